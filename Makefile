@@ -1,0 +1,29 @@
+# Every target sets up .venv on its own: `make demo` and `make test` work on a fresh clone.
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed-stamp
+
+.PHONY: setup demo test bench clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test,bench]'
+	touch $(STAMP)
+
+setup: $(STAMP)
+
+## The main job: closed-loop walking run (prints metrics, writes plots under runs/).
+demo: $(STAMP)
+	$(VENV)/bin/wbmpc demo --out runs/demo
+
+## The test suite (what CI runs through .ci/run).
+test: $(STAMP)
+	$(PY) -m pytest -q
+
+bench: $(STAMP)
+	$(VENV)/bin/wbmpc bench sequencer
+
+clean:
+	rm -rf $(VENV) runs build *.egg-info
