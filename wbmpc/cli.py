@@ -16,7 +16,9 @@ from typing import Any
 import numpy as np
 
 # Modules providing ``register(subparsers)``; the order is the order of ``wbmpc --help``.
-SUBCOMMAND_MODULES: list[str] = []
+SUBCOMMAND_MODULES: list[str] = [
+    "bench.cli",
+]
 
 
 def to_jsonable(obj: Any) -> Any:
