@@ -1,0 +1,23 @@
+"""Robot descriptions: Pinocchio and MuJoCo models of the same URDF, contacts, limits.
+
+    >>> from robots import load_robot
+    >>> robot = load_robot("bolt")
+    >>> robot.nq, robot.nv, robot.nu
+    (13, 12, 6)
+
+Each robot is one module registering a builder (see :mod:`robots.registry`); importing this
+package registers them all.
+"""
+
+from robots.description import CONTACT_TYPES, MujocoContactSettings, RobotDescription
+from robots.registry import available_robots, load_robot, register_robot
+from robots import bolt as _bolt  # noqa: F401  (registers "bolt")
+
+__all__ = [
+    "CONTACT_TYPES",
+    "MujocoContactSettings",
+    "RobotDescription",
+    "available_robots",
+    "load_robot",
+    "register_robot",
+]
