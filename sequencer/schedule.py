@@ -64,3 +64,62 @@ class ContactSchedule:
     def times(self) -> np.ndarray:
         """Node times [s], shape (n_nodes + 1,)."""
         return self.t0 + self.dt * np.arange(self.n_nodes + 1)
+
+
+def contact_schedule(plan, t0: float, dt: float, n_nodes: int) -> ContactSchedule:
+    """Sample a :class:`sequencer.horizon.FootstepPlan` on the OCP grid ``t0 + k dt``, k = 0..n_nodes.
+
+    Point feet, no double support: between two touchdowns exactly one foot is in stance and the
+    other one swings from the previous touchdown (the start of the current stance) to its own
+    next touchdown. At a node exactly on a touchdown time the landing foot is in contact and the
+    other foot starts its swing (phase 0).
+
+    Args:
+        plan: FootstepPlan (feet ``"left"``/``"right"``).
+        t0: time of node 0 [s], >= plan.t_stance_start.
+        dt: node spacing [s], > 0.
+        n_nodes: number of running nodes, >= 1; the grid must end before the last planned
+            touchdown (the swing in progress there would have no planned end).
+
+    Returns:
+        ContactSchedule with ``feet == ("left", "right")``.
+    """
+    t0 = float(t0)
+    dt = float(dt)
+    if not (np.isfinite(dt) and dt > 0):
+        raise ParameterError(f"dt={dt} s must be a finite positive number")
+    if isinstance(n_nodes, bool) or int(n_nodes) != n_nodes or n_nodes < 1:
+        raise ParameterError(f"n_nodes={n_nodes!r} must be an integer >= 1")
+    n_nodes = int(n_nodes)
+    if not np.isfinite(t0) or t0 < plan.t_stance_start:
+        raise ParameterError(
+            f"t0={t0} s must be finite and >= the plan's current stance start {plan.t_stance_start} s"
+        )
+    feet = ("left", "right")
+    times = t0 + dt * np.arange(n_nodes + 1)
+    touchdowns = plan.touchdown_times
+    if times[-1] >= touchdowns[-1]:
+        raise ParameterError(
+            f"the grid ends at t0 + n_nodes*dt = {times[-1]:.4g} s, at or after the plan's last touchdown "
+            f"{touchdowns[-1]:.4g} s: plan with a longer horizon or use fewer nodes"
+        )
+    # index of the stance interval of each node: 0 = current stance, k = after the k-th touchdown
+    interval = np.searchsorted(touchdowns, times, side="right")
+    stance_starts = np.concatenate([[plan.t_stance_start], touchdowns])
+    stance_feet = [plan.stance_foot] + [step.foot for step in plan.steps]
+    in_contact = np.zeros((n_nodes + 1, 2), dtype=bool)
+    swing_phase = np.full((n_nodes + 1, 2), np.nan)
+    swing_duration = np.full((n_nodes + 1, 2), np.nan)
+    touchdown_position = np.full((n_nodes + 1, 2, 2), np.nan)
+    for k, i in enumerate(interval):
+        stance = feet.index(stance_feet[i])
+        swing = 1 - stance
+        in_contact[k, stance] = True
+        start, end = stance_starts[i], touchdowns[i]
+        swing_duration[k, swing] = end - start
+        swing_phase[k, swing] = min(max((times[k] - start) / (end - start), 0.0), 1.0)
+        touchdown_position[k, swing] = plan.steps[i].position
+    return ContactSchedule(
+        t0=t0, dt=dt, feet=feet, in_contact=in_contact, swing_phase=swing_phase,
+        swing_duration=swing_duration, touchdown_position=touchdown_position,
+    )

@@ -1,0 +1,331 @@
+"""Fixed-horizon footstep sequencer: Algorithm 1 of Roux et al. 2024 (eqs. 13-16).
+
+From the measured DCM and the time elapsed in the current stance, solve the one-step QP, then
+repeat from the planned touchdown (new stance foot = the foot that just landed, measured DCM =
+p_T + b_T, elapsed time 0), alternating the stance foot and the width bounds, until a touchdown
+time is at or after ``t + horizon``.
+
+Time convention (documented deviation, see docs/sequencer.md): every QP of the sequence is
+written in the time of its own stance (Gamma = exp(omega (T_{k+1} - T_k))). Eqs. (13)-(16) write
+Gamma in the clock of the first stance; the constraints are identical, but the absolute form
+multiplies alpha2 by exp(2 omega T_k) for the k-th step (about 1e14 at the end of a 3 s horizon),
+which would freeze the timing of all later steps and depend on the choice of time origin.
+
+Failure: :meth:`FootstepSequencer.plan` raises :class:`sequencer.step_qp.InfeasibleStep` (a
+:class:`sequencer.step_qp.StepQPError`, itself a :class:`wbmpc.errors.SolverError`) carrying the
+failing :class:`StepProblem` and the solver status. A closed loop that wants to keep running
+catches ``StepQPError`` and keeps its previous plan; ``clamp_elapsed=True`` avoids the most
+common cause (the foot has not landed by T_max) by planning as if the elapsed time were T_max.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from sequencer.backends import make_backend
+from sequencer.nominal import other_foot
+from sequencer.params import SequencerParams
+from sequencer.step_qp import CONSTRAINT_NAMES, InfeasibleStep, StepProblem, solve_exact_scalars
+from wbmpc.errors import ParameterError
+
+_ACTIVE_NAMES = tuple(tuple(CONSTRAINT_NAMES[i] for i in range(6) if (bits >> i) & 1) for bits in range(64))
+
+
+@dataclass(frozen=True, slots=True)
+class PlannedStep:
+    """One planned touchdown.
+
+    Attributes:
+        foot: ``"left"`` or ``"right"``, the foot that LANDS at this step.
+        position: world (x, y) of the foothold p_T [m], shape (2,).
+        touchdown_time: absolute touchdown time [s] (same clock as the plan's t0).
+        dcm_offset: b_T = zeta_T - p_T [m], shape (2,).
+        dcm_at_touchdown: zeta_T = p_T + b_T, world (x, y) [m], shape (2,).
+        stance_start_time: when the stance preceding this touchdown began [s].
+        active: names of the active inequalities of this step's QP (see step_qp.CONSTRAINT_NAMES).
+    """
+
+    foot: str
+    position: np.ndarray
+    touchdown_time: float
+    dcm_offset: np.ndarray
+    dcm_at_touchdown: np.ndarray
+    stance_start_time: float
+    active: tuple[str, ...] = ()
+
+    @property
+    def duration(self) -> float:
+        """Step duration: touchdown_time - stance_start_time [s]."""
+        return self.touchdown_time - self.stance_start_time
+
+
+@dataclass(frozen=True, slots=True)
+class FootstepPlan:
+    """Output of Algorithm 1: the stance at planning time and the planned touchdowns.
+
+    Attributes:
+        t0: planning (measurement) time [s].
+        stance_foot: foot in stance at t0.
+        stance_position: world (x, y) of the stance foot [m], shape (2,).
+        dcm_measured: world (x, y) DCM at t0 [m], shape (2,).
+        omega: LIPM natural frequency [1/s].
+        steps: planned touchdowns in time order; the last one is at or after t0 + horizon.
+        t_stance_start: when the current stance began [s] (<= t0).
+        horizon: H_u [s].
+    """
+
+    t0: float
+    stance_foot: str
+    stance_position: np.ndarray
+    dcm_measured: np.ndarray
+    omega: float
+    steps: tuple[PlannedStep, ...]
+    t_stance_start: float
+    horizon: float
+
+    # ------------------------------------------------------------------ queries
+    @property
+    def touchdown_times(self) -> np.ndarray:
+        """Touchdown times [s], shape (K,)."""
+        return np.array([s.touchdown_time for s in self.steps])
+
+    @property
+    def positions(self) -> np.ndarray:
+        """Footholds, world (x, y) [m], shape (K, 2)."""
+        return np.array([s.position for s in self.steps])
+
+    def _segments(self):
+        """(start time, stance position, DCM at start) of every stance, the current one first."""
+        yield self.t0, self.stance_position, self.dcm_measured
+        for step in self.steps:
+            yield step.touchdown_time, step.position, step.dcm_at_touchdown
+
+    def _check_times(self, t) -> np.ndarray:
+        times = np.asarray(t, dtype=float)
+        if not np.all(np.isfinite(times)):
+            raise ParameterError(f"t={t!r} must be finite")
+        if np.any(times < self.t0 - 1e-12):
+            raise ParameterError(f"t={t!r} s must be >= the plan's t0={self.t0} s")
+        return times
+
+    def dcm_at(self, t) -> np.ndarray:
+        """LIPM DCM prediction (eq. 1b through the planned steps), world (x, y) [m].
+
+        Args:
+            t: time(s) [s] >= t0, scalar or shape (n,). Returns shape (2,) or (n, 2).
+        """
+        times = self._check_times(t)
+        flat = np.atleast_1d(times)
+        out = np.empty((flat.size, 2))
+        segments = list(self._segments())
+        for i, (start, foot, dcm0) in enumerate(segments):
+            end = segments[i + 1][0] if i + 1 < len(segments) else np.inf
+            mask = (flat >= start) & (flat < end) if i > 0 else (flat < end)
+            if np.any(mask):
+                tau = flat[mask] - start
+                out[mask] = foot + np.outer(np.exp(self.omega * tau), dcm0 - foot)
+        return out[0] if times.ndim == 0 else out
+
+    def lipm_com_at(self, t, com_xy_measured) -> np.ndarray:
+        """LIPM CoM prediction (eqs. 1a/1b integrated through the planned steps), world (x, y) [m].
+
+        Within a stance on foot p starting at s with CoM c0 and DCM z0 (exact solution)::
+
+            c(s + tau) = p + (c0 - p) e^{-omega tau} + (z0 - p) (e^{omega tau} - e^{-omega tau}) / 2
+
+        After the last planned touchdown the last foothold stays in stance.
+
+        Args:
+            t: time(s) [s] >= t0, scalar or shape (n,).
+            com_xy_measured: CoM (x, y) at t0 [m], shape (2,).
+        Returns:
+            shape (2,) for a scalar t, else (n, 2).
+        """
+        com0 = np.asarray(com_xy_measured, dtype=float)
+        if com0.shape != (2,) or not np.all(np.isfinite(com0)):
+            raise ParameterError(f"com_xy_measured={com_xy_measured!r} must be a finite (x, y) pair")
+        times = self._check_times(t)
+        flat = np.atleast_1d(times)
+        out = np.empty((flat.size, 2))
+        segments = list(self._segments())
+        com = com0
+        for i, (start, foot, dcm0) in enumerate(segments):
+            end = segments[i + 1][0] if i + 1 < len(segments) else np.inf
+            mask = (flat >= start) & (flat < end) if i > 0 else (flat < end)
+            if np.any(mask):
+                tau = (flat[mask] - start)[:, None]
+                out[mask] = (
+                    foot + (com - foot) * np.exp(-self.omega * tau)
+                    + (dcm0 - foot) * (np.exp(self.omega * tau) - np.exp(-self.omega * tau)) / 2.0
+                )
+            if np.isfinite(end):
+                tau = end - start
+                com = (
+                    foot + (com - foot) * math.exp(-self.omega * tau)
+                    + (dcm0 - foot) * (math.exp(self.omega * tau) - math.exp(-self.omega * tau)) / 2.0
+                )
+        return out[0] if times.ndim == 0 else out
+
+    def mean_velocity(self) -> np.ndarray:
+        """Average foothold velocity over the plan, (x, y) [m/s], from the stance foot to the last step.
+
+        Uses the two feet's mean position at the first and last pair of footholds so that the
+        lateral zig-zag cancels.
+        """
+        if len(self.steps) < 3:
+            raise ParameterError(f"mean_velocity needs at least 3 planned steps, the plan has {len(self.steps)}")
+        first_mid = 0.5 * (self.steps[0].position + self.steps[1].position)
+        last_mid = 0.5 * (self.steps[-2].position + self.steps[-1].position)
+        t_first = 0.5 * (self.steps[0].touchdown_time + self.steps[1].touchdown_time)
+        t_last = 0.5 * (self.steps[-2].touchdown_time + self.steps[-1].touchdown_time)
+        return (last_mid - first_mid) / (t_last - t_first)
+
+
+class FootstepSequencer:
+    """Receding-horizon footstep sequencer (Algorithm 1) with one warm QP workspace.
+
+    Args:
+        params: SequencerParams (weights, bounds, nominal gait, horizon).
+        backend: ``"exact"`` (default: closed-form active-set solution of the same QP, ~10x faster,
+            verified against OSQP and ProxQP in the tests), ``"osqp"`` (the paper's solver) or
+            ``"proxqp"``.
+    """
+
+    def __init__(self, params: SequencerParams, backend: str = "exact"):
+        if not isinstance(params, SequencerParams):
+            raise ParameterError(f"params must be a SequencerParams, got {type(params).__name__}")
+        self.params = params
+        self.backend_name = backend
+        self.backend = make_backend(backend)
+        omega = params.omega
+        self._omega = omega
+        self._gamma_nom = math.exp(omega * params.t_nom)
+        self._gamma_hi = math.exp(omega * params.t_max)
+        self._gamma_lo0 = math.exp(omega * params.t_min)
+        self._per_stance = {
+            foot: (params.w_nom(foot), params.b_nom(foot), params.width_bounds(foot)) for foot in ("left", "right")
+        }
+        self._max_steps = int(math.ceil(params.horizon / params.t_min)) + 2
+
+    def problem(self, stance_foot: str, stance_position, dcm_measured, elapsed: float) -> StepProblem:
+        """The one-step QP (eqs. 2-5) for this sequencer's parameters."""
+        return StepProblem.from_params(self.params, stance_foot, stance_position, dcm_measured, elapsed)
+
+    def plan(
+        self,
+        t: float,
+        stance_foot: str,
+        stance_position,
+        dcm_measured,
+        t_stance_start: float,
+        clamp_elapsed: bool = False,
+    ) -> FootstepPlan:
+        """Run Algorithm 1 from the measured state.
+
+        Args:
+            t: measurement time [s].
+            stance_foot: ``"left"`` or ``"right"``, the foot on the ground at t.
+            stance_position: world (x, y) of the stance foot [m], shape (2,).
+            dcm_measured: world (x, y) of the measured DCM at t [m], shape (2,).
+            t_stance_start: when the current stance began [s], <= t (t - t_stance_start is the
+                paper's "time elapsed since the last contact").
+            clamp_elapsed: if True and the elapsed time exceeds T_max, plan as if it were T_max
+                (touchdown now) instead of raising InfeasibleStep.
+
+        Returns:
+            FootstepPlan whose last step lands at or after t + horizon.
+
+        Raises:
+            ParameterError: bad input (names the argument and value).
+            InfeasibleStep / StepQPError: a QP failed; carries the problem data and solver status.
+        """
+        if stance_foot not in ("left", "right"):
+            raise ParameterError(f"stance_foot={stance_foot!r} must be 'left' or 'right'")
+        t = float(t)
+        t_stance_start = float(t_stance_start)
+        if not (math.isfinite(t) and math.isfinite(t_stance_start)):
+            raise ParameterError(f"t={t} s and t_stance_start={t_stance_start} s must be finite")
+        elapsed = t - t_stance_start
+        if elapsed < 0:
+            raise ParameterError(f"t_stance_start={t_stance_start} s must be <= t={t} s")
+        p0 = np.asarray(stance_position, dtype=float)
+        dcm = np.asarray(dcm_measured, dtype=float)
+        if p0.shape != (2,) or not (math.isfinite(p0[0]) and math.isfinite(p0[1])):
+            raise ParameterError(f"stance_position={stance_position!r} must be a finite (x, y) pair [m]")
+        if dcm.shape != (2,) or not (math.isfinite(dcm[0]) and math.isfinite(dcm[1])):
+            raise ParameterError(f"dcm_measured={dcm_measured!r} must be a finite (x, y) pair [m]")
+        params = self.params
+        if elapsed > params.t_max:
+            if clamp_elapsed:
+                elapsed = params.t_max
+            else:
+                raise InfeasibleStep(
+                    f"elapsed time t - t_stance_start = {elapsed:.4g} s exceeds T_max={params.t_max} s",
+                    self.problem(stance_foot, p0, dcm, 0.0),
+                    "primal infeasible",
+                    self.backend_name,
+                )
+        if self.backend_name == "exact":
+            steps = self._plan_exact(t, stance_foot, p0, dcm, t - elapsed, elapsed)
+        else:
+            steps = self._plan_backend(t, stance_foot, p0, dcm, t - elapsed, elapsed)
+        return FootstepPlan(
+            t0=t, stance_foot=stance_foot, stance_position=p0.copy(), dcm_measured=dcm.copy(), omega=self._omega,
+            steps=tuple(steps), t_stance_start=t_stance_start, horizon=params.horizon,
+        )
+
+    def _plan_exact(self, t, stance, p0, dcm, stance_start, elapsed) -> list[PlannedStep]:
+        params = self.params
+        omega = self._omega
+        a1, a2, a3 = params.alpha1, params.alpha2, params.alpha3
+        l_nom, l_min, l_max = params.l_nom, params.l_min, params.l_max
+        gamma_nom, g_hi = self._gamma_nom, self._gamma_hi
+        t_end = t + params.horizon
+        p0x, p0y = float(p0[0]), float(p0[1])
+        zx, zy = float(dcm[0]), float(dcm[1])
+        steps = []
+        for _ in range(self._max_steps):
+            w_nom, (bnx, bny), (w_lo, w_hi) = self._per_stance[stance]
+            if elapsed > 0.0:
+                decay = math.exp(-omega * elapsed)
+                g_lo = math.exp(omega * max(params.t_min, elapsed))
+            else:
+                decay = 1.0
+                g_lo = self._gamma_lo0
+            px, py, gamma, bx, by, bits = solve_exact_scalars(
+                p0x, p0y, (zx - p0x) * decay, (zy - p0y) * decay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny,
+                l_min, l_max, w_lo, w_hi, g_lo, g_hi,
+            )
+            touchdown = stance_start + math.log(gamma) / omega
+            landing = "right" if stance == "left" else "left"
+            zx, zy = px + bx, py + by
+            steps.append(
+                PlannedStep(landing, np.array((px, py)), touchdown, np.array((bx, by)), np.array((zx, zy)),
+                            stance_start, _ACTIVE_NAMES[bits])
+            )
+            if touchdown >= t_end:
+                break
+            stance, p0x, p0y, stance_start, elapsed = landing, px, py, touchdown, 0.0
+        return steps
+
+    def _plan_backend(self, t, stance, p0, dcm, stance_start, elapsed) -> list[PlannedStep]:
+        t_end = t + self.params.horizon
+        steps = []
+        for _ in range(self._max_steps):
+            solution = self.backend.solve(self.problem(stance, p0, dcm, elapsed))
+            touchdown = stance_start + solution.duration
+            landing = other_foot(stance)
+            position = solution.step_position.copy()
+            offset = solution.dcm_offset.copy()
+            dcm = position + offset
+            steps.append(
+                PlannedStep(landing, position, touchdown, offset, dcm.copy(), stance_start,
+                            tuple(solution.active_names))
+            )
+            if touchdown >= t_end:
+                break
+            stance, p0, stance_start, elapsed = landing, position, touchdown, 0.0
+        return steps

@@ -1,0 +1,71 @@
+"""Nominal step and nominal DCM offsets of a periodic LIPM gait (Khadiv et al. 2020, Appendix A).
+
+Conventions: world frame, x forward, y to the LEFT. ``stance_foot`` is the foot on the ground
+while the step is planned; the OTHER foot lands at the end of the step, and the DCM offset
+``b_T = zeta_T - p_T`` is measured from that landing foot.
+
+Periodic-gait derivation (also checked numerically in ``tests/test_sequencer_nominal.py``): with
+step duration T, E = exp(omega T), step widths w_left = -l_p + v_y T (left stance, the right foot
+lands on the right) and w_right = +l_p + v_y T, the LIPM DCM obeys
+``b_next = b E - w`` at each touchdown. The 2-periodic solution gives, for the step planned from a
+LEFT stance (right foot lands)::
+
+    b_y = + l_p / (1 + E) - v_y T / (1 - E)
+
+and the mirror ``- l_p / (1 + E) - v_y T / (1 - E)`` from a RIGHT stance. At touchdown of the
+right foot, the DCM is still to the LEFT of the right foot (b_y > 0): it is travelling from the
+left foot towards the right one. (Flipping the sign of the l_p term, as one widely copied public
+implementation does, makes the nominal gait non-periodic.) Sagittally: ``b_x = L / (E - 1)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+from wbmpc.errors import ParameterError
+
+FEET = ("left", "right")
+
+
+def other_foot(foot: str) -> str:
+    """Return ``"right"`` for ``"left"`` and vice versa (raise ParameterError otherwise)."""
+    if foot == "left":
+        return "right"
+    if foot == "right":
+        return "left"
+    raise ParameterError(f"foot={foot!r} must be 'left' or 'right'")
+
+
+def stance_sign(stance_foot: str) -> float:
+    """+1 for a left stance, -1 for a right stance (the sign of the l_p term in b_y,nom)."""
+    if stance_foot == "left":
+        return 1.0
+    if stance_foot == "right":
+        return -1.0
+    raise ParameterError(f"stance_foot={stance_foot!r} must be 'left' or 'right'")
+
+
+def nominal_step_width(pelvis_width: float, v_y: float, t_nom: float, stance_foot: str) -> float:
+    """Nominal lateral step ``p_T,y - p_0,y`` [m]: ``-l_p + v_y T`` (left stance), ``+l_p + v_y T`` (right)."""
+    return -stance_sign(stance_foot) * pelvis_width + v_y * t_nom
+
+
+def nominal_dcm_offset(
+    omega: float, step_length: float, pelvis_width: float, v_y: float, t_nom: float, stance_foot: str
+) -> tuple[float, float]:
+    """Nominal DCM offset at touchdown ``(b_x, b_y)`` [m], relative to the landing foot.
+
+    Args:
+        omega: LIPM natural frequency sqrt(g / z_c) [1/s], > 0.
+        step_length: nominal step length L_nom = v_x T_nom [m].
+        pelvis_width: nominal lateral distance between the feet l_p [m].
+        v_y: commanded lateral velocity [m/s] (y to the left).
+        t_nom: nominal step duration [s], > 0.
+        stance_foot: ``"left"`` or ``"right"``, the foot in stance during the planned step.
+    """
+    if not (omega > 0 and t_nom > 0):
+        raise ParameterError(f"omega={omega} 1/s and t_nom={t_nom} s must both be > 0")
+    growth = math.exp(omega * t_nom)
+    b_x = step_length / (growth - 1.0)
+    b_y = stance_sign(stance_foot) * pelvis_width / (1.0 + growth) - v_y * t_nom / (1.0 - growth)
+    return b_x, b_y

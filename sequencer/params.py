@@ -1,0 +1,190 @@
+"""Parameters of the DCM footstep sequencer (Roux et al. 2024, eqs. 2-5 and Table I).
+
+Units: weights are dimensionless, lengths in metres, times in seconds, velocities in m/s.
+Frames: world frame, x forward, y to the left.
+
+The lateral bounds follow the labels of the paper's Table I: ``w_left_*`` bound the lateral
+step ``p_T,y - p_0,y`` while the LEFT foot is the stance foot (the right foot steps, so the
+width is negative), ``w_right_*`` while the RIGHT foot is the stance foot. This is the reading
+consistent with the Table I example (stance foot p0 = (-0.12, 0.10) with the DCM at
+y = -0.07 moving towards the right foot); see ``docs/sequencer.md``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from sequencer.nominal import nominal_dcm_offset, nominal_step_width, stance_sign
+from wbmpc.errors import ParameterError
+
+PRESET_DIR = Path(__file__).resolve().parent / "presets"
+
+
+@dataclass(frozen=True)
+class SequencerParams:
+    """Weights, bounds, nominal gait and horizon of the footstep sequencer (frozen, validated).
+
+    Attributes:
+        alpha1: weight of the step position error, eq. (3a) [-], > 0.
+        alpha2: weight of the step timing error |Gamma(T) - Gamma(T_nom)|^2 [-], > 0.
+        alpha3: weight of the DCM offset error [-], > 0.
+        z_c: constant CoM height of the LIPM [m], > 0.
+        gravity: gravitational acceleration [m/s^2], > 0.
+        v_x: commanded forward velocity [m/s]; the nominal step length is l_nom = v_x * t_nom.
+        v_y: commanded lateral velocity [m/s] (y to the left).
+        l_min, l_max: bounds on the step length p_T,x - p_0,x [m].
+        pelvis_width: nominal lateral distance between the feet l_p [m] (Khadiv et al. 2020).
+        w_left_min, w_left_max: bounds on p_T,y - p_0,y while the LEFT foot is in stance [m].
+        w_right_min, w_right_max: bounds on p_T,y - p_0,y while the RIGHT foot is in stance [m].
+        t_min, t_nom, t_max: step duration (time from the start of a stance to the next
+            touchdown) bounds and nominal value [s], 0 < t_min <= t_nom <= t_max.
+        horizon: H_u, Algorithm 1 plans until a touchdown is at or after t0 + horizon [s], > 0.
+        name: label of the parameter set (for reports only).
+    """
+
+    alpha1: float = 1e3
+    alpha2: float = 1.0
+    alpha3: float = 1e6
+    z_c: float = 0.31
+    gravity: float = 9.81
+    v_x: float = 0.1 / 0.3
+    v_y: float = 0.0
+    l_min: float = -0.3
+    l_max: float = 0.3
+    pelvis_width: float = 0.25
+    w_left_min: float = -0.40
+    w_left_max: float = -0.10
+    w_right_min: float = 0.10
+    w_right_max: float = 0.40
+    t_min: float = 0.1
+    t_nom: float = 0.3
+    t_max: float = 1.0
+    horizon: float = 3.0
+    name: str = "custom"
+
+    # ------------------------------------------------------------------ validation
+    def __post_init__(self) -> None:
+        for field in dataclasses.fields(self):
+            if field.name == "name":
+                continue
+            value = getattr(self, field.name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ParameterError(f"{field.name}={value!r} must be a real number")
+            if not math.isfinite(value):
+                raise ParameterError(f"{field.name}={value!r} must be finite (no NaN or inf)")
+            # store plain floats (TOML or argparse may give ints)
+            object.__setattr__(self, field.name, float(value))
+        for name in ("alpha1", "alpha2", "alpha3", "z_c", "gravity", "horizon"):
+            if getattr(self, name) <= 0:
+                raise ParameterError(f"{name}={getattr(self, name)} must be > 0")
+        for low, high, unit in (
+            ("l_min", "l_max", "m"),
+            ("w_left_min", "w_left_max", "m"),
+            ("w_right_min", "w_right_max", "m"),
+        ):
+            if getattr(self, low) > getattr(self, high):
+                raise ParameterError(
+                    f"{low}={getattr(self, low)} {unit} must be <= {high}={getattr(self, high)} {unit}"
+                )
+        if not self.t_min > 0:
+            raise ParameterError(f"t_min={self.t_min} s must be > 0")
+        if not self.t_min <= self.t_nom <= self.t_max:
+            raise ParameterError(
+                f"step durations must satisfy 0 < t_min <= t_nom <= t_max, "
+                f"got t_min={self.t_min} s, t_nom={self.t_nom} s, t_max={self.t_max} s"
+            )
+        if not self.l_min <= self.l_nom <= self.l_max:
+            raise ParameterError(
+                f"v_x={self.v_x} m/s gives a nominal step length v_x*t_nom={self.l_nom:.4g} m "
+                f"outside [l_min, l_max] = [{self.l_min}, {self.l_max}] m"
+            )
+        for foot in ("left", "right"):
+            low, high = self.width_bounds(foot)
+            nominal = self.w_nom(foot)
+            if not low <= nominal <= high:
+                raise ParameterError(
+                    f"pelvis_width={self.pelvis_width} m and v_y={self.v_y} m/s give a nominal "
+                    f"{foot}-stance width {nominal:.4g} m outside [w_{foot}_min, w_{foot}_max] = "
+                    f"[{low}, {high}] m"
+                )
+
+    # ------------------------------------------------------------------ derived values
+    @property
+    def omega(self) -> float:
+        """LIPM natural frequency sqrt(gravity / z_c) [1/s]."""
+        return math.sqrt(self.gravity / self.z_c)
+
+    @property
+    def l_nom(self) -> float:
+        """Nominal step length v_x * t_nom [m]."""
+        return self.v_x * self.t_nom
+
+    def w_nom(self, stance_foot: str) -> float:
+        """Nominal lateral step p_T,y - p_0,y [m] from ``stance_foot`` (negative from a left stance)."""
+        return nominal_step_width(self.pelvis_width, self.v_y, self.t_nom, stance_foot)
+
+    def width_bounds(self, stance_foot: str) -> tuple[float, float]:
+        """(min, max) of p_T,y - p_0,y [m] while ``stance_foot`` is on the ground."""
+        if stance_sign(stance_foot) > 0:
+            return self.w_left_min, self.w_left_max
+        return self.w_right_min, self.w_right_max
+
+    def b_nom(self, stance_foot: str) -> tuple[float, float]:
+        """Nominal DCM offset (b_x, b_y) at touchdown [m], relative to the landing foot."""
+        return nominal_dcm_offset(self.omega, self.l_nom, self.pelvis_width, self.v_y, self.t_nom, stance_foot)
+
+    # ------------------------------------------------------------------ presets and I/O
+    @classmethod
+    def from_toml(cls, path: str | Path) -> "SequencerParams":
+        """Load parameters from a TOML file with one key per field (missing keys keep defaults)."""
+        path = Path(path)
+        try:
+            with path.open("rb") as stream:
+                data = tomllib.load(stream)
+        except FileNotFoundError as err:
+            raise ParameterError(f"parameter file {str(path)!r} does not exist") from err
+        except tomllib.TOMLDecodeError as err:
+            raise ParameterError(f"parameter file {str(path)!r} is not valid TOML: {err}") from err
+        return cls.from_dict(data, source=str(path))
+
+    @classmethod
+    def from_dict(cls, data: dict, source: str = "dict") -> "SequencerParams":
+        """Build parameters from a mapping of field names to values (unknown keys raise)."""
+        allowed = [f.name for f in dataclasses.fields(cls)]
+        unknown = sorted(set(data) - set(allowed))
+        if unknown:
+            raise ParameterError(f"unknown sequencer parameter(s) {unknown} in {source}; allowed: {allowed}")
+        return cls(**data)
+
+    @classmethod
+    def preset(cls, name: str) -> "SequencerParams":
+        """Load a named preset from ``sequencer/presets/<name>.toml``."""
+        available = sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
+        if name not in available:
+            raise ParameterError(f"preset={name!r} is not known (available: {available})")
+        return cls.from_toml(PRESET_DIR / f"{name}.toml")
+
+    @classmethod
+    def table_i(cls) -> "SequencerParams":
+        """Table I of Roux et al. 2024 (the paper's walking parameters, v_x = l_nom / T_nom = 0.33 m/s)."""
+        return cls.preset("table_i")
+
+    @classmethod
+    def bolt_walking(cls) -> "SequencerParams":
+        """Parameters for Bolt in the MuJoCo closed loop.
+
+        Differs from Table I in the lateral geometry only: Table I asks for 0.25 m between the
+        feet, but Bolt's feet are 0.052 m apart at the standing pose and its legs are ~0.3 m
+        long, so the preset uses a nominal width of 0.10 m within [0.04, 0.20] m, step lengths
+        within +-0.20 m and step durations within [0.15, 0.6] s. z_c = 0.31 m is Bolt's CoM
+        height at the standing pose. Weights, T_nom and v_x are Table I's.
+        """
+        return cls.preset("bolt_walking")
+
+    def to_dict(self) -> dict:
+        """Field name -> value (floats and the name string)."""
+        return dataclasses.asdict(self)
