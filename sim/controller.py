@@ -1,0 +1,379 @@
+"""Controllers for the closed loop: the interface, a posture-holding PD and the paper's walking controller.
+
+A controller is driven by the runner (``sim.runner``) at two rates:
+
+- ``replan(t, measurement)`` every ``replan_period`` (10 ms in the paper): the slow, expensive part
+  (footstep sequencer + whole-body MPC). Returns a flat dict of scalars that the runner logs.
+- ``compute(t, measurement)`` at every simulation tick (1 kHz): the torque command, shape (nu,) [N·m].
+  The runner clips it to the torque limits and logs both the command and the applied torque.
+
+Every state is in the Pinocchio convention (see :class:`sim.measurement.Measurement`).
+
+The :class:`WalkingController` is the pipeline of section III.C of the paper: measured DCM
+``zeta = c + c_dot / omega`` -> footstep sequencer -> per-node contact schedule -> whole-body MPC
+(warm start, one FDDP iteration) -> at 1 kHz the Riccati feedback of eqs. (25)-(26)::
+
+    tau = u_k + K_k (x_meas ⊖ x_k),     K = du*/dx  (library-wide gain convention)
+
+where ⊖ is ``pin.difference`` on q and a plain difference on v, and k is node 1 of the latest
+solution (the paper's computation-delay model) or node 0 (``delay_nodes=0``), advanced by the time
+elapsed since that solution was computed (so a failed update keeps following the last good plan).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+import pinocchio as pin
+
+from sim.measurement import Measurement
+from sim.stance import TOUCHDOWN_DETECTIONS, StanceTracker
+from wbmpc.errors import ParameterError
+
+GRAVITY = 9.81  # [m/s^2]
+
+
+@runtime_checkable
+class Controller(Protocol):
+    """What the runner needs from a controller."""
+
+    replan_period: float  # [s], period of ``replan``; a multiple of the simulation time step
+
+    def reset(self, robot: Any, x0: np.ndarray, t0: float) -> None:
+        """Prepare a new episode from state ``x0`` (nq + nv, Pinocchio) at time ``t0`` [s]."""
+
+    def replan(self, t: float, measurement: Measurement) -> dict[str, float]:
+        """Slow update (planning); returns scalars to log (same keys at every call)."""
+
+    def compute(self, t: float, measurement: Measurement) -> np.ndarray:
+        """Torque command at time ``t``, shape (nu,) [N·m], before clipping."""
+
+
+class JointPDController:
+    """Holds the robot's reference posture with a joint PD (no balance: Bolt falls within ~1 s).
+
+    Useful to exercise the runner (logging, fall detection) without any planning.
+
+    Args:
+        kp: proportional gain [N·m/rad], > 0.
+        kd: derivative gain [N·m·s/rad], >= 0.
+        replan_period: period of the (empty) slow update [s].
+    """
+
+    def __init__(self, kp: float = 3.0, kd: float = 0.05, replan_period: float = 0.01) -> None:
+        if not kp > 0:
+            raise ParameterError(f"kp={kp} N·m/rad must be > 0")
+        if not kd >= 0:
+            raise ParameterError(f"kd={kd} N·m·s/rad must be >= 0")
+        self.kp, self.kd, self.replan_period = float(kp), float(kd), float(replan_period)
+        self._q_joints_reference = None
+        self._nq = 0
+
+    def reset(self, robot: Any, x0: np.ndarray, t0: float) -> None:
+        self._nq = robot.pinocchio_model.nq
+        self._q_joints_reference = np.asarray(robot.q_reference)[7:].copy()
+
+    def replan(self, t: float, measurement: Measurement) -> dict[str, float]:
+        return {}
+
+    def compute(self, t: float, measurement: Measurement) -> np.ndarray:
+        q_joints = measurement.x[7 : self._nq]
+        v_joints = measurement.x[self._nq + 6 :]
+        return self.kp * (self._q_joints_reference - q_joints) - self.kd * v_joints
+
+
+@dataclass(frozen=True)
+class WalkingControllerConfig:
+    """Options of the walking controller (defaults: the paper's pipeline).
+
+    Attributes:
+        n_nodes: MPC horizon length N (nodes), paper: 100.
+        node_dt: MPC node spacing [s], paper: 0.01 (horizon H_u = 1 s).
+        replan_period: period of the sequencer + MPC update [s], paper: 0.01 (100 Hz).
+        max_iterations: FDDP iterations per MPC update, paper: 1.
+        delay_nodes: 1 applies node 1 of each solution (paper, computation delay of one node);
+            0 applies node 0 (no delay).
+        interpolate: interpolate u and x between nodes k and k+1 at 1 kHz (otherwise zero-order hold).
+        feedback: apply the Riccati gains (False: feed-forward u_k only, to show what K buys).
+        touchdown_detection: "plan" or "contact" (see ``sim.stance``).
+        first_stance_foot: stance foot at t0 (both feet are on the ground at start; the other one
+            takes the first step).
+        velocity_command: initial (v_x, v_y) command [m/s] (world frame); None keeps the preset's.
+        mpc_failure_times: injected failures [s]: the MPC update at the first replan at or after
+            each time is discarded as if the solver had failed (the last good solution is kept).
+        sequencer_params: ``sequencer.SequencerParams``; None = ``SequencerParams.bolt_walking()``.
+        sequencer_backend: QP backend of the sequencer ("osqp" as in the paper, or "proxqp").
+        ocp: ``wbmpc.WalkingOCPConfig``; None = its defaults.
+    """
+
+    n_nodes: int = 100
+    node_dt: float = 0.01
+    replan_period: float = 0.01
+    max_iterations: int = 1
+    delay_nodes: int = 1
+    interpolate: bool = False
+    feedback: bool = True
+    touchdown_detection: str = "plan"
+    first_stance_foot: str = "left"
+    velocity_command: tuple[float, float] | None = None
+    mpc_failure_times: tuple[float, ...] = ()
+    sequencer_params: Any = None
+    sequencer_backend: str = "osqp"
+    ocp: Any = None
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.n_nodes, int) and self.n_nodes >= 2):
+            raise ParameterError(f"n_nodes={self.n_nodes!r} must be an integer >= 2")
+        for name in ("node_dt", "replan_period"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise ParameterError(f"{name}={value} s must be a finite positive number")
+        if self.delay_nodes not in (0, 1):
+            raise ParameterError(f"delay_nodes={self.delay_nodes!r} must be 0 (no delay) or 1 (paper)")
+        if self.touchdown_detection not in TOUCHDOWN_DETECTIONS:
+            raise ParameterError(
+                f"touchdown_detection={self.touchdown_detection!r} must be one of {TOUCHDOWN_DETECTIONS}"
+            )
+        if self.first_stance_foot not in ("left", "right"):
+            raise ParameterError(f"first_stance_foot={self.first_stance_foot!r} must be 'left' or 'right'")
+        if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
+            raise ParameterError(f"max_iterations={self.max_iterations!r} must be an integer >= 1")
+
+
+@dataclass
+class _Reference:
+    """The solution the 1 kHz loop follows (a snapshot of the last good MPC solution)."""
+
+    t: float  # time of node 0 [s]
+    xs: np.ndarray  # (N+1, nx)
+    us: np.ndarray  # (N, nu)
+    K: np.ndarray  # (N, nu, ndx)
+
+
+@dataclass
+class _Timers:
+    sequencer: float = 0.0
+    mpc: float = 0.0
+    feedback: float = 0.0
+    extras: dict = field(default_factory=dict)
+
+
+class WalkingController:
+    """Footstep sequencer + whole-body MPC at ``replan_period`` + Riccati feedback at every tick.
+
+    Args:
+        config: :class:`WalkingControllerConfig`.
+    """
+
+    def __init__(self, config: WalkingControllerConfig | None = None) -> None:
+        self.config = config or WalkingControllerConfig()
+        self.replan_period = self.config.replan_period
+        self.timers = _Timers()
+        self._pending_failures: list[float] = sorted(float(t) for t in self.config.mpc_failure_times)
+
+    # ------------------------------------------------------------------ episode setup
+    def reset(self, robot: Any, x0: np.ndarray, t0: float) -> None:
+        from sequencer import FootstepSequencer, SequencerParams
+        from wbmpc import WalkingMPC, WalkingOCPConfig
+
+        cfg = self.config
+        self.robot = robot
+        self.model = robot.pinocchio_model
+        self.data = self.model.createData()
+        self.nq, self.nv = self.model.nq, self.model.nv
+        self.feet = tuple(robot.foot_frames.keys())
+        self.frame_ids = [self.model.getFrameId(robot.foot_frames[f]) for f in self.feet]
+        params = cfg.sequencer_params or SequencerParams.bolt_walking()
+        if cfg.velocity_command is not None:
+            params = _with_velocity(params, cfg.velocity_command)
+        self.sequencer_params = params
+        self.sequencer = FootstepSequencer(params, backend=cfg.sequencer_backend)
+        self.omega = float(np.sqrt(GRAVITY / _com_height(params)))
+        self.mpc = WalkingMPC(
+            robot,
+            cfg.ocp if cfg.ocp is not None else WalkingOCPConfig(),
+            n_nodes=cfg.n_nodes,
+            dt=cfg.node_dt,
+            max_iterations=cfg.max_iterations,
+        )
+        self.stance = StanceTracker(self.feet, cfg.touchdown_detection)
+        feet_world = self._feet_position(np.asarray(x0)[: self.nq])
+        stance_index = self.feet.index(cfg.first_stance_foot)
+        self.stance.reset(cfg.first_stance_foot, feet_world[stance_index, :2], t0)
+        self.plan = None
+        self.reference: _Reference | None = None
+        self.n_failures = 0
+        self.timers = _Timers()
+        self._pending_failures = sorted(float(t) for t in cfg.mpc_failure_times)
+        self._x_ref = np.zeros(self.nq + self.nv)
+
+    def set_velocity_command(self, v_x: float, v_y: float = 0.0) -> None:
+        """Change the walking velocity command [m/s] (takes effect at the next replan)."""
+        from sequencer import FootstepSequencer
+
+        params = _with_velocity(self.sequencer_params, (v_x, v_y))
+        if params != self.sequencer_params:
+            self.sequencer_params = params
+            self.sequencer = FootstepSequencer(params, backend=self.config.sequencer_backend)
+
+    # ------------------------------------------------------------------ helpers
+    def _feet_position(self, q: np.ndarray) -> np.ndarray:
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return np.array([self.data.oMf[i].translation for i in self.frame_ids])
+
+    def _dcm(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        com = pin.centerOfMass(self.model, self.data, q, v)
+        com_velocity = self.data.vcom[0]
+        return com.copy(), com[:2] + com_velocity[:2] / self.omega
+
+    # ------------------------------------------------------------------ 100 Hz
+    def replan(self, t: float, measurement: Measurement) -> dict[str, float]:
+        from sequencer import contact_schedule
+
+        cfg = self.config
+        x = measurement.x
+        q, v = x[: self.nq], x[self.nq :]
+        com, dcm = self._dcm(q, v)
+        feet_world = self._feet_position(q)
+
+        # Stance switch from the previous plan (touchdown time reached, or early contact).
+        first = self.plan.steps[0] if self.plan is not None and len(self.plan.steps) else None
+        switched = self.stance.update(
+            t,
+            None if first is None else first.foot,
+            None if first is None else first.touchdown_time,
+            self.stance.state.t_start,
+            feet_world,
+            measurement.foot_in_contact,
+        )
+
+        record: dict[str, float] = {
+            "stance_foot": float(self.feet.index(self.stance.state.foot)),
+            "stance_x": self.stance.state.position[0],
+            "stance_y": self.stance.state.position[1],
+            "t_stance_start": self.stance.state.t_start,
+            "stance_switched": float(switched),
+            "dcm_x": dcm[0],
+            "dcm_y": dcm[1],
+            "sequencer_ok": 1.0,
+        }
+
+        tic = time.perf_counter()
+        try:
+            self.plan = self.sequencer.plan(
+                t=t,
+                stance_foot=self.stance.state.foot,
+                stance_position=self.stance.state.position,
+                dcm_measured=dcm,
+                t_stance_start=self.stance.state.t_start,
+            )
+        except Exception as err:  # infeasible step QP: keep following the last plan
+            if self.plan is None or not _is_solver_failure(err):
+                raise
+            record["sequencer_ok"] = 0.0
+        sequencer_time = time.perf_counter() - tic
+        self.timers.sequencer += sequencer_time
+        record["sequencer_time"] = sequencer_time
+        step = self.plan.steps[0]
+        record["next_foot"] = float(self.feet.index(step.foot))
+        record["next_x"], record["next_y"] = float(step.position[0]), float(step.position[1])
+        record["next_touchdown_time"] = float(step.touchdown_time)
+
+        tic = time.perf_counter()
+        schedule = contact_schedule(self.plan, t, cfg.node_dt, cfg.n_nodes)
+        com_terminal = _terminal_com(self.plan, t + cfg.n_nodes * cfg.node_dt, com)
+        injected = bool(self._pending_failures) and t >= self._pending_failures[0] - 1e-9
+        if injected:
+            self._pending_failures.pop(0)
+            ok, status, iterations, cost, solve_time = False, "injected_failure", 0, np.nan, 0.0
+        else:
+            solution = self.mpc.update(t, x, schedule, com_terminal)
+            ok, status = bool(solution.ok), str(solution.status)
+            iterations, cost, solve_time = int(solution.iterations), float(solution.cost), solution.solve_time
+            if ok:
+                self.reference = _Reference(
+                    float(solution.t), np.array(solution.xs), np.array(solution.us), np.array(solution.K)
+                )
+        self.timers.mpc += time.perf_counter() - tic
+        if not ok:
+            self.n_failures += 1
+        record.update(
+            mpc_ok=float(ok),
+            mpc_injected_failure=float(injected),
+            mpc_iterations=float(iterations),
+            mpc_cost=cost,
+            mpc_solve_time=float(solve_time),
+            mpc_tick_time=time.perf_counter() - tic,
+            mpc_reference_age=np.nan if self.reference is None else t - self.reference.t,
+            mpc_status_code=float(_STATUS_CODES.get(status, -1)),
+        )
+        self.last_status = status
+        return record
+
+    # ------------------------------------------------------------------ 1 kHz
+    def compute(self, t: float, measurement: Measurement) -> np.ndarray:
+        if self.reference is None:
+            raise RuntimeError(
+                "WalkingController.compute(): no MPC solution yet (the first update failed: "
+                f"status {getattr(self, 'last_status', 'none')!r})"
+            )
+        tic = time.perf_counter()
+        cfg, ref = self.config, self.reference
+        n = ref.us.shape[0]
+        elapsed_nodes = (t - ref.t) / cfg.node_dt
+        base = int(np.floor(elapsed_nodes + 1e-9))
+        k = min(max(base + cfg.delay_nodes, 0), n - 1)
+        if cfg.interpolate and k + 1 < n:
+            alpha = min(max(elapsed_nodes - base, 0.0), 1.0)
+            u = (1.0 - alpha) * ref.us[k] + alpha * ref.us[k + 1]
+            x_k, x_next = ref.xs[k], ref.xs[k + 1]
+            self._x_ref[: self.nq] = pin.interpolate(self.model, x_k[: self.nq], x_next[: self.nq], alpha)
+            self._x_ref[self.nq :] = (1.0 - alpha) * x_k[self.nq :] + alpha * x_next[self.nq :]
+            x_ref = self._x_ref
+        else:
+            u, x_ref = ref.us[k], ref.xs[k]
+        tau = np.array(u, dtype=float)
+        if cfg.feedback:
+            x = measurement.x
+            dx = np.empty(2 * self.nv)
+            dx[: self.nv] = pin.difference(self.model, x_ref[: self.nq], x[: self.nq])
+            dx[self.nv :] = x[self.nq :] - x_ref[self.nq :]
+            tau += ref.K[k] @ dx
+        self.timers.feedback += time.perf_counter() - tic
+        return tau
+
+
+_STATUS_CODES = {"injected_failure": -2}
+
+
+def _is_solver_failure(err: Exception) -> bool:
+    from wbmpc.errors import SolverError
+
+    return isinstance(err, SolverError) or type(err).__name__.lower().startswith("infeasible")
+
+
+def _com_height(params: Any) -> float:
+    for name in ("com_height", "z_c", "zc"):
+        if hasattr(params, name):
+            return float(getattr(params, name))
+    raise ParameterError(f"sequencer parameters {type(params).__name__} have no CoM height field")
+
+
+def _with_velocity(params: Any, command: tuple[float, float]) -> Any:
+    v_x, v_y = float(command[0]), float(command[1])
+    changes = {"v_x": v_x}
+    if hasattr(params, "v_y"):
+        changes["v_y"] = v_y
+    elif v_y != 0.0:
+        raise ParameterError(f"velocity_command v_y={v_y} m/s: the sequencer only takes a forward speed")
+    return dataclasses.replace(params, **changes)
+
+
+def _terminal_com(plan: Any, t_horizon: float, com: np.ndarray) -> np.ndarray:
+    """CoM reference at the end of the horizon (eq. 24): LIPM prediction in xy, current height."""
+    com_xy = np.asarray(plan.lipm_com_at(t_horizon, com[:2]), dtype=float)
+    return np.array([com_xy[0], com_xy[1], com[2]])

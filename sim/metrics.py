@@ -1,0 +1,136 @@
+"""Summary figures of a closed-loop run, comparable with the paper's (section IV).
+
+Definitions (all times in s, velocities in m/s, world frame):
+
+- ``velocity_error_x/y``: |mean base velocity - command| over the steady window, the paper's
+  epsilon_V = |V_bar - V*| (paper, walk at 0.33 m/s: (5.2, 1.1) mm/s). The steady window starts
+  ``steady_start`` after the beginning of the run or the last command change, whichever is later.
+- ``rise_time`` (when the command changes): time from the change until the running average of the
+  base x velocity (window ``AVERAGE_WINDOW``) first reaches 90 % of the step in command
+  (paper, transition 0 -> 0.3 m/s: 4.35 s).
+- ``push_recovery_time``: time from the end of the push until the running average of the base y
+  velocity is back within ``RECOVERY_BAND`` of its value before the push, and stays there.
+- ``max_torque_ratio``: max |tau_command| / torque limit (> 1 means the limits clipped the command);
+  ``saturated_fraction``: fraction of ticks with at least one clipped joint.
+- MPC tick time: wall time of each MPC update (median, p99) [s]; ``real_time_factor``: simulated
+  time / wall time (> 1 is faster than real time).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+AVERAGE_WINDOW = 1.0  # [s], running average of the base velocity (about two steps)
+RECOVERY_BAND = 0.03  # [m/s]
+PAPER_FIGURES = {
+    "velocity_error_x": 5.2e-3,  # [m/s], walk at 0.33 m/s (section IV.B)
+    "velocity_error_y": 1.1e-3,  # [m/s]
+    "rise_time": 4.35,  # [s], transition 0 -> 0.3 m/s at t = 5 s (section IV.D)
+}
+
+
+def running_average(t: np.ndarray, signal: np.ndarray, window: float = AVERAGE_WINDOW) -> np.ndarray:
+    """Trailing moving average of ``signal`` over ``window`` seconds (shorter at the start)."""
+    if len(t) == 0:
+        return np.asarray(signal, dtype=float)
+    dt = float(t[1] - t[0]) if len(t) > 1 else 1.0
+    n = max(1, int(round(window / dt)))
+    cumulative = np.concatenate([[0.0], np.cumsum(signal)])
+    index = np.arange(1, len(signal) + 1)
+    start = np.maximum(index - n, 0)
+    return (cumulative[index] - cumulative[start]) / (index - start)
+
+
+def compute_metrics(log) -> dict[str, Any]:
+    """Metrics of a :class:`sim.log.RunLog` (works on partial logs of falls and errors)."""
+    ticks, replans, timing = log.ticks, log.replans, log.timing
+    t = ticks.get("t", np.zeros(0))
+    metrics: dict[str, Any] = {
+        "status": log.status,
+        "fell": log.status == "fell",
+        "fall_time": log.fall_time,
+        "fall_reason": log.fall_reason,
+        "simulated_time": float(len(t) * (t[1] - t[0])) if len(t) > 1 else 0.0,
+    }
+    total = timing.get("total", 0.0)
+    metrics["real_time_factor"] = metrics["simulated_time"] / total if total > 0 else None
+    if len(t) < 2:
+        return metrics
+
+    velocity = ticks["base_velocity_world"]
+    command = ticks["velocity_command"]
+    metrics["distance_x"] = float(ticks["x"][-1, 0] - ticks["x"][0, 0])
+
+    # Steady window: after steady_start and after the last change of command.
+    steady_start = float(log.params.get("steady_start", 3.0))
+    changes = np.flatnonzero(np.any(np.diff(command, axis=0) != 0, axis=1))
+    last_change = t[changes[-1] + 1] if len(changes) else t[0]
+    start = max(t[0] + steady_start, last_change + steady_start)
+    window = t >= start
+    metrics["steady_window"] = [float(start), float(t[-1])] if window.any() else None
+    if window.sum() > 1:
+        mean_velocity = velocity[window, :2].mean(axis=0)
+        error = np.abs(mean_velocity - command[window][-1])
+        metrics["mean_velocity_x"], metrics["mean_velocity_y"] = float(mean_velocity[0]), float(mean_velocity[1])
+        metrics["velocity_error_x"], metrics["velocity_error_y"] = float(error[0]), float(error[1])
+
+    # Rise time after the last command change.
+    if len(changes):
+        i_change = changes[-1] + 1
+        before, after = command[i_change - 1, 0], command[i_change, 0]
+        average_x = running_average(t, velocity[:, 0])
+        target = before + 0.9 * (after - before)
+        later = np.arange(i_change, len(t))
+        reached = later[(average_x[later] - target) * np.sign(after - before) >= 0]
+        metrics["rise_time"] = float(t[reached[0]] - t[i_change]) if len(reached) else None
+
+    # Push recovery.
+    events = log.params.get("events", {})
+    if "push_start" in events and "push_end" in events:
+        push_start, push_end = events["push_start"], events["push_end"]
+        metrics["push_applied"] = bool(t[-1] >= push_end)
+        metrics["push_recovered"] = bool(t[-1] >= push_end) and log.status == "completed"
+        average_y = running_average(t, velocity[:, 1])
+        before = t < push_start
+        if before.any() and t[-1] >= push_end:
+            reference = average_y[before][-1]
+            after = np.flatnonzero(t >= push_end)
+            outside = np.abs(average_y[after] - reference) > RECOVERY_BAND
+            if not outside.any():
+                metrics["push_recovery_time"] = 0.0
+            elif outside[-1]:
+                metrics["push_recovery_time"] = None
+            else:
+                last_outside = after[np.flatnonzero(outside)[-1]]
+                metrics["push_recovery_time"] = float(t[last_outside + 1] - push_end)
+            metrics["push_max_dcm_deviation_y"] = float(
+                np.max(np.abs(ticks["dcm"][after, 1] - ticks["dcm"][before][-1, 1]))
+            )
+
+    # Torques.
+    limit = np.asarray(log.params.get("torque_limit", np.full(ticks["tau"].shape[1], np.inf)))
+    metrics["max_torque"] = float(np.max(np.abs(ticks["tau"])))
+    metrics["max_torque_ratio"] = float(np.max(np.abs(ticks["tau_command"]) / limit))
+    metrics["saturated_fraction"] = float(np.mean(np.any(np.abs(ticks["tau_command"]) > limit, axis=1)))
+
+    # MPC.
+    if "mpc_tick_time" in replans and len(replans["mpc_tick_time"]):
+        ok = replans["mpc_ok"] > 0.5
+        tick_time = replans["mpc_tick_time"][replans.get("mpc_injected_failure", np.zeros(len(ok))) < 0.5]
+        metrics["mpc_updates"] = int(len(ok))
+        metrics["mpc_failures"] = int(np.sum(~ok))
+        metrics["mpc_injected_failures"] = int(np.sum(replans.get("mpc_injected_failure", 0.0) > 0.5))
+        if len(tick_time):
+            metrics["mpc_tick_time_median"] = float(np.median(tick_time))
+            metrics["mpc_tick_time_p99"] = float(np.percentile(tick_time, 99))
+        metrics["sequencer_failures"] = int(np.sum(replans.get("sequencer_ok", np.ones(1)) < 0.5))
+        if "stance_switched" in replans:
+            metrics["steps"] = int(np.sum(replans["stance_switched"] > 0.5))
+    return metrics
+
+
+def paper_comparison(metrics: dict[str, Any]) -> dict[str, dict[str, float | None]]:
+    """{figure: {"ours": value, "paper": value}} for the figures the paper reports."""
+    return {name: {"ours": metrics.get(name), "paper": value} for name, value in PAPER_FIGURES.items() if name in metrics}

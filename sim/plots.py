@@ -1,0 +1,123 @@
+"""Figures of a closed-loop run, in the layout of the paper's Figs. 5-8.
+
+- :func:`plot_lateral`: CoM (purple), DCM (green) and feet (red left, blue right; drawn while in
+  contact) along y over time (Figs. 5 and 7), with the planned footholds as dots;
+- :func:`plot_velocity`: base velocity along x and y (blue), its running average (green) and the
+  command (red) over time (Figs. 6 and 8);
+- :func:`plot_plane`: foot contacts and DCM in the ground plane (as Fig. 3, for the executed walk);
+- :func:`save_figures`: all three into one PNG (``--plot FILE``).
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from sim.metrics import running_average
+
+COLORS = {"com": "tab:purple", "dcm": "tab:green", "left": "tab:red", "right": "tab:blue", "command": "tab:red"}
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _mark_events(ax, log) -> None:
+    for name, value in log.params.get("events", {}).items():
+        if name.startswith(("push", "speed")):
+            ax.axvline(value, color="0.6", lw=0.8, ls="--")
+    if log.fall_time is not None:
+        ax.axvline(log.fall_time, color="k", lw=1.0)
+        ax.text(log.fall_time, ax.get_ylim()[1], " fall", va="top", fontsize=8)
+
+
+def plot_lateral(log, ax=None, t_range: tuple[float, float] | None = None):
+    """CoM, DCM and feet along y [m] over time [s] (paper Figs. 5 and 7)."""
+    plt = _pyplot()
+    if ax is None:
+        _, ax = plt.subplots(figsize=(8, 3))
+    ticks = log.ticks
+    t = ticks["t"]
+    keep = np.ones(len(t), bool) if t_range is None else (t >= t_range[0]) & (t <= t_range[1])
+    ax.plot(t[keep], ticks["com"][keep, 1], color=COLORS["com"], label="CoM")
+    ax.plot(t[keep], ticks["dcm"][keep, 1], color=COLORS["dcm"], label="DCM")
+    feet_names = ("left", "right")
+    for j, foot in enumerate(feet_names[: ticks["feet"].shape[1]]):
+        y = np.where(ticks["foot_contact"][:, j], ticks["feet"][:, j, 1], np.nan)
+        ax.plot(t[keep], y[keep], color=COLORS[foot], lw=2.5, label=f"{foot} foot (contact)")
+    replans = log.replans
+    if "next_y" in replans and len(replans["next_y"]):
+        rt = replans["t"]
+        rkeep = np.ones(len(rt), bool) if t_range is None else (rt >= t_range[0]) & (rt <= t_range[1])
+        for j, foot in enumerate(feet_names):
+            sel = rkeep & (replans["next_foot"] == j)
+            ax.scatter(replans["next_touchdown_time"][sel], replans["next_y"][sel], s=4, color=COLORS[foot], alpha=0.4)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("y [m]")
+    ax.legend(loc="upper right", fontsize=7, ncol=4)
+    _mark_events(ax, log)
+    return ax
+
+
+def plot_velocity(log, axes=None):
+    """Base velocity x and y [m/s] with its running average and the command (paper Figs. 6 and 8)."""
+    plt = _pyplot()
+    if axes is None:
+        _, axes = plt.subplots(2, 1, figsize=(8, 4), sharex=True)
+    t = log.ticks["t"]
+    for j, (ax, axis) in enumerate(zip(axes, "xy")):
+        v = log.ticks["base_velocity_world"][:, j]
+        ax.plot(t, v, color="tab:blue", lw=0.6, label=f"base v_{axis}")
+        ax.plot(t, running_average(t, v), color="tab:green", label="running average (1 s)")
+        ax.plot(t, log.ticks["velocity_command"][:, j], color=COLORS["command"], label="command")
+        ax.set_ylabel(f"v_{axis} [m/s]")
+        _mark_events(ax, log)
+    axes[0].legend(loc="lower right", fontsize=7, ncol=3)
+    axes[-1].set_xlabel("t [s]")
+    return axes
+
+
+def plot_plane(log, ax=None):
+    """Foot contacts and DCM in the ground plane, x-y [m]."""
+    plt = _pyplot()
+    if ax is None:
+        _, ax = plt.subplots(figsize=(8, 3))
+    ticks = log.ticks
+    ax.plot(ticks["dcm"][:, 0], ticks["dcm"][:, 1], color=COLORS["dcm"], lw=0.8, label="DCM")
+    ax.plot(ticks["com"][:, 0], ticks["com"][:, 1], color=COLORS["com"], lw=0.8, label="CoM")
+    for j, foot in enumerate(("left", "right")[: ticks["feet"].shape[1]]):
+        contact = ticks["foot_contact"][:, j]
+        ax.scatter(ticks["feet"][contact, j, 0], ticks["feet"][contact, j, 1], s=2, color=COLORS[foot], label=foot)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.legend(loc="upper right", fontsize=7, ncol=4)
+    return ax
+
+
+def save_figures(log, path: str | os.PathLike) -> str:
+    """Draw the three figures of ``log`` into one PNG at ``path``; returns the path."""
+    plt = _pyplot()
+    fig = plt.figure(figsize=(10, 11))
+    grid = fig.add_gridspec(4, 1, height_ratios=[1.2, 0.8, 0.8, 1.2])
+    plot_lateral(log, fig.add_subplot(grid[0]))
+    ax_x = fig.add_subplot(grid[1])
+    plot_velocity(log, [ax_x, fig.add_subplot(grid[2], sharex=ax_x)])
+    plot_plane(log, fig.add_subplot(grid[3]))
+    title = f"{log.scenario} (seed {log.seed}): {log.status}"
+    if log.fall_reason:
+        title += f" at t = {log.fall_time:.2f} s ({log.fall_reason})"
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    directory = os.path.dirname(os.fspath(path))
+    if directory:
+        os.makedirs(directory, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return os.fspath(path)

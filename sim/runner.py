@@ -1,0 +1,337 @@
+"""The closed loop: a scenario, a controller and MuJoCo at 1 kHz; returns a :class:`sim.log.RunLog`.
+
+``run_scenario`` is a pure function of its arguments (scenario name and parameters, robot, seed):
+it builds everything it needs, keeps no global state and returns plain data, so campaigns can run
+trials in worker processes. The same seed gives the same log (timings aside).
+
+Each tick (``model.opt.timestep``, 1 ms):
+
+1. read MuJoCo's state and convert it to Pinocchio's convention (``robots.conventions``);
+2. compute CoM, DCM and feet (logged for every controller), classify ground contacts, detect a fall;
+3. build the measurement (optionally with Gaussian noise in the tangent space);
+4. every ``controller.replan_period``: pass the scenario's velocity command, call ``replan``;
+5. ``tau = controller.compute(...)``, clipped to the robot's torque limits, written to ``data.ctrl``;
+6. the scenario acts (pushes), then ``mj_step``.
+
+The log and ``metrics.json`` are written to ``out`` (when given) in a ``finally`` block, so a fall,
+an exception or Ctrl-C still leaves a complete record of what happened up to that point.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from sim.controller import GRAVITY, Controller, JointPDController, WalkingController, WalkingControllerConfig
+from sim.falls import ContactSensor, FallCriteria, detect_fall
+from sim.log import RunLog
+from sim.measurement import Measurement
+from sim.scenarios import make_scenario, scenario_class, scenario_parameters
+from wbmpc.errors import ParameterError
+
+CONTROLLERS = ("walking", "pd")
+
+
+@dataclass(frozen=True)
+class RunnerOptions:
+    """Options of the simulation loop itself.
+
+    Attributes:
+        noise_q: standard deviation of the configuration measurement noise, applied in the tangent
+            space (base position [m], base orientation [rad], joints [rad]); 0 = exact.
+        noise_v: standard deviation of the velocity measurement noise [m/s, rad/s]; 0 = exact.
+        min_base_height: see :class:`sim.falls.FallCriteria` [m].
+        max_tilt_deg: largest base tilt before a fall is declared [deg].
+        stop_on_fall: end the run at the first fall (otherwise only record it).
+        progress: show a progress bar of simulated time (None: on runs > 3 s when stderr is a TTY).
+    """
+
+    noise_q: float = 0.0
+    noise_v: float = 0.0
+    min_base_height: float = 0.18
+    max_tilt_deg: float = 50.0
+    stop_on_fall: bool = True
+    progress: bool | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("noise_q", "noise_v"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0):
+                raise ParameterError(f"{name}={value} must be a finite number >= 0")
+
+    @property
+    def fall_criteria(self) -> FallCriteria:
+        return FallCriteria(min_base_height=self.min_base_height, max_tilt=np.deg2rad(self.max_tilt_deg))
+
+
+def run_scenario(
+    name: str,
+    robot: str = "bolt",
+    duration: float | None = None,
+    seed: int = 0,
+    out: str | None = None,
+    controller: str = "walking",
+    **params: Any,
+) -> RunLog:
+    """Run scenario ``name`` in closed loop and return its log (metrics included).
+
+    Args:
+        name: registered scenario ("walk", "push", "terrain", "transition", "slip").
+        robot: registered robot name.
+        duration: simulated time [s]; None = the scenario's default.
+        seed: seed of every random choice (terrain, noise).
+        out: directory for ``log.npz`` and ``metrics.json`` (None: nothing written).
+        controller: "walking" (sequencer + MPC + Riccati feedback) or "pd" (posture hold, falls).
+        **params: scenario parameters (e.g. ``speed``, ``force``), :class:`RunnerOptions` fields,
+            and controller options (:class:`sim.controller.WalkingControllerConfig` fields for
+            "walking"; ``kp``, ``kd`` for "pd").
+
+    Returns:
+        The :class:`RunLog`; ``status`` tells whether the run completed or fell.
+
+    Raises:
+        ParameterError: unknown scenario, controller or parameter (the message lists the allowed ones).
+    """
+    scenario_cls = scenario_class(name)
+    if controller not in CONTROLLERS:
+        raise ParameterError(f"controller={controller!r} must be one of {CONTROLLERS}")
+    scenario_keys = set(scenario_parameters(name))
+    runner_keys = {f.name for f in dataclasses.fields(RunnerOptions)}
+    controller_keys = (
+        {f.name for f in dataclasses.fields(WalkingControllerConfig)} if controller == "walking" else {"kp", "kd"}
+    )
+    unknown = sorted(set(params) - scenario_keys - runner_keys - controller_keys)
+    if unknown:
+        raise ParameterError(
+            f"run_scenario({name!r}): unknown parameter(s) {unknown}; allowed: scenario {sorted(scenario_keys)}, "
+            f"runner {sorted(runner_keys)}, controller {sorted(controller_keys)}"
+        )
+    scenario = make_scenario(name, **{k: v for k, v in params.items() if k in scenario_keys})
+    options = RunnerOptions(**{k: v for k, v in params.items() if k in runner_keys})
+    controller_options = {k: v for k, v in params.items() if k in controller_keys}
+    duration = float(scenario_cls.default_duration if duration is None else duration)
+    if not (np.isfinite(duration) and duration > 0):
+        raise ParameterError(f"duration={duration} s must be a finite positive number")
+    if controller == "walking":
+        for key in ("mpc_failure_times",):
+            if key in controller_options:
+                controller_options[key] = tuple(float(t) for t in np.atleast_1d(controller_options[key]))
+        controller_options.setdefault("velocity_command", scenario.velocity_command(0.0))
+        ctrl: Controller = WalkingController(WalkingControllerConfig(**controller_options))
+    else:
+        ctrl = JointPDController(**controller_options)
+
+    log = RunLog(
+        scenario=name,
+        robot=robot,
+        seed=int(seed),
+        params={
+            "duration": duration,
+            "controller": controller,
+            "scenario": dataclasses.asdict(scenario),
+            "runner": dataclasses.asdict(options),
+            "controller_options": {k: _jsonable_param(v) for k, v in controller_options.items()},
+            "events": scenario.events(),
+            "steady_start": scenario_cls.steady_start,
+        },
+    )
+    return _ClosedLoop(scenario, ctrl, options, robot, duration, int(seed), log, out).run()
+
+
+def _jsonable_param(value: Any) -> Any:
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return dataclasses.asdict(value)
+    return value
+
+
+class _ClosedLoop:
+    """One run's simulation state (built and used by :func:`run_scenario` only)."""
+
+    def __init__(self, scenario, controller, options, robot_name, duration, seed, log, out) -> None:
+        self.scenario, self.controller, self.options = scenario, controller, options
+        self.robot_name, self.duration, self.seed, self.log, self.out = robot_name, duration, seed, log, out
+
+    def _build(self) -> None:
+        import mujoco
+
+        from robots import load_robot
+        from robots.conventions import mujoco_to_pinocchio_state, pinocchio_to_mujoco_state
+
+        self.to_pinocchio = mujoco_to_pinocchio_state
+        self.rng = np.random.default_rng(self.seed)
+        self.robot = robot = load_robot(self.robot_name)
+        spec = robot.mujoco_spec(link_collisions=True)
+        self.scenario.modify_spec(spec, self.rng)
+        self.mj_model = spec.compile()
+        self.mj_data = mujoco.MjData(self.mj_model)
+        qpos, qvel = pinocchio_to_mujoco_state(robot, np.asarray(robot.q_reference), np.asarray(robot.v_reference))
+        self.mj_data.qpos[:] = qpos
+        self.mj_data.qvel[:] = qvel
+        self.scenario.initialize_episode(self.mj_model, self.mj_data, self.rng)
+        mujoco.mj_forward(self.mj_model, self.mj_data)
+        self.mj_step = mujoco.mj_step
+
+        self.model = robot.pinocchio_model
+        self.data = self.model.createData()
+        self.nq, self.nv = self.model.nq, self.model.nv
+        self.nu = self.nv - 6
+        self.feet = tuple(robot.foot_frames.keys())
+        self.frame_ids = [self.model.getFrameId(robot.foot_frames[f]) for f in self.feet]
+        self.torque_limit = np.asarray(robot.torque_limit, dtype=float)
+        self.criteria = self.options.fall_criteria
+        self.contacts = ContactSensor(self.mj_model, robot.foot_radius, self.criteria.foot_contact_margin)
+        com_reference = pin.centerOfMass(self.model, self.data, np.asarray(robot.q_reference))
+        self.omega = float(np.sqrt(GRAVITY / com_reference[2]))
+        self.dt = float(self.mj_model.opt.timestep)
+        self.n_ticks = int(round(self.duration / self.dt))
+        period = self.controller.replan_period / self.dt
+        self.replan_every = int(round(period))
+        if self.replan_every < 1 or abs(period - self.replan_every) > 1e-6:
+            raise ParameterError(
+                f"replan_period={self.controller.replan_period} s must be a multiple of the simulation "
+                f"time step {self.dt} s"
+            )
+
+    def _allocate(self) -> dict[str, np.ndarray]:
+        n, n_feet = self.n_ticks, len(self.feet)
+        return {
+            "t": np.zeros(n),
+            "qpos": np.zeros((n, self.mj_model.nq)),
+            "qvel": np.zeros((n, self.mj_model.nv)),
+            "x": np.zeros((n, self.nq + self.nv)),
+            "tau_command": np.zeros((n, self.nu)),
+            "tau": np.zeros((n, self.nu)),
+            "com": np.zeros((n, 3)),
+            "com_velocity": np.zeros((n, 3)),
+            "dcm": np.zeros((n, 2)),
+            "feet": np.zeros((n, n_feet, 3)),
+            "foot_contact": np.zeros((n, n_feet), dtype=bool),
+            "base_velocity_world": np.zeros((n, 3)),
+            "velocity_command": np.zeros((n, 2)),
+        }
+
+    def _measure_noise(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        x = np.concatenate([q, v])
+        if self.options.noise_q > 0:
+            x[: self.nq] = pin.integrate(self.model, q, self.rng.normal(0.0, self.options.noise_q, self.nv))
+        if self.options.noise_v > 0:
+            x[self.nq :] += self.rng.normal(0.0, self.options.noise_v, self.nv)
+        return x
+
+    def run(self) -> RunLog:
+        log, ticks_done = self.log, 0
+        replan_rows: list[dict[str, float]] = []
+        timing = {"simulation": 0.0, "replan": 0.0, "feedback": 0.0, "logging": 0.0, "total": 0.0}
+        wall_start = time.perf_counter()
+        bar = None
+        ticks: dict[str, np.ndarray] = {}
+        try:
+            self._build()
+            ticks = self._allocate()
+            show = self.options.progress
+            if show is None:
+                show = self.duration > 3.0 and sys.stderr.isatty()
+            if show:
+                from tqdm import tqdm
+
+                bar = tqdm(total=round(self.duration, 3), unit="s", desc=f"{log.scenario} (sim time)", leave=False)
+            x0 = None
+            data, model = self.mj_data, self.mj_model
+            for i in range(self.n_ticks):
+                tic = time.perf_counter()
+                t = i * self.dt
+                q, v = self.to_pinocchio(self.robot, data.qpos, data.qvel)
+                com = pin.centerOfMass(self.model, self.data, q, v)
+                com_velocity = self.data.vcom[0]
+                pin.updateFramePlacements(self.model, self.data)
+                feet = np.array([self.data.oMf[f].translation for f in self.frame_ids])
+                foot_contact, other_contact = self.contacts.classify(data, feet)
+                command = self.scenario.velocity_command(t)
+                ticks["t"][i] = t
+                ticks["qpos"][i] = data.qpos
+                ticks["qvel"][i] = data.qvel
+                ticks["x"][i, : self.nq] = q
+                ticks["x"][i, self.nq :] = v
+                ticks["com"][i] = com
+                ticks["com_velocity"][i] = com_velocity
+                ticks["dcm"][i] = com[:2] + com_velocity[:2] / self.omega
+                ticks["feet"][i] = feet
+                ticks["foot_contact"][i] = foot_contact
+                ticks["base_velocity_world"][i] = data.qvel[:3]
+                ticks["velocity_command"][i] = command
+                ticks_done = i + 1
+                timing["logging"] += time.perf_counter() - tic
+
+                reason = detect_fall(self.criteria, q, other_contact)
+                if reason is not None and log.fall_time is None:
+                    log.status, log.fall_time, log.fall_reason = "fell", t, reason
+                    if self.options.stop_on_fall:
+                        break
+
+                measurement = Measurement(t, self._measure_noise(q, v), foot_contact)
+                if x0 is None:
+                    x0 = measurement.x.copy()
+                    self.controller.reset(self.robot, x0, t)
+                if i % self.replan_every == 0:
+                    tic = time.perf_counter()
+                    if hasattr(self.controller, "set_velocity_command"):
+                        self.controller.set_velocity_command(*command)
+                    record = self.controller.replan(t, measurement)
+                    replan_rows.append({"t": t, **record})
+                    timing["replan"] += time.perf_counter() - tic
+                tic = time.perf_counter()
+                tau_command = np.asarray(self.controller.compute(t, measurement), dtype=float)
+                timing["feedback"] += time.perf_counter() - tic
+                tau = np.clip(tau_command, -self.torque_limit, self.torque_limit)
+                ticks["tau_command"][i] = tau_command
+                ticks["tau"][i] = tau
+
+                tic = time.perf_counter()
+                self.scenario.before_step(t, model, data)
+                data.ctrl[:] = tau
+                self.mj_step(model, data)
+                timing["simulation"] += time.perf_counter() - tic
+                if bar is not None and i % 100 == 99:
+                    bar.update(0.1)
+            if log.status == "running":
+                log.status = "completed"
+        except KeyboardInterrupt:
+            log.status, log.error = "interrupted", "KeyboardInterrupt"
+            raise
+        except BaseException as err:
+            log.status, log.error = "error", f"{type(err).__name__}: {err}"
+            raise
+        finally:
+            if bar is not None:
+                bar.close()
+            timing["total"] = time.perf_counter() - wall_start
+            self._finish(ticks, ticks_done, replan_rows, timing)
+        return log
+
+    def _finish(self, ticks, ticks_done, replan_rows, timing) -> None:
+        from sim.metrics import compute_metrics
+
+        log = self.log
+        log.ticks = {k: v[:ticks_done].copy() for k, v in ticks.items()}
+        keys = sorted({k for row in replan_rows for k in row})
+        log.replans = {k: np.array([row.get(k, np.nan) for row in replan_rows], dtype=float) for k in keys}
+        timers = getattr(self.controller, "timers", None)
+        if timers is not None:
+            timing["sequencer"] = timers.sequencer
+            timing["mpc"] = timers.mpc
+        timing["simulated_time"] = ticks_done * getattr(self, "dt", 0.0)
+        log.timing = timing
+        if getattr(self, "robot", None) is not None:
+            log.params["torque_limit"] = np.asarray(self.robot.torque_limit).tolist()
+        try:
+            log.metrics = compute_metrics(log)
+        except Exception as err:  # metrics must never hide the run's own outcome
+            log.metrics = {"error": f"metrics failed: {type(err).__name__}: {err}"}
+        if self.out is not None:
+            log.save(self.out)

@@ -1,0 +1,20 @@
+"""Registered closed-loop scenarios, one per experiment of the paper (see ``sim.scenarios.base``)."""
+
+from sim.scenarios.base import (
+    Scenario,
+    available_scenarios,
+    make_scenario,
+    register,
+    scenario_class,
+    scenario_parameters,
+)
+from sim.scenarios import push, slip, terrain, transition, walk  # noqa: F401  (registration)
+
+__all__ = [
+    "Scenario",
+    "available_scenarios",
+    "make_scenario",
+    "register",
+    "scenario_class",
+    "scenario_parameters",
+]

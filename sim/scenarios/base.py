@@ -1,0 +1,99 @@
+"""Scenario interface and registry (dm_control style: seeded, registered by name).
+
+A scenario is a dataclass of parameters (with units) that shapes one experiment of the paper:
+
+- ``modify_spec(spec, rng)``: edit the MuJoCo ``MjSpec`` before it is compiled (terrain, patches);
+- ``initialize_episode(model, data, rng)``: set the initial state (default: reference posture
+  lowered until the feet touch the ground, both feet on the ground as in the paper);
+- ``before_step(t, model, data)``: act on the simulation before each step (pushes);
+- ``velocity_command(t)``: the walking command (v_x, v_y) [m/s] at time t.
+
+All randomness comes from the ``rng`` the runner derives from the run's seed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from wbmpc.errors import ParameterError
+
+_REGISTRY: dict[str, type["Scenario"]] = {}
+
+
+def register(name: str):
+    """Class decorator: make a :class:`Scenario` subclass available as ``name``."""
+
+    def decorator(cls: type[Scenario]) -> type[Scenario]:
+        if name in _REGISTRY:
+            raise ValueError(f"scenario {name!r} is already registered by {_REGISTRY[name].__name__}")
+        cls.name = name
+        _REGISTRY[name] = cls
+        return cls
+
+    return decorator
+
+
+def available_scenarios() -> list[str]:
+    """Names of the registered scenarios."""
+    return sorted(_REGISTRY)
+
+
+def scenario_class(name: str) -> type["Scenario"]:
+    if name not in _REGISTRY:
+        raise ParameterError(f"scenario={name!r} is unknown (available: {', '.join(available_scenarios())})")
+    return _REGISTRY[name]
+
+
+def scenario_parameters(name: str) -> dict[str, Any]:
+    """Parameter names of scenario ``name`` with their defaults."""
+    return {f.name: f.default for f in dataclasses.fields(scenario_class(name))}
+
+
+def make_scenario(name: str, **params: Any) -> "Scenario":
+    """Instantiate scenario ``name``; unknown parameters raise a ParameterError listing the allowed ones."""
+    cls = scenario_class(name)
+    allowed = scenario_parameters(name)
+    unknown = sorted(set(params) - set(allowed))
+    if unknown:
+        raise ParameterError(f"scenario {name!r} has no parameter {unknown} (allowed: {sorted(allowed)})")
+    return cls(**params)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Base scenario: flat ground, constant velocity command ``speed`` along x."""
+
+    name: ClassVar[str] = "base"
+    default_duration: ClassVar[float] = 10.0  # [s]
+    steady_start: ClassVar[float] = 3.0  # [s], start of the steady part used by the metrics
+
+    speed: float = 0.33  # [m/s], forward velocity command
+
+    def __post_init__(self) -> None:
+        _check_range("speed", self.speed, -1.0, 1.0, "m/s")
+
+    def modify_spec(self, spec: Any, rng: np.random.Generator) -> None:
+        """Edit the MuJoCo model specification before compilation (default: nothing)."""
+
+    def initialize_episode(self, model: Any, data: Any, rng: np.random.Generator) -> None:
+        """Adjust the initial state in ``data`` (the runner already set the standing posture)."""
+
+    def before_step(self, t: float, model: Any, data: Any) -> None:
+        """Act on the simulation before the step at time ``t`` [s] (default: nothing)."""
+
+    def velocity_command(self, t: float) -> tuple[float, float]:
+        """Walking command (v_x, v_y) [m/s], world frame, at time ``t`` [s]."""
+        return (self.speed, 0.0)
+
+    def events(self) -> dict[str, float]:
+        """Times [s] of the scenario's events (push start, speed change...) for metrics and plots."""
+        return {}
+
+
+def _check_range(name: str, value: float, low: float, high: float, unit: str) -> None:
+    if not (np.isfinite(value) and low <= value <= high):
+        raise ParameterError(f"{name}={value} {unit} must be in [{low}, {high}] {unit}")

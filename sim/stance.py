@@ -1,0 +1,92 @@
+"""Which foot is in stance, where it stands and since when: the sequencer's initial condition.
+
+The footstep sequencer plans from the current stance foot (``p0``), the time elapsed since its
+touchdown (``t`` in eqs. (5a)-(5b)) and the measured DCM. The closed loop must therefore track the
+stance switches. :class:`StanceTracker` switches the stance to the swinging foot when the plan says
+its touchdown has come (``detection="plan"``), or, with ``detection="contact"``, as soon as the
+simulator reports the swing foot on the ground past half of its planned swing (early touchdown on an
+obstacle), and at the latest at the planned time. The new stance position is the *measured* foot
+position, so that slips and terrain show up in the next plan.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from wbmpc.errors import ParameterError
+
+TOUCHDOWN_DETECTIONS = ("plan", "contact")
+
+
+@dataclass
+class StanceState:
+    """Current stance: foot name, measured position (world xy [m]) and touchdown time [s]."""
+
+    foot: str
+    position: np.ndarray
+    t_start: float
+
+
+class StanceTracker:
+    """Tracks the stance foot of a biped from the footstep plan and the measured contacts.
+
+    Args:
+        feet: foot names in the order of the measurements, e.g. ``("left", "right")``.
+        detection: ``"plan"`` (switch at the planned touchdown time) or ``"contact"`` (switch at the
+            first measured contact of the swing foot after half of its swing, or at the planned time).
+    """
+
+    def __init__(self, feet: tuple[str, ...], detection: str = "plan") -> None:
+        if detection not in TOUCHDOWN_DETECTIONS:
+            raise ParameterError(f"touchdown_detection={detection!r} must be one of {TOUCHDOWN_DETECTIONS}")
+        if len(feet) != 2:
+            raise ParameterError(f"feet={feet!r}: the stance tracker handles bipeds (2 feet)")
+        self.feet = tuple(feet)
+        self.detection = detection
+        self.state: StanceState | None = None
+        self.n_switches = 0
+
+    def reset(self, foot: str, position_xy: np.ndarray, t_start: float) -> None:
+        """Start with ``foot`` in stance at ``position_xy`` (world, m) since ``t_start`` [s]."""
+        if foot not in self.feet:
+            raise ParameterError(f"stance foot {foot!r} must be one of {self.feet}")
+        self.state = StanceState(foot, np.array(position_xy[:2], dtype=float), float(t_start))
+        self.n_switches = 0
+
+    def update(
+        self,
+        t: float,
+        next_touchdown_foot: str | None,
+        next_touchdown_time: float | None,
+        swing_start_time: float | None,
+        feet_position_world: np.ndarray,
+        foot_in_contact: np.ndarray,
+    ) -> bool:
+        """Switch the stance if the swing foot has touched down; returns True on a switch.
+
+        Args:
+            t: current time [s].
+            next_touchdown_foot: foot of the first planned step (None if there is no plan yet).
+            next_touchdown_time: its planned touchdown time [s].
+            swing_start_time: when its swing began [s] (the current stance's start).
+            feet_position_world: shape (n_feet, 3), measured foot positions [m], world frame.
+            foot_in_contact: shape (n_feet,), measured contacts.
+        """
+        if self.state is None:
+            raise RuntimeError("StanceTracker.update() called before reset()")
+        if next_touchdown_foot is None or next_touchdown_foot == self.state.foot:
+            return False
+        index = self.feet.index(next_touchdown_foot)
+        touched = t >= next_touchdown_time - 1e-9
+        t_switch = min(float(next_touchdown_time), t)
+        if not touched and self.detection == "contact" and swing_start_time is not None:
+            half_swing = swing_start_time + 0.5 * (next_touchdown_time - swing_start_time)
+            if foot_in_contact[index] and t >= half_swing:
+                touched, t_switch = True, t
+        if not touched:
+            return False
+        self.state = StanceState(next_touchdown_foot, np.array(feet_position_world[index, :2]), t_switch)
+        self.n_switches += 1
+        return True
