@@ -18,6 +18,7 @@ import numpy as np
 # Modules providing ``register(subparsers)``; the order is the order of ``wbmpc --help``.
 SUBCOMMAND_MODULES: list[str] = [
     "bench.cli",
+    "sim.cli",
 ]
 
 
