@@ -55,6 +55,8 @@ class MujocoContactSettings:
         condim: contact dimensionality: 3 = normal force + 2D sliding friction (point feet), 6 adds
             torsional and rolling friction.
         cone: friction cone, "elliptic" or "pyramidal".
+        impratio: ratio of frictional to normal constraint impedance (elliptic cones); > 1 makes
+            friction stiffer, i.e. less creeping slip of point feet [-].
         solref: (time constant [s], damping ratio [-]) of the contact constraint.
         solimp: (d0, dwidth, width [m], midpoint, power) impedance of the contact constraint.
         noslip_iterations: MuJoCo noslip post-processing iterations (0 disables it).
@@ -63,6 +65,7 @@ class MujocoContactSettings:
     friction: float = 1.0
     condim: int = 3
     cone: str = "elliptic"
+    impratio: float = 10.0
     solref: tuple[float, float] = (0.005, 1.0)
     solimp: tuple[float, float, float, float, float] = (0.95, 0.99, 0.001, 0.5, 2.0)
     noslip_iterations: int = 0

@@ -1,0 +1,174 @@
+"""Pinocchio <-> MuJoCo conventions, checked by comparing both engines on random states.
+
+Both models come from the same URDF; at the same physical state they must give the same foot
+positions and velocities, the same mass matrix (armature included) and the same free-fall
+forward dynamics, up to rounding.
+"""
+
+import mujoco
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from robots import load_robot
+from robots.conventions import (
+    MujocoIndexMap,
+    base_rotation,
+    mujoco_to_pinocchio_acceleration,
+    mujoco_to_pinocchio_state,
+    pinocchio_to_mujoco_acceleration,
+    pinocchio_to_mujoco_state,
+    read_mujoco_state,
+    velocity_transform,
+    write_mujoco_state,
+    write_mujoco_torque,
+)
+from robots.mujoco_model import add_box_geom, foot_site_name
+from wbmpc.errors import ParameterError
+
+N_STATES = 25
+
+
+@pytest.fixture(scope="module")
+def bolt():
+    return load_robot("bolt")
+
+
+@pytest.fixture(scope="module")
+def mj_model(bolt):
+    model = bolt.mujoco_model(floor=False)
+    model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT  # free flight: no foot-foot contact
+    return model
+
+
+def full_mass_matrix(mj_model, mj_data, out):
+    """Dense MuJoCo mass matrix into ``out`` (mj_fullM's signature changed in MuJoCo 4)."""
+    try:
+        mujoco.mj_fullM(mj_model, mj_data, out)
+    except TypeError:
+        mujoco.mj_fullM(mj_model, out, mj_data.qM)
+
+
+def random_state(robot, rng):
+    q = np.empty(robot.nq)
+    q[0:3] = rng.uniform(-1.0, 1.0, 3)
+    quat = rng.normal(size=4)
+    q[3:7] = quat / np.linalg.norm(quat)
+    q[7:] = rng.uniform(-np.pi, np.pi, robot.nu)
+    v = rng.normal(scale=2.0, size=robot.nv)
+    return q, v
+
+
+def random_states(robot, seed=0):
+    rng = np.random.default_rng(seed)
+    return [random_state(robot, rng) for _ in range(N_STATES)]
+
+
+def test_round_trip_is_exact(bolt):
+    for q, v in random_states(bolt, seed=1):
+        qpos, qvel = pinocchio_to_mujoco_state(bolt, q, v)
+        np.testing.assert_array_equal(qpos[3:7], [q[6], q[3], q[4], q[5]])  # (w, x, y, z)
+        np.testing.assert_array_equal(qvel[3:], v[3:])  # angular (body frame) and joints unchanged
+        q2, v2 = mujoco_to_pinocchio_state(bolt, qpos, qvel)
+        np.testing.assert_array_equal(q2, q)
+        np.testing.assert_allclose(v2, v, rtol=0, atol=1e-14)
+        a = np.random.default_rng(2).normal(size=bolt.nv)
+        qacc = pinocchio_to_mujoco_acceleration(bolt, q, v, a)
+        np.testing.assert_allclose(mujoco_to_pinocchio_acceleration(bolt, qpos, qvel, qacc), a, rtol=0, atol=1e-13)
+
+
+def test_base_rotation_matches_pinocchio(bolt):
+    for q, _ in random_states(bolt, seed=3)[:5]:
+        expected = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
+        np.testing.assert_allclose(base_rotation(q), expected, atol=1e-15)
+
+
+def test_foot_positions_and_velocities_agree(bolt, mj_model):
+    model, data = bolt.pinocchio_model, bolt.create_pinocchio_data()
+    mj_data = mujoco.MjData(mj_model)
+    sites = {side: mj_model.site(foot_site_name(side)).id for side in bolt.foot_frames}
+    velocity = np.zeros(6)
+    for q, v in random_states(bolt, seed=4):
+        mj_data.qpos[:], mj_data.qvel[:] = pinocchio_to_mujoco_state(bolt, q, v)
+        mujoco.mj_forward(mj_model, mj_data)
+        pin.forwardKinematics(model, data, q, v)
+        pin.updateFramePlacements(model, data)
+        for side, frame_id in bolt.foot_frame_ids.items():
+            np.testing.assert_allclose(mj_data.site_xpos[sites[side]], data.oMf[frame_id].translation, rtol=0, atol=1e-12)
+            mujoco.mj_objectVelocity(mj_model, mj_data, mujoco.mjtObj.mjOBJ_SITE, sites[side], velocity, 0)
+            expected = pin.getFrameVelocity(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED)
+            np.testing.assert_allclose(velocity[3:], expected.linear, rtol=0, atol=1e-11)
+            np.testing.assert_allclose(velocity[:3], expected.angular, rtol=0, atol=1e-11)
+
+
+def test_mass_matrices_agree_including_armature(bolt, mj_model):
+    model, data = bolt.pinocchio_model, bolt.create_pinocchio_data()
+    mj_data = mujoco.MjData(mj_model)
+    M_mujoco = np.zeros((bolt.nv, bolt.nv))
+    for q, v in random_states(bolt, seed=5):
+        mj_data.qpos[:], mj_data.qvel[:] = pinocchio_to_mujoco_state(bolt, q, v)
+        mujoco.mj_forward(mj_model, mj_data)
+        full_mass_matrix(mj_model, mj_data, M_mujoco)
+        M_pinocchio = pin.crba(model, data, q)
+        M_pinocchio = np.triu(M_pinocchio) + np.triu(M_pinocchio, 1).T
+        T = velocity_transform(bolt, q)
+        np.testing.assert_allclose(T.T @ M_mujoco @ T, M_pinocchio, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(np.diag(mj_model.dof_armature)[6:, 6:], np.diag(bolt.armature))
+
+
+def test_forward_dynamics_agree(bolt, mj_model):
+    model, data = bolt.pinocchio_model, bolt.create_pinocchio_data()
+    mj_data = mujoco.MjData(mj_model)
+    index_map = MujocoIndexMap.from_model(bolt, mj_model)
+    rng = np.random.default_rng(6)
+    worst = 0.0
+    for q, v in random_states(bolt, seed=7):
+        tau = rng.uniform(-1.0, 1.0, bolt.nu) * bolt.torque_limit
+        write_mujoco_state(bolt, index_map, mj_data, q, v)
+        write_mujoco_torque(bolt, index_map, mj_data, tau)
+        mujoco.mj_forward(mj_model, mj_data)
+        a = pin.aba(model, data, q, v, np.concatenate([np.zeros(6), tau]))
+        expected = pinocchio_to_mujoco_acceleration(bolt, q, v, a)
+        worst = max(worst, np.max(np.abs(mj_data.qacc - expected)) / (1.0 + np.max(np.abs(expected))))
+    assert worst < 1e-10
+
+
+def test_torque_order_and_clamping(bolt):
+    mj_model = bolt.mujoco_model(floor=False)
+    index_map = MujocoIndexMap.from_model(bolt, mj_model)
+    assert index_map.is_identity
+    assert [mj_model.actuator(i).name for i in index_map.actuators] == list(bolt.actuated_joint_names)
+    mj_data = mujoco.MjData(mj_model)
+    tau = np.array([10.0, -10.0, 1.0, -1.0, 0.5, 2.7])
+    write_mujoco_torque(bolt, index_map, mj_data, tau)
+    mujoco.mj_forward(mj_model, mj_data)
+    np.testing.assert_allclose(mj_data.actuator_force, np.clip(tau, -bolt.torque_limit, bolt.torque_limit))
+    np.testing.assert_allclose(mj_data.qfrc_actuator[6:], np.clip(tau, -2.7, 2.7))
+    with pytest.raises(ParameterError, match=r"tau has shape \(5,\), expected \(6,\)"):
+        write_mujoco_torque(bolt, index_map, mj_data, np.zeros(5))
+
+
+def test_index_map_with_an_extra_free_body(bolt):
+    spec = bolt.mujoco_spec()
+    ball = spec.worldbody.add_body(name="ball", pos=[1.0, 0.0, 0.5])
+    ball.add_freejoint(name="ball_joint")
+    ball.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.05, 0, 0], mass=0.1)
+    add_box_geom(spec, "block", [0.3, 0.0, 0.003], [0.02, 0.02, 0.003], friction=0.2)
+    mj_model = spec.compile()
+    index_map = MujocoIndexMap.from_model(bolt, mj_model)
+    assert (index_map.nq_mujoco, index_map.nv_mujoco) == (bolt.nq + 7, bolt.nv + 6)
+    assert not index_map.is_identity
+    mj_data = mujoco.MjData(mj_model)
+    q, v = random_state(bolt, np.random.default_rng(8))
+    write_mujoco_state(bolt, index_map, mj_data, q, v)
+    q2, v2 = read_mujoco_state(bolt, index_map, mj_data)
+    np.testing.assert_array_equal(q2, q)
+    np.testing.assert_allclose(v2, v, atol=1e-14)
+    np.testing.assert_array_equal(mj_data.qpos[bolt.nq:bolt.nq + 3], [1.0, 0.0, 0.5])  # ball untouched
+
+
+def test_bad_shapes_are_rejected(bolt):
+    with pytest.raises(ParameterError, match=r"q has shape \(12,\), expected \(13,\)"):
+        pinocchio_to_mujoco_state(bolt, np.zeros(12), np.zeros(12))
+    with pytest.raises(ParameterError, match=r"qvel has shape \(13,\), expected \(12,\)"):
+        mujoco_to_pinocchio_state(bolt, np.zeros(13), np.zeros(13))
