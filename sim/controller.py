@@ -106,7 +106,8 @@ class WalkingControllerConfig:
         mpc_failure_times: injected failures [s]: the MPC update at the first replan at or after
             each time is discarded as if the solver had failed (the last good solution is kept).
         sequencer_params: ``sequencer.SequencerParams``; None = ``SequencerParams.bolt_walking()``.
-        sequencer_backend: QP backend of the sequencer ("osqp" as in the paper, or "proxqp").
+        sequencer_backend: QP backend of the sequencer: "exact" (closed-form solution of the same QP,
+            verified against OSQP in the sequencer tests, fastest), "osqp" (the paper's) or "proxqp".
         ocp: ``wbmpc.WalkingOCPConfig``; None = its defaults.
     """
 
@@ -122,7 +123,7 @@ class WalkingControllerConfig:
     velocity_command: tuple[float, float] | None = None
     mpc_failure_times: tuple[float, ...] = ()
     sequencer_params: Any = None
-    sequencer_backend: str = "osqp"
+    sequencer_backend: str = "exact"
     ocp: Any = None
 
     def __post_init__(self) -> None:

@@ -76,7 +76,7 @@ def run_scenario(
     duration: float | None = None,
     seed: int = 0,
     out: str | None = None,
-    controller: str = "walking",
+    controller: "str | Controller" = "walking",
     **params: Any,
 ) -> RunLog:
     """Run scenario ``name`` in closed loop and return its log (metrics included).
@@ -87,7 +87,9 @@ def run_scenario(
         duration: simulated time [s]; None = the scenario's default.
         seed: seed of every random choice (terrain, noise).
         out: directory for ``log.npz`` and ``metrics.json`` (None: nothing written).
-        controller: "walking" (sequencer + MPC + Riccati feedback) or "pd" (posture hold, falls).
+        controller: "walking" (sequencer + MPC + Riccati feedback), "pd" (posture hold, falls), or
+            an object implementing :class:`sim.controller.Controller` (then ``params`` holds no
+            controller options).
         **params: scenario parameters (e.g. ``speed``, ``force``), :class:`RunnerOptions` fields,
             and controller options (:class:`sim.controller.WalkingControllerConfig` fields for
             "walking"; ``kp``, ``kd`` for "pd").
@@ -99,13 +101,19 @@ def run_scenario(
         ParameterError: unknown scenario, controller or parameter (the message lists the allowed ones).
     """
     scenario_cls = scenario_class(name)
-    if controller not in CONTROLLERS:
-        raise ParameterError(f"controller={controller!r} must be one of {CONTROLLERS}")
+    custom = not isinstance(controller, str)
+    if custom and not isinstance(controller, Controller):
+        raise ParameterError(f"controller={controller!r} does not implement sim.controller.Controller")
+    if not custom and controller not in CONTROLLERS:
+        raise ParameterError(f"controller={controller!r} must be one of {CONTROLLERS} or a Controller object")
     scenario_keys = set(scenario_parameters(name))
     runner_keys = {f.name for f in dataclasses.fields(RunnerOptions)}
-    controller_keys = (
-        {f.name for f in dataclasses.fields(WalkingControllerConfig)} if controller == "walking" else {"kp", "kd"}
-    )
+    if custom:
+        controller_keys: set[str] = set()
+    elif controller == "walking":
+        controller_keys = {f.name for f in dataclasses.fields(WalkingControllerConfig)}
+    else:
+        controller_keys = {"kp", "kd"}
     unknown = sorted(set(params) - scenario_keys - runner_keys - controller_keys)
     if unknown:
         raise ParameterError(
@@ -118,12 +126,14 @@ def run_scenario(
     duration = float(scenario_cls.default_duration if duration is None else duration)
     if not (np.isfinite(duration) and duration > 0):
         raise ParameterError(f"duration={duration} s must be a finite positive number")
-    if controller == "walking":
+    if custom:
+        ctrl: Controller = controller
+    elif controller == "walking":
         for key in ("mpc_failure_times",):
             if key in controller_options:
                 controller_options[key] = tuple(float(t) for t in np.atleast_1d(controller_options[key]))
         controller_options.setdefault("velocity_command", scenario.velocity_command(0.0))
-        ctrl: Controller = WalkingController(WalkingControllerConfig(**controller_options))
+        ctrl = WalkingController(WalkingControllerConfig(**controller_options))
     else:
         ctrl = JointPDController(**controller_options)
 
@@ -133,7 +143,7 @@ def run_scenario(
         seed=int(seed),
         params={
             "duration": duration,
-            "controller": controller,
+            "controller": controller if not custom else type(controller).__name__,
             "scenario": dataclasses.asdict(scenario),
             "runner": dataclasses.asdict(options),
             "controller_options": {k: _jsonable_param(v) for k, v in controller_options.items()},

@@ -24,8 +24,8 @@ class Slip(Scenario):
     side: str = "left"  # "left" (y > 0) or "right" (y < 0) foot's track
     x_start: float = 1.0  # [m], world x where the patch begins
     length: float = 0.4  # [m], patch length along x
-    patch_width: float = 0.15  # [m], along y, centred on the foot's track
-    track_offset: float = 0.1  # [m], |y| of the foot's track
+    patch_width: float = 0.08  # [m], along y, centred on the foot's track
+    track_offset: float = 0.05  # [m], |y| of the foot's track (half the preset's nominal step width)
 
     def __post_init__(self) -> None:
         super().__post_init__()

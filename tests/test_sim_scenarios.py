@@ -1,0 +1,120 @@
+"""Scenario registry, terrain and patch generation, stance tracking and metric definitions."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from robots import load_robot
+from sim.log import RunLog
+from sim.metrics import compute_metrics, running_average
+from sim.scenarios import available_scenarios, make_scenario, scenario_parameters
+from sim.stance import StanceTracker
+from wbmpc.errors import ParameterError
+
+
+def test_registry_has_the_paper_scenarios():
+    assert {"walk", "push", "terrain", "transition", "slip"} <= set(available_scenarios())
+    assert scenario_parameters("push")["force"] == 6.3
+    assert scenario_parameters("walk")["speed"] == 0.33
+    with pytest.raises(ParameterError, match=r"has no parameter \['forse'\]"):
+        make_scenario("push", forse=3.0)
+    with pytest.raises(ParameterError, match="side='middle'"):
+        make_scenario("slip", side="middle")
+    with pytest.raises(ParameterError, match="speed=5.0 m/s"):
+        make_scenario("walk", speed=5.0)
+
+
+def test_terrain_boxes_follow_the_paper_distribution_and_the_seed():
+    terrain = make_scenario("terrain", length=20.0, width=1.0)
+    boxes = terrain.sample_boxes(np.random.default_rng(0))
+    assert abs(len(boxes) - 200) < 3 * np.sqrt(200)  # Poisson, 10 per m² over 20 m²
+    assert np.all((boxes[:, 3:5] >= 0.01) & (boxes[:, 3:5] <= 0.05))
+    assert np.all((boxes[:, 5] >= 0.005) & (boxes[:, 5] <= 0.008))
+    np.testing.assert_array_equal(boxes, terrain.sample_boxes(np.random.default_rng(0)))
+    robot = load_robot("bolt")
+    spec = robot.mujoco_spec()
+    make_scenario("terrain", length=2.0).modify_spec(spec, np.random.default_rng(1))
+    model = spec.compile()
+    names = [model.geom(i).name for i in range(model.ngeom)]
+    assert sum(name.startswith("terrain_box_") for name in names) > 0
+
+
+def test_slip_patch_friction_is_the_one_used_in_contacts():
+    from robots.conventions import pinocchio_to_mujoco_state
+
+    robot = load_robot("bolt")
+    spec = robot.mujoco_spec()
+    make_scenario("slip", friction=0.05, x_start=-0.2, length=0.4).modify_spec(spec, np.random.default_rng(0))
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    data.qpos[:], data.qvel[:] = pinocchio_to_mujoco_state(robot, robot.q_reference, robot.v_reference)
+    data.qpos[2] += 0.001  # stand on the 1 mm patch
+    mujoco.mj_forward(model, data)
+    patch = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "slip_patch")
+    left_foot = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "left_foot")
+    on_patch = [c for c in data.contact[: data.ncon] if {c.geom1, c.geom2} == {patch, left_foot}]
+    assert len(on_patch) == 1  # the left foot (y > 0) stands on the patch
+    assert on_patch[0].friction[0] == pytest.approx(0.05)  # the patch's friction, not the foot's 1.0
+    assert robot.mujoco_contact.friction == pytest.approx(1.0)
+
+
+def test_transition_command_changes_at_the_switch():
+    scenario = make_scenario("transition")
+    assert scenario.velocity_command(4.99) == (0.0, 0.0)
+    assert scenario.velocity_command(5.0) == (0.3, 0.0)
+
+
+def test_stance_tracker_switches_at_the_planned_touchdown_or_on_early_contact():
+    feet = np.array([[0.0, 0.05, 0.016], [0.1, -0.05, 0.016]])
+    tracker = StanceTracker(("left", "right"), detection="plan")
+    tracker.reset("left", feet[0, :2], 0.0)
+    assert not tracker.update(0.2, "right", 0.3, 0.0, feet, np.array([True, True]))
+    assert tracker.update(0.31, "right", 0.3, 0.0, feet, np.array([True, False]))
+    assert tracker.state.foot == "right" and tracker.state.t_start == pytest.approx(0.3)
+    np.testing.assert_allclose(tracker.state.position, feet[1, :2])
+    early = StanceTracker(("left", "right"), detection="contact")
+    early.reset("left", feet[0, :2], 0.0)
+    assert not early.update(0.1, "right", 0.3, 0.0, feet, np.array([True, True]))  # before half swing
+    assert early.update(0.2, "right", 0.3, 0.0, feet, np.array([True, True]))
+    assert early.state.t_start == pytest.approx(0.2)
+    with pytest.raises(ParameterError, match="touchdown_detection='vision'"):
+        StanceTracker(("left", "right"), detection="vision")
+
+
+def _synthetic_log(t, velocity_x, command_x, events=None):
+    n = len(t)
+    velocity = np.zeros((n, 3))
+    velocity[:, 0] = velocity_x
+    command = np.zeros((n, 2))
+    command[:, 0] = command_x
+    x = np.zeros((n, 25))
+    x[:, 0] = np.cumsum(velocity_x) * (t[1] - t[0])
+    log = RunLog("synthetic", "bolt", 0, {"steady_start": 1.0, "events": events or {}, "torque_limit": [2.7] * 6})
+    log.status = "completed"
+    log.ticks = {
+        "t": t, "base_velocity_world": velocity, "velocity_command": command, "x": x,
+        "tau": np.full((n, 6), 1.35), "tau_command": np.full((n, 6), 1.35), "dcm": np.zeros((n, 2)),
+    }
+    log.timing = {"total": 1.0}
+    return log
+
+
+def test_velocity_error_and_rise_time_definitions():
+    t = np.arange(0, 10, 0.001)
+    # first-order response to a step 0 -> 0.3 m/s at t = 2 s, time constant 1 s, plus an offset
+    velocity = np.where(t < 2, 0.0, 0.3 * (1 - np.exp(-(t - 2) / 1.0))) + 0.005
+    command = np.where(t < 2, 0.0, 0.3)
+    metrics = compute_metrics(_synthetic_log(t, velocity, command))
+    # running average (1 s window) of a first-order step reaches 90 % of the step later than the signal
+    average = running_average(t, velocity)
+    expected = t[np.argmax((t >= 2) & (average >= 0.27))] - 2.0
+    assert metrics["rise_time"] == pytest.approx(expected)
+    assert 2.3 < metrics["rise_time"] < 3.5
+    # steady window starts 1 s after the last command change (t = 3 s): offset 5 mm/s + residual decay
+    assert metrics["steady_window"][0] == pytest.approx(3.0)
+    residual = np.mean(0.3 * np.exp(-(t[t >= 3] - 2)))
+    assert metrics["velocity_error_x"] == pytest.approx(abs(0.005 - residual), abs=1e-4)
+    assert metrics["max_torque_ratio"] == pytest.approx(0.5)
+    assert metrics["real_time_factor"] == pytest.approx(10.0)
