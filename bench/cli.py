@@ -12,7 +12,9 @@ import importlib
 from wbmpc.cli import add_output_arguments, print_json
 
 # target name -> module path (each module: add_arguments, run, format_report)
-BENCH_MODULES: dict[str, str] = {}
+BENCH_MODULES: dict[str, str] = {
+    "loop": "bench.loop",
+}
 
 
 def register(subparsers) -> None:

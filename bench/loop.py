@@ -1,0 +1,97 @@
+"""Closed-loop real-time factor and where the time goes (simulation, sequencer, MPC, feedback).
+
+Runs the ``walk`` scenario (100 Hz sequencer + MPC, 1 kHz Riccati feedback) for ``--duration``
+simulated seconds and reports:
+
+- the real-time factor (simulated time / wall time; the issue's target is >= 1.5 on one core);
+- the share of the wall time spent in MuJoCo stepping, the sequencer, the MPC update, the 1 kHz
+  feedback and the runner's own bookkeeping (state conversion, kinematics, logging);
+- as the in-run baseline, the cost of bare ``mj_step`` on the same model measured in the same
+  process, and the loop's cost per tick as a multiple of it (machine-independent ratio).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--duration", type=float, default=5.0, help="simulated time [s]")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--scenario", default="walk", help="scenario to run (default: walk)")
+
+
+def _bare_step_time(n_steps: int = 3000) -> float:
+    """Wall time of one bare ``mj_step`` of Bolt standing [s] (median of 3 batches)."""
+    import mujoco
+    import numpy as np
+
+    from robots import load_robot
+    from robots.conventions import pinocchio_to_mujoco_state
+
+    robot = load_robot("bolt")
+    model = robot.mujoco_spec(link_collisions=True).compile()
+    data = mujoco.MjData(model)
+    batches = []
+    for _ in range(3):
+        data.qpos[:], data.qvel[:] = pinocchio_to_mujoco_state(robot, robot.q_reference, robot.v_reference)
+        mujoco.mj_forward(model, data)
+        tic = time.perf_counter()
+        for _ in range(n_steps // 3):
+            mujoco.mj_step(model, data)
+        batches.append((time.perf_counter() - tic) / (n_steps // 3))
+    return float(np.median(batches))
+
+
+def run(args: argparse.Namespace) -> dict:
+    from sim.runner import run_scenario
+
+    bare = _bare_step_time()
+    log = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False)
+    timing = dict(log.timing)
+    total = timing["total"]
+    simulated = timing.get("simulated_time", 0.0)
+    replan_other = timing["replan"] - timing.get("sequencer", 0.0) - timing.get("mpc", 0.0)
+    shares = {
+        "simulation": timing["simulation"] / total,
+        "sequencer": timing.get("sequencer", 0.0) / total,
+        "mpc": timing.get("mpc", 0.0) / total,
+        "feedback": timing["feedback"] / total,
+        "runner (state conversion, kinematics, logging)": (timing["logging"] + max(replan_other, 0.0)) / total,
+    }
+    shares["other (setup, Python loop)"] = max(0.0, 1.0 - sum(shares.values()))
+    n_ticks = len(log.ticks["t"])
+    return {
+        "scenario": args.scenario,
+        "status": log.status,
+        "simulated_time": simulated,
+        "wall_time": total,
+        "real_time_factor": simulated / total if total > 0 else None,
+        "target_real_time_factor": 1.5,
+        "shares": shares,
+        "bare_mj_step_time": bare,
+        "loop_tick_over_bare_step": (total / n_ticks) / bare if n_ticks else None,
+        "mpc_tick_time_median": log.metrics.get("mpc_tick_time_median"),
+        "mpc_tick_time_p99": log.metrics.get("mpc_tick_time_p99"),
+        "mpc_tick_over_replan_period": (log.metrics.get("mpc_tick_time_median") or 0.0) / 0.01,
+    }
+
+
+def format_report(result: dict) -> str:
+    lines = [
+        f"closed loop '{result['scenario']}' ({result['status']}): {result['simulated_time']:.2f} s simulated "
+        f"in {result['wall_time']:.2f} s wall",
+        f"  real-time factor        {result['real_time_factor']:.2f} x   (target >= {result['target_real_time_factor']})",
+        f"  loop tick / bare mj_step {result['loop_tick_over_bare_step']:.1f} x   "
+        f"(bare mj_step {result['bare_mj_step_time'] * 1e6:.1f} us, in-run baseline)",
+    ]
+    if result.get("mpc_tick_time_median") is not None:
+        lines.append(
+            f"  MPC tick median / p99   {result['mpc_tick_time_median'] * 1e3:.2f} / "
+            f"{result['mpc_tick_time_p99'] * 1e3:.2f} ms  ({result['mpc_tick_over_replan_period']:.2f} of the 10 ms period)"
+        )
+    lines.append("  share of wall time:")
+    for name, share in result["shares"].items():
+        lines.append(f"    {name:<48} {100 * share:5.1f} %")
+    return "\n".join(lines)
