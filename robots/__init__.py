@@ -12,6 +12,7 @@ package registers them all.
 from robots.description import CONTACT_TYPES, MujocoContactSettings, RobotDescription
 from robots.registry import available_robots, load_robot, register_robot
 from robots import bolt as _bolt  # noqa: F401  (registers "bolt")
+from robots import g1 as _g1  # noqa: F401  (registers "g1")
 
 __all__ = [
     "CONTACT_TYPES",

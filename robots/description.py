@@ -255,8 +255,19 @@ class RobotDescription:
         return build_mujoco_spec(self, **options)
 
     def mujoco_model(self, **options: Any) -> "mujoco.MjModel":
-        """Compiled ``mujoco.MjModel`` of this robot (same options as :meth:`mujoco_spec`)."""
-        return self.mujoco_spec(**options).compile()
+        """Compiled ``mujoco.MjModel`` of this robot (same options as :meth:`mujoco_spec`).
+
+        Its qpos/qvel/ctrl follow the robot-only layout of :mod:`robots.conventions` (checked).
+        """
+        from robots.conventions import MujocoIndexMap
+
+        model = self.mujoco_spec(**options).compile()
+        if not MujocoIndexMap.from_model(self, model).is_identity:
+            raise ParameterError(
+                f"MuJoCo orders the joints of robot '{self.name}' differently from Pinocchio; "
+                "use robots.conventions.MujocoIndexMap to address its coordinates"
+            )
+        return model
 
     def __repr__(self) -> str:
         return (

@@ -29,15 +29,22 @@ from wbmpc.errors import ParameterError
 N_STATES = 25
 
 
+@pytest.fixture(scope="module", params=["bolt", "g1"])
+def robot(request):
+    """Each engine-comparison test runs on Bolt and on G1."""
+    return load_robot(request.param)
+
+
 @pytest.fixture(scope="module")
 def bolt():
     return load_robot("bolt")
 
 
 @pytest.fixture(scope="module")
-def mj_model(bolt):
-    model = bolt.mujoco_model(floor=False)
-    model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT  # free flight: no foot-foot contact
+def mj_model(robot):
+    model = robot.mujoco_model(floor=False)
+    # free flight without joint-limit constraints: only the rigid-body dynamics are compared
+    model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_LIMIT
     return model
 
 
@@ -64,36 +71,36 @@ def random_states(robot, seed=0):
     return [random_state(robot, rng) for _ in range(N_STATES)]
 
 
-def test_round_trip_is_exact(bolt):
-    for q, v in random_states(bolt, seed=1):
-        qpos, qvel = pinocchio_to_mujoco_state(bolt, q, v)
+def test_round_trip_is_exact(robot):
+    for q, v in random_states(robot, seed=1):
+        qpos, qvel = pinocchio_to_mujoco_state(robot, q, v)
         np.testing.assert_array_equal(qpos[3:7], [q[6], q[3], q[4], q[5]])  # (w, x, y, z)
         np.testing.assert_array_equal(qvel[3:], v[3:])  # angular (body frame) and joints unchanged
-        q2, v2 = mujoco_to_pinocchio_state(bolt, qpos, qvel)
+        q2, v2 = mujoco_to_pinocchio_state(robot, qpos, qvel)
         np.testing.assert_array_equal(q2, q)
         np.testing.assert_allclose(v2, v, rtol=0, atol=1e-14)
-        a = np.random.default_rng(2).normal(size=bolt.nv)
-        qacc = pinocchio_to_mujoco_acceleration(bolt, q, v, a)
-        np.testing.assert_allclose(mujoco_to_pinocchio_acceleration(bolt, qpos, qvel, qacc), a, rtol=0, atol=1e-13)
+        a = np.random.default_rng(2).normal(size=robot.nv)
+        qacc = pinocchio_to_mujoco_acceleration(robot, q, v, a)
+        np.testing.assert_allclose(mujoco_to_pinocchio_acceleration(robot, qpos, qvel, qacc), a, rtol=0, atol=1e-13)
 
 
-def test_base_rotation_matches_pinocchio(bolt):
-    for q, _ in random_states(bolt, seed=3)[:5]:
+def test_base_rotation_matches_pinocchio(robot):
+    for q, _ in random_states(robot, seed=3)[:5]:
         expected = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
         np.testing.assert_allclose(base_rotation(q), expected, atol=1e-15)
 
 
-def test_foot_positions_and_velocities_agree(bolt, mj_model):
-    model, data = bolt.pinocchio_model, bolt.create_pinocchio_data()
+def test_foot_positions_and_velocities_agree(robot, mj_model):
+    model, data = robot.pinocchio_model, robot.create_pinocchio_data()
     mj_data = mujoco.MjData(mj_model)
-    sites = {side: mj_model.site(foot_site_name(side)).id for side in bolt.foot_frames}
+    sites = {side: mj_model.site(foot_site_name(side)).id for side in robot.foot_frames}
     velocity = np.zeros(6)
-    for q, v in random_states(bolt, seed=4):
-        mj_data.qpos[:], mj_data.qvel[:] = pinocchio_to_mujoco_state(bolt, q, v)
+    for q, v in random_states(robot, seed=4):
+        mj_data.qpos[:], mj_data.qvel[:] = pinocchio_to_mujoco_state(robot, q, v)
         mujoco.mj_forward(mj_model, mj_data)
         pin.forwardKinematics(model, data, q, v)
         pin.updateFramePlacements(model, data)
-        for side, frame_id in bolt.foot_frame_ids.items():
+        for side, frame_id in robot.foot_frame_ids.items():
             np.testing.assert_allclose(mj_data.site_xpos[sites[side]], data.oMf[frame_id].translation, rtol=0, atol=1e-12)
             mujoco.mj_objectVelocity(mj_model, mj_data, mujoco.mjtObj.mjOBJ_SITE, sites[side], velocity, 0)
             expected = pin.getFrameVelocity(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED)
@@ -101,34 +108,34 @@ def test_foot_positions_and_velocities_agree(bolt, mj_model):
             np.testing.assert_allclose(velocity[:3], expected.angular, rtol=0, atol=1e-11)
 
 
-def test_mass_matrices_agree_including_armature(bolt, mj_model):
-    model, data = bolt.pinocchio_model, bolt.create_pinocchio_data()
+def test_mass_matrices_agree_including_armature(robot, mj_model):
+    model, data = robot.pinocchio_model, robot.create_pinocchio_data()
     mj_data = mujoco.MjData(mj_model)
-    M_mujoco = np.zeros((bolt.nv, bolt.nv))
-    for q, v in random_states(bolt, seed=5):
-        mj_data.qpos[:], mj_data.qvel[:] = pinocchio_to_mujoco_state(bolt, q, v)
+    M_mujoco = np.zeros((robot.nv, robot.nv))
+    for q, v in random_states(robot, seed=5):
+        mj_data.qpos[:], mj_data.qvel[:] = pinocchio_to_mujoco_state(robot, q, v)
         mujoco.mj_forward(mj_model, mj_data)
         full_mass_matrix(mj_model, mj_data, M_mujoco)
         M_pinocchio = pin.crba(model, data, q)
         M_pinocchio = np.triu(M_pinocchio) + np.triu(M_pinocchio, 1).T
-        T = velocity_transform(bolt, q)
+        T = velocity_transform(robot, q)
         np.testing.assert_allclose(T.T @ M_mujoco @ T, M_pinocchio, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(np.diag(mj_model.dof_armature)[6:, 6:], np.diag(bolt.armature))
+    np.testing.assert_allclose(np.diag(mj_model.dof_armature)[6:, 6:], np.diag(robot.armature))
 
 
-def test_forward_dynamics_agree(bolt, mj_model):
-    model, data = bolt.pinocchio_model, bolt.create_pinocchio_data()
+def test_forward_dynamics_agree(robot, mj_model):
+    model, data = robot.pinocchio_model, robot.create_pinocchio_data()
     mj_data = mujoco.MjData(mj_model)
-    index_map = MujocoIndexMap.from_model(bolt, mj_model)
+    index_map = MujocoIndexMap.from_model(robot, mj_model)
     rng = np.random.default_rng(6)
     worst = 0.0
-    for q, v in random_states(bolt, seed=7):
-        tau = rng.uniform(-1.0, 1.0, bolt.nu) * bolt.torque_limit
-        write_mujoco_state(bolt, index_map, mj_data, q, v)
-        write_mujoco_torque(bolt, index_map, mj_data, tau)
+    for q, v in random_states(robot, seed=7):
+        tau = rng.uniform(-1.0, 1.0, robot.nu) * robot.torque_limit
+        write_mujoco_state(robot, index_map, mj_data, q, v)
+        write_mujoco_torque(robot, index_map, mj_data, tau)
         mujoco.mj_forward(mj_model, mj_data)
         a = pin.aba(model, data, q, v, np.concatenate([np.zeros(6), tau]))
-        expected = pinocchio_to_mujoco_acceleration(bolt, q, v, a)
+        expected = pinocchio_to_mujoco_acceleration(robot, q, v, a)
         worst = max(worst, np.max(np.abs(mj_data.qacc - expected)) / (1.0 + np.max(np.abs(expected))))
     assert worst < 1e-10
 

@@ -90,3 +90,22 @@ def test_bad_description_fields_are_rejected(bolt):
         RobotDescription(**{**base, "q_reference": np.full(13, np.nan)})
     with pytest.raises(ParameterError, match=r"q has shape \(12,\), expected \(13,\)"):
         bolt.foot_positions(np.zeros(12))
+
+
+def test_g1_has_flat_6d_sole_contacts_on_the_floor():
+    g1 = load_robot("g1")
+    assert (g1.nq, g1.nv, g1.nu) == (36, 35, 29)
+    assert g1.contact_type == "flat6d" and dict(g1.foot_frames) == {"left": "left_sole", "right": "right_sole"}
+    data = g1.create_pinocchio_data()
+    pin.framesForwardKinematics(g1.pinocchio_model, data, g1.q_reference)
+    for side, frame_id in g1.foot_frame_ids.items():
+        placement = data.oMf[frame_id]
+        assert placement.translation[2] == pytest.approx(0.0, abs=1e-12)
+        np.testing.assert_allclose(placement.rotation, np.eye(3), atol=1e-12)  # soles flat
+    assert data.oMf[g1.foot_frame_ids["left"]].translation[1] > 0.05
+    # URDF effort limits (Unitree ratings) and the per-motor-class armature.
+    np.testing.assert_array_equal(g1.pinocchio_model.effortLimit[6:], g1.torque_limit)
+    knee = g1.actuated_joint_names.index("left_knee_joint")
+    assert g1.torque_limit[knee] == 139.0 and g1.armature[knee] == pytest.approx(0.025101925)
+    assert np.all(g1.armature > 0) and np.all(g1.torque_limit >= 5.0)
+    assert 0.6 < g1.com_height_reference < 0.75
