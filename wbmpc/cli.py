@@ -17,6 +17,9 @@ import numpy as np
 
 # Modules providing ``register(subparsers)``; the order is the order of ``wbmpc --help``.
 SUBCOMMAND_MODULES: list[str] = [
+    "sequencer.cli",
+    "sensitivity.cli",
+    "sequencer.demo",
     "bench.cli",
     "sim.cli",
 ]
