@@ -13,4 +13,25 @@ from wbmpc.errors import WbmpcError
 
 __version__ = "0.1.0"
 
-__all__ = ["WbmpcError", "__version__"]
+_LAZY = {
+    "WalkingOCPConfig": "wbmpc.walking",
+    "StateWeights": "wbmpc.walking",
+    "WalkingOCP": "wbmpc.walking",
+    "WalkingMPC": "wbmpc.mpc",
+    "MPCSolution": "wbmpc.mpc",
+    "ShootingProblem": "wbmpc.problem",
+    "SolverFDDP": "wbmpc.solvers.fddp",
+    "StateMultibody": "wbmpc.state",
+}
+
+
+def __getattr__(name: str):
+    """Import the heavy (Pinocchio) parts on first use, so ``import wbmpc`` stays light."""
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'wbmpc' has no attribute {name!r}")
+
+
+__all__ = ["WbmpcError", "__version__", *_LAZY]

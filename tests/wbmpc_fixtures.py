@@ -1,0 +1,33 @@
+"""Shared fixtures of the wbmpc tests: hand-written alternating gait schedules."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sequencer.schedule import ContactSchedule
+
+
+def alternating_schedule(t0: float, dt: float, n_nodes: int, step_duration: float = 0.3,
+                         first_swing: str = "right", step_length: float = 0.1,
+                         foot_y: tuple[float, float] = (0.1, -0.1), t_start: float = 0.0) -> ContactSchedule:
+    """Single-support alternating gait: the ``first_swing`` foot swings on [t_start, t_start + T),
+    then the other, and so on (no double support, as the sequencer's schedule). Touchdowns
+    advance by ``step_length`` [m] in x per step."""
+    feet = ("left", "right")
+    times = t0 + dt * np.arange(n_nodes + 1)
+    in_contact = np.ones((n_nodes + 1, 2), dtype=bool)
+    phase = np.full((n_nodes + 1, 2), np.nan)
+    duration = np.full((n_nodes + 1, 2), np.nan)
+    touchdown = np.full((n_nodes + 1, 2, 2), np.nan)
+    first = feet.index(first_swing)
+    for k, t in enumerate(times):
+        step = int(np.floor((t - t_start) / step_duration + 1e-9))
+        if step < 0:
+            continue
+        swing = first if step % 2 == 0 else 1 - first
+        in_contact[k, swing] = False
+        phase[k, swing] = (t - t_start - step * step_duration) / step_duration
+        duration[k, swing] = step_duration
+        touchdown[k, swing] = ((step + 1) * step_length, foot_y[swing])
+    return ContactSchedule(t0=t0, dt=dt, feet=feet, in_contact=in_contact, swing_phase=phase,
+                           swing_duration=duration, touchdown_position=touchdown)

@@ -1,0 +1,198 @@
+"""Rigid contact models with Baumgarte stabilisation (Crocoddyl's ContactModel3D / ContactModel6D).
+
+A contact constrains the acceleration of a frame: Jc a + a0 = 0 with the drift
+
+    a0 = a_frame(q, v, a = 0) + Kp · e_position + Kd · v_frame
+
+(the Baumgarte gains Kp [1/s²] and Kd [1/s] pull a drifting contact back to its reference).
+
+- :class:`ContactModel3D` — point foot (Bolt). Expressed in the LOCAL_WORLD_ALIGNED frame: the
+  force (3,) [N] is in the world axes at the foot, so friction cones use the world normal.
+  e_position = R_frameᵀ (p_frame − p_ref) taken in the local frame, as Crocoddyl does.
+- :class:`ContactModel6D` — flat foot (humanoids). Expressed in the LOCAL frame: the wrench (6,)
+  [N, N·m] = (force, torque) in the foot frame; e_position = log6(ref⁻¹ · oMf).
+
+Contacts of a node are kept sorted by name (Crocoddyl stores them in a std::map), so rows of the
+stacked contact Jacobian and force vector follow the alphabetical order of contact names.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from wbmpc.errors import ParameterError
+from wbmpc.state import StateMultibody
+
+
+def skew(w: np.ndarray) -> np.ndarray:
+    """Skew-symmetric matrix [w]× of a 3-vector, shape (3, 3)."""
+    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+
+
+class ContactData:
+    """Buffers of one contact: Jc (nc, nv), a0 (nc,), da0_dx (nc, ndx), force (nc,), df_dx, df_du."""
+
+    def __init__(self, model, nu: int):
+        nv, ndx, nc = model.state.nv, model.state.ndx, model.nc
+        self.Jc = np.zeros((nc, nv))
+        self.a0 = np.zeros(nc)
+        self.da0_dx = np.zeros((nc, ndx))
+        self.force = np.zeros(nc)
+        self.df_dx = np.zeros((nc, ndx))
+        self.df_du = np.zeros((nc, nu))
+        self.fext = pin.Force.Zero()
+        self.dtau_dq = None  # (nv, nv) extra RNEA derivative of a world-aligned force, or None
+        self.fJf = np.zeros((6, nv))
+        self.velocity = pin.Motion.Zero()
+        self.a0_local = np.zeros(nc)
+        self.position_error_local = np.zeros(3)
+        self.rMf = pin.SE3.Identity()
+
+
+class _ContactBase:
+    def __init__(self, state: StateMultibody, frame_id: int, gains: tuple[float, float]):
+        model = state.pinocchio
+        if not (0 <= frame_id < model.nframes):
+            raise ParameterError(f"frame_id={frame_id} is not a frame of model {model.name!r} (0..{model.nframes - 1})")
+        kp, kd = (float(g) for g in gains)
+        if not (np.isfinite(kp) and np.isfinite(kd) and kp >= 0 and kd >= 0):
+            raise ParameterError(f"Baumgarte gains={gains} must be finite and >= 0 (Kp [1/s^2], Kd [1/s])")
+        self.state = state
+        self.frame_id = int(frame_id)
+        self.joint_id = model.frames[frame_id].parentJoint
+        self.joint_placement_frame = model.frames[frame_id].placement  # jMf
+        self.fXj = self.joint_placement_frame.inverse().toActionMatrix()
+        self.gains = (kp, kd)
+
+    def createData(self, nu: int) -> ContactData:
+        return ContactData(self, nu)
+
+
+class ContactModel3D(_ContactBase):
+    """Point contact on a frame, LOCAL_WORLD_ALIGNED.
+
+    Args:
+        state: the multibody state.
+        frame_id: Pinocchio frame index of the foot.
+        reference_world: contact point reference (3,) [m] used by the Kp term; mutable.
+        gains: Baumgarte (Kp [1/s²], Kd [1/s]).
+    """
+
+    nc = 3
+
+    def __init__(self, state: StateMultibody, frame_id: int, reference_world: np.ndarray, gains=(0.0, 0.0)):
+        super().__init__(state, frame_id, gains)
+        self.reference = np.asarray(reference_world, dtype=float).reshape(3).copy()
+
+    def calc(self, data: ContactData, pdata: pin.Data) -> None:
+        """Fill Jc (3, nv) and a0 (3,) from Pinocchio data after computeAllTerms."""
+        model = self.state.pinocchio
+        fid = self.frame_id
+        oMf = pin.updateFramePlacement(model, pdata, fid)
+        data.fJf[:] = pin.getFrameJacobian(model, pdata, fid, pin.LOCAL)
+        data.velocity = pin.getFrameVelocity(model, pdata, fid, pin.LOCAL)
+        a0_local = pin.getFrameClassicalAcceleration(model, pdata, fid, pin.LOCAL).linear
+        oRf = oMf.rotation
+        kp, kd = self.gains
+        if kp != 0.0:
+            data.position_error_local[:] = oRf.T @ (oMf.translation - self.reference)
+            a0_local += kp * data.position_error_local
+        if kd != 0.0:
+            a0_local += kd * data.velocity.linear
+        np.matmul(oRf, data.fJf[:3], out=data.Jc)
+        np.matmul(oRf, a0_local, out=data.a0)
+
+    def calcDiff(self, data: ContactData, pdata: pin.Data) -> None:
+        """Fill da0_dx (3, ndx). Needs computeRNEADerivatives (kinematic derivatives) first."""
+        model = self.state.pinocchio
+        nv = self.state.nv
+        v_dq, a_dq, a_dv, _ = pin.getJointAccelerationDerivatives(model, pdata, self.joint_id, pin.LOCAL)
+        fXj = self.fXj
+        fJf = data.fJf
+        vv_skew = skew(data.velocity.linear)
+        vw_skew = skew(data.velocity.angular)
+        fXjdv_dq = fXj @ v_dq
+        fXjda_dq = fXj @ a_dq
+        fXjda_dv = fXj @ a_dv
+        da_dq = fXjda_dq[:3] + vw_skew @ fXjdv_dq[:3] - vv_skew @ fXjdv_dq[3:]
+        da_dv = fXjda_dv[:3] + vw_skew @ fJf[:3] - vv_skew @ fJf[3:]
+        kp, kd = self.gains
+        oMf = pdata.oMf[self.frame_id]
+        oRf = oMf.rotation
+        if kp != 0.0:
+            da_dq += kp * skew(data.position_error_local) @ fJf[3:] + kp * fJf[:3]
+        if kd != 0.0:
+            da_dq += kd * fXjdv_dq[:3]
+            da_dv += kd * fJf[:3]
+        # Drift re-evaluated with the current joint accelerations (the rotation derivative term).
+        a0_local = pin.getFrameClassicalAcceleration(model, pdata, self.frame_id, pin.LOCAL).linear
+        if kp != 0.0:
+            a0_local += kp * data.position_error_local
+        if kd != 0.0:
+            a0_local += kd * data.velocity.linear
+        a0_world = oRf @ a0_local
+        data.da0_dx[:, :nv] = oRf @ da_dq - (skew(a0_world) @ oRf) @ fJf[3:]
+        data.da0_dx[:, nv:] = oRf @ da_dv
+
+    def update_force(self, data: ContactData, pdata: pin.Data, force: np.ndarray) -> None:
+        """Store the contact force (3,) [N, world axes] and its external force on the parent joint."""
+        data.force[:] = force
+        oRf = pdata.oMf[self.frame_id].rotation
+        f_local = oRf.T @ force
+        data.fext = self.joint_placement_frame.act(pin.Force(f_local, np.zeros(3)))
+        fJf = data.fJf
+        data.dtau_dq = -fJf[:3].T @ (skew(f_local) @ fJf[3:])
+
+
+class ContactModel6D(_ContactBase):
+    """Flat (6D) contact on a frame, LOCAL.
+
+    Args:
+        state: the multibody state.
+        frame_id: Pinocchio frame index of the sole.
+        reference_placement: reference placement of the sole (pin.SE3) used by the Kp term.
+        gains: Baumgarte (Kp [1/s²], Kd [1/s]).
+    """
+
+    nc = 6
+
+    def __init__(self, state: StateMultibody, frame_id: int, reference_placement: pin.SE3, gains=(0.0, 0.0)):
+        super().__init__(state, frame_id, gains)
+        self.reference = pin.SE3(reference_placement)
+
+    def calc(self, data: ContactData, pdata: pin.Data) -> None:
+        model = self.state.pinocchio
+        fid = self.frame_id
+        oMf = pin.updateFramePlacement(model, pdata, fid)
+        data.fJf[:] = pin.getFrameJacobian(model, pdata, fid, pin.LOCAL)
+        a0 = pin.getFrameAcceleration(model, pdata, fid, pin.LOCAL).vector
+        kp, kd = self.gains
+        if kp != 0.0:
+            data.rMf = self.reference.actInv(oMf)
+            a0 += kp * pin.log6(data.rMf).vector
+        if kd != 0.0:
+            data.velocity = pin.getFrameVelocity(model, pdata, fid, pin.LOCAL)
+            a0 += kd * data.velocity.vector
+        data.Jc[:] = data.fJf
+        data.a0[:] = a0
+
+    def calcDiff(self, data: ContactData, pdata: pin.Data) -> None:
+        model = self.state.pinocchio
+        nv = self.state.nv
+        v_dq, a_dq, a_dv, _ = pin.getJointAccelerationDerivatives(model, pdata, self.joint_id, pin.LOCAL)
+        fXj = self.fXj
+        np.matmul(fXj, a_dq, out=data.da0_dx[:, :nv])
+        np.matmul(fXj, a_dv, out=data.da0_dx[:, nv:])
+        kp, kd = self.gains
+        if kp != 0.0:
+            data.da0_dx[:, :nv] += kp * pin.Jlog6(data.rMf) @ data.fJf
+        if kd != 0.0:
+            data.da0_dx[:, :nv] += kd * fXj @ v_dq
+            data.da0_dx[:, nv:] += kd * data.fJf
+
+    def update_force(self, data: ContactData, pdata: pin.Data, force: np.ndarray) -> None:
+        """Store the contact wrench (6,) = (force [N], torque [N·m]) in the LOCAL sole frame."""
+        data.force[:] = force
+        data.fext = self.joint_placement_frame.act(pin.Force(force))
+        data.dtau_dq = None

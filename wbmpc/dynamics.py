@@ -1,0 +1,192 @@
+"""Contact-constrained forward dynamics of a floating-base robot (Crocoddyl's
+DifferentialActionModelContactFwdDynamics), with its analytical derivatives.
+
+For the active contacts (stacked Jacobian Jc (nc, nv), drift a0 (nc,)), the acceleration a and
+contact forces λ solve the KKT system
+
+    [M  Jcᵀ] [ a ]   [τ − b]
+    [Jc  0 ] [−λ ] = [ −a0 ]
+
+where M includes the rotor armature (``model.armature``) and b the nonlinear effects. The
+derivatives follow from the KKT inverse and the RNEA derivatives with the contact forces as
+external forces.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from wbmpc.actuation import ActuationFloatingBase
+from wbmpc.costs import CostModelSum
+from wbmpc.errors import ParameterError
+from wbmpc.residuals.base import DataCollector
+from wbmpc.state import StateMultibody
+
+
+class DifferentialActionModelContactFwdDynamics:
+    """Continuous-time node: a = f(x, u) under rigid contacts, and the node's running cost l(x, u).
+
+    Args:
+        state: the multibody state.
+        actuation: floating-base actuation (nu = nv − 6).
+        contacts: contact name -> contact model (:mod:`wbmpc.contacts`); kept sorted by name.
+        costs: named cost terms of the node.
+        active_contacts: names of the contacts enforced at this node (default: all).
+    """
+
+    def __init__(self, state: StateMultibody, actuation: ActuationFloatingBase, contacts: dict,
+                 costs: CostModelSum, active_contacts=None):
+        self.state = state
+        self.actuation = actuation
+        self.nu = actuation.nu
+        self.contacts = dict(sorted(contacts.items()))
+        self.costs = costs
+        if costs.nu != self.nu:
+            raise ParameterError(f"costs were built for nu={costs.nu}, the actuation has nu={self.nu}")
+        names = list(self.contacts) if active_contacts is None else list(active_contacts)
+        self.set_active_contacts(names)
+
+    def set_active_contacts(self, names) -> None:
+        """Enforce exactly the contacts in ``names`` (between solves; never during one)."""
+        unknown = set(names) - set(self.contacts)
+        if unknown:
+            raise ParameterError(f"unknown contact(s) {sorted(unknown)}; known contacts: {list(self.contacts)}")
+        self.active_contacts = [name for name in self.contacts if name in set(names)]
+        self.nc = sum(self.contacts[name].nc for name in self.active_contacts)
+
+    def createData(self) -> "DifferentialActionDataContactFwdDynamics":
+        return DifferentialActionDataContactFwdDynamics(self)
+
+    def calc(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Fill data.xout (nv,) accelerations [m/s², rad/s²], contact forces and data.cost.
+
+        With ``u=None`` (terminal node) only the kinematics and the state costs are computed.
+        """
+        model = self.state.pinocchio
+        pdata = data.pinocchio
+        nq = self.state.nq
+        q, v = x[:nq], x[nq:]
+        pin.computeAllTerms(model, pdata, q, v)
+        if u is None:
+            data.cost = self.costs.calc(data.costs, x, None, data.shared)
+            return
+        self.actuation.calc(data.tau, u)
+        nc = self.nc
+        data.Jc = data.Jc_all[:nc]
+        data.a0 = data.a0_all[:nc]
+        row = 0
+        for name in self.active_contacts:
+            contact = self.contacts[name]
+            cdata = data.contacts[name]
+            contact.calc(cdata, pdata)
+            data.Jc[row:row + contact.nc] = cdata.Jc
+            data.a0[row:row + contact.nc] = cdata.a0
+            row += contact.nc
+        if nc:
+            data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc, data.a0, 0.0)
+            forces = pdata.lambda_c
+        else:
+            data.xout[:] = np.linalg.solve(pdata.M, data.tau - pdata.nle)
+            forces = np.zeros(0)
+        for i in range(len(data.fext)):
+            data.fext[i] = pin.Force.Zero()
+        row = 0
+        for name in self.active_contacts:
+            contact = self.contacts[name]
+            cdata = data.contacts[name]
+            contact.update_force(cdata, pdata, forces[row:row + contact.nc])
+            data.fext[contact.joint_id] = cdata.fext
+            row += contact.nc
+        data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
+        data.cost = self.costs.calc(data.costs, x, u, data.shared)
+
+    def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Fill data.Fx (nv, ndx), Fu (nv, nu), force derivatives and the cost derivatives.
+
+        Uses what :meth:`calc` stored (accelerations, forces, Jc); call calc first.
+        """
+        if u is None:
+            self.costs.calcDiff(data.costs, x, None, data.shared)
+            self._copy_cost_derivatives(data)
+            return
+        model = self.state.pinocchio
+        pdata = data.pinocchio
+        nq, nv = self.state.nq, self.state.nv
+        q, v = x[:nq], x[nq:]
+        nc = self.nc
+        pin.computeRNEADerivatives(model, pdata, q, v, data.xout, data.fext)
+        dtau_dq = pdata.dtau_dq
+        for name in self.active_contacts:
+            extra = data.contacts[name].dtau_dq
+            if extra is not None:
+                dtau_dq = dtau_dq + extra
+        dtau_dv = pdata.dtau_dv
+        if nc:
+            Kinv = pin.getKKTContactDynamicMatrixInverse(model, pdata, data.Jc)
+        else:
+            Kinv = np.linalg.inv(pdata.M)
+        row = 0
+        da0_dx = data.da0_dx_all[:nc]
+        for name in self.active_contacts:
+            contact = self.contacts[name]
+            cdata = data.contacts[name]
+            contact.calcDiff(cdata, pdata)
+            da0_dx[row:row + contact.nc] = cdata.da0_dx
+            row += contact.nc
+        a_dtau = Kinv[:nv, :nv]
+        np.matmul(-a_dtau, dtau_dq, out=data.Fx[:, :nv])
+        np.matmul(-a_dtau, dtau_dv, out=data.Fx[:, nv:])
+        if nc:
+            a_da = Kinv[:nv, nv:]
+            data.Fx -= a_da @ da0_dx
+            f_dtau = Kinv[nv:, :nv]
+            f_da = Kinv[nv:, nv:]
+            df_dx = np.empty((nc, self.state.ndx))
+            np.matmul(f_dtau, dtau_dq, out=df_dx[:, :nv])
+            np.matmul(f_dtau, dtau_dv, out=df_dx[:, nv:])
+            df_dx += f_da @ da0_dx
+            df_du = -f_dtau[:, 6:]
+            row = 0
+            for name in self.active_contacts:
+                contact = self.contacts[name]
+                cdata = data.contacts[name]
+                cdata.df_dx[:] = df_dx[row:row + contact.nc]
+                cdata.df_du[:] = df_du[row:row + contact.nc]
+                row += contact.nc
+        data.Fu[:] = a_dtau[:, 6:]
+        self.costs.calcDiff(data.costs, x, u, data.shared)
+        self._copy_cost_derivatives(data)
+
+    @staticmethod
+    def _copy_cost_derivatives(data) -> None:
+        c = data.costs
+        data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu = c.Lx, c.Lu, c.Lxx, c.Lxu, c.Luu
+
+
+class DifferentialActionDataContactFwdDynamics:
+    """Per-node buffers of :class:`DifferentialActionModelContactFwdDynamics`."""
+
+    def __init__(self, model: DifferentialActionModelContactFwdDynamics):
+        state = model.state
+        nv, ndx, nu = state.nv, state.ndx, model.nu
+        nc_max = sum(c.nc for c in model.contacts.values())
+        self.pinocchio = state.pinocchio.createData()
+        self.contacts = {name: c.createData(nu) for name, c in model.contacts.items()}
+        self.shared = DataCollector(self.pinocchio, {})
+        self.costs = model.costs.createData()
+        self.tau = np.zeros(nv)
+        self.xout = np.zeros(nv)
+        self.Jc_all = np.zeros((nc_max, nv))
+        self.a0_all = np.zeros(nc_max)
+        self.da0_dx_all = np.zeros((nc_max, ndx))
+        self.Jc = self.Jc_all[:0]
+        self.a0 = self.a0_all[:0]
+        self.fext = pin.StdVec_Force()
+        for _ in range(state.pinocchio.njoints):
+            self.fext.append(pin.Force.Zero())
+        self.Fx = np.zeros((nv, ndx))
+        self.Fu = np.zeros((nv, nu))
+        self.cost = 0.0
+        c = self.costs
+        self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu = c.Lx, c.Lu, c.Lxx, c.Lxu, c.Luu

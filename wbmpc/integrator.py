@@ -1,0 +1,106 @@
+"""Explicit (semi-implicit) Euler integration of a differential action model.
+
+    v⁺ = v + a dt,   q⁺ = q ⊕ (v dt + a dt²),   l = dt · l_continuous(x, u)
+
+(Crocoddyl's IntegratedActionModelEuler). A node built with ``dt = 0`` is a terminal node: it
+is evaluated with ``u=None``, its cost is the differential model's cost unscaled and x⁺ = x.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from wbmpc.errors import ParameterError
+
+
+class IntegratedActionModelEuler:
+    """Discrete node x⁺ = f(x, u) with cost l(x, u).
+
+    Args:
+        differential: continuous-time model (e.g. contact forward dynamics).
+        dt: time step [s], ≥ 0 (0 for a terminal node).
+    """
+
+    def __init__(self, differential, dt: float):
+        if not (np.isfinite(dt) and dt >= 0):
+            raise ParameterError(f"dt={dt} s must be finite and >= 0")
+        self.differential = differential
+        self.state = differential.state
+        self.nu = differential.nu
+        self.dt = float(dt)
+
+    def createData(self) -> "IntegratedActionDataEuler":
+        return IntegratedActionDataEuler(self)
+
+    def calc(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Fill data.xnext (nx,) and data.cost."""
+        diff = self.differential
+        dd = data.differential
+        diff.calc(dd, x, u)
+        if u is None:
+            data.dx[:] = 0.0
+            data.xnext[:] = x
+            data.cost = dd.cost
+            return
+        state = self.state
+        nq, nv = state.nq, state.nv
+        dt = self.dt
+        a = dd.xout
+        data.dx[:nv] = x[nq:] * dt + a * (dt * dt)
+        data.dx[nv:] = a * dt
+        data.xnext[:nq] = pin.integrate(state.pinocchio, x[:nq], data.dx[:nv])
+        data.xnext[nq:] = x[nq:] + data.dx[nv:]
+        data.cost = dt * dd.cost
+
+    def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Fill data.Fx (ndx, ndx), Fu (ndx, nu), Lx, Lu, Lxx, Lxu, Luu. Needs calc first."""
+        diff = self.differential
+        dd = data.differential
+        diff.calcDiff(dd, x, u)
+        if u is None:
+            data.Fx[:] = np.eye(self.state.ndx)
+            data.Lx[:] = dd.Lx
+            data.Lxx[:] = dd.Lxx
+            return
+        state = self.state
+        nq, nv = state.nq, state.nv
+        model = state.pinocchio
+        dt = self.dt
+        dt2 = dt * dt
+        q = x[:nq]
+        dq = data.dx[:nv]
+        J_dq = pin.dIntegrate(model, q, dq, pin.ARG1)
+        J_q = pin.dIntegrate(model, q, dq, pin.ARG0)
+        top = dd.Fx * dt2
+        top[:, nv:] += dt * np.eye(nv)
+        np.matmul(J_dq, top, out=data.Fx[:nv])
+        data.Fx[:nv, :nv] += J_q
+        np.multiply(dd.Fx, dt, out=data.Fx[nv:])
+        data.Fx[nv:, nv:] += np.eye(nv)
+        np.matmul(J_dq, dd.Fu * dt2, out=data.Fu[:nv])
+        np.multiply(dd.Fu, dt, out=data.Fu[nv:])
+        np.multiply(dd.Lx, dt, out=data.Lx)
+        np.multiply(dd.Lu, dt, out=data.Lu)
+        np.multiply(dd.Lxx, dt, out=data.Lxx)
+        np.multiply(dd.Lxu, dt, out=data.Lxu)
+        np.multiply(dd.Luu, dt, out=data.Luu)
+
+
+class IntegratedActionDataEuler:
+    """Per-node buffers of :class:`IntegratedActionModelEuler`."""
+
+    def __init__(self, model: IntegratedActionModelEuler):
+        state = model.state
+        ndx, nu = state.ndx, model.nu
+        self.differential = model.differential.createData()
+        self.dx = np.zeros(ndx)
+        self.xnext = np.zeros(state.nx)
+        self.cost = 0.0
+        self.Fx = np.zeros((ndx, ndx))
+        self.Fu = np.zeros((ndx, nu))
+        self.Lx = np.zeros(ndx)
+        self.Lu = np.zeros(nu)
+        self.Lxx = np.zeros((ndx, ndx))
+        self.Lxu = np.zeros((ndx, nu))
+        self.Luu = np.zeros((nu, nu))

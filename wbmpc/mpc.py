@@ -1,0 +1,163 @@
+"""Receding-horizon walking MPC: shift, warm start, a few FDDP iterations, keep the last good plan.
+
+    mpc = WalkingMPC(robot, WalkingOCPConfig(), n_nodes=100, dt=0.01, max_iterations=1)
+    sol = mpc.update(t, x_measured, schedule, com_terminal_reference)   # never raises
+    tau = sol.u(1) + sol.K(1) @ state_difference(sol.x(1), x_hat)       # eq. (25), node 1
+
+Gain convention: ``K`` is ∂u*/∂x (the paper's eq. 26, plus sign); apply it to x̂ ⊖ x_k, the
+tangent-space difference (pin.difference on q, plain on v), size ndx = 2 nv.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from wbmpc.errors import ParameterError
+from wbmpc.solvers.fddp import SolverFDDP
+from wbmpc.walking import WalkingOCP, WalkingOCPConfig, quasi_static_controls
+
+
+class GainSequence(np.ndarray):
+    """Feedback gains (N, nu, ndx), an ndarray that is also callable: ``K(k)`` is ``K[k]``."""
+
+    def __call__(self, k: int) -> np.ndarray:
+        return np.asarray(self[k])
+
+
+@dataclass(frozen=True)
+class MPCSolution:
+    """One MPC update.
+
+    Attributes:
+        ok: False when this update failed (then xs, us, K are the last good solution shifted to t).
+        status: "converged", "max_iter" or "failed: <reason>".
+        iterations: FDDP iterations run by this update.
+        cost: total cost of the returned trajectory (NaN if there is none).
+        solve_time: wall time of the update [s].
+        t: time of node 0 [s].
+        xs: (N + 1, nx) predicted states, Pinocchio convention.
+        us: (N, nu) torques [N·m].
+        K: (N, nu, ndx) feedback gains ∂u/∂x, library sign (u = u_k + K_k (x̂ ⊖ x_k)); also
+            callable, ``K(k)`` = ``K[k]``, like the accessors ``u(k)`` and ``x(k)``.
+    """
+
+    ok: bool
+    status: str
+    iterations: int
+    cost: float
+    solve_time: float
+    t: float
+    xs: np.ndarray
+    us: np.ndarray
+    K: np.ndarray
+
+    def u(self, k: int) -> np.ndarray:
+        """Torque of node k (nu,) [N·m]."""
+        return self.us[k]
+
+    def x(self, k: int) -> np.ndarray:
+        """Predicted state of node k (nx,)."""
+        return self.xs[k]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "K", np.asarray(self.K, dtype=float).view(GainSequence))
+
+
+def _shift(array: np.ndarray, nodes: int) -> np.ndarray:
+    """Drop the first ``nodes`` rows and repeat the last row to keep the shape."""
+    if nodes <= 0:
+        return array.copy()
+    nodes = min(nodes, array.shape[0] - 1)
+    return np.concatenate([array[nodes:], np.repeat(array[-1:], nodes, axis=0)])
+
+
+class WalkingMPC:
+    """Receding-horizon FDDP on the walking OCP.
+
+    Args:
+        robot: a ``robots.RobotDescription``.
+        config: OCP weights and solver options.
+        n_nodes: horizon length N (running nodes).
+        dt: node spacing [s].
+        max_iterations: FDDP iterations per update (the paper runs 1).
+        cold_start_iterations: iterations of the first update (no warm start yet).
+    """
+
+    def __init__(self, robot, config: WalkingOCPConfig | None = None, n_nodes: int = 100, dt: float = 0.01,
+                 max_iterations: int = 1, cold_start_iterations: int = 20):
+        if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or max_iterations < 1:
+            raise ParameterError(f"max_iterations={max_iterations!r} must be an integer >= 1")
+        if int(cold_start_iterations) != cold_start_iterations or cold_start_iterations < 1:
+            raise ParameterError(f"cold_start_iterations={cold_start_iterations!r} must be an integer >= 1")
+        self.config = WalkingOCPConfig() if config is None else config
+        self.ocp = WalkingOCP(robot, self.config, n_nodes, dt)
+        self.problem = self.ocp.problem
+        self.solver = SolverFDDP(self.problem)
+        self.solver.set_max_line_search_trials(self.config.max_line_search_trials)
+        self.solver.reg_min = self.config.reg_min
+        self.solver.reg_max = self.config.reg_max
+        self.solver.th_stop = self.config.th_stop
+        self.max_iterations = int(max_iterations)
+        self.cold_start_iterations = int(cold_start_iterations)
+        self.n_nodes = self.ocp.n_nodes
+        self.dt = self.ocp.dt
+        self.last_good: MPCSolution | None = None
+
+    def warm_start(self, t: float, x_measured: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+        """Initial guess at time t: the last good solution shifted by round((t − t_last)/dt)
+        nodes, with x_measured as node 0; a quasi-static guess if there is none.
+        Returns (xs_init, us_init, cold)."""
+        last = self.last_good
+        if last is None:
+            xs = np.repeat(x_measured[None, :], self.n_nodes + 1, axis=0)
+            u0 = quasi_static_controls(self.ocp, x_measured)
+            us = np.repeat(u0[None, :], self.n_nodes, axis=0)
+            return xs, us, True
+        nodes = int(round((t - last.t) / self.dt))
+        xs = _shift(last.xs, nodes)
+        us = _shift(last.us, nodes)
+        xs[0] = x_measured
+        return xs, us, False
+
+    def update(self, t: float, x_measured: np.ndarray, schedule, com_terminal_reference: np.ndarray) -> MPCSolution:
+        """Re-solve from the measured state; never raises (failures come back with ok=False)."""
+        tic = time.perf_counter()
+        try:
+            x = self.ocp.state.check_state("x_measured", x_measured)
+            self.ocp.update(x, schedule, com_terminal_reference)
+            xs_init, us_init, cold = self.warm_start(float(t), x)
+            iterations = self.cold_start_iterations if cold else self.max_iterations
+            converged = self.solver.solve(xs_init, us_init, maxiter=iterations, is_feasible=False)
+            solver = self.solver
+            K = solver.K
+            finite = (np.isfinite(solver.cost) and np.all(np.isfinite(solver.xs)) and np.all(np.isfinite(solver.us))
+                      and np.all(np.isfinite(K)))
+            if not finite:
+                raise FloatingPointError("the solution is not finite")
+            if not converged and solver.preg >= solver.reg_max:
+                raise FloatingPointError(f"regularisation reached reg_max={solver.reg_max} (no descent)")
+            solution = MPCSolution(
+                ok=True, status="converged" if converged else "max_iter", iterations=len(solver.log),
+                cost=float(solver.cost), solve_time=time.perf_counter() - tic, t=float(t),
+                xs=solver.xs.copy(), us=solver.us.copy(), K=K,
+            )
+            self.last_good = solution
+            return solution
+        except Exception as err:  # the control loop must go on: report and keep the last good plan
+            return self._failed(float(t), x_measured, f"failed: {type(err).__name__}: {err}", tic)
+
+    def _failed(self, t: float, x_measured, status: str, tic: float) -> MPCSolution:
+        last = self.last_good
+        nx, ndx, nu, N = self.ocp.state.nx, self.ocp.state.ndx, self.ocp.nu, self.n_nodes
+        if last is None:
+            x = np.asarray(x_measured, dtype=float).reshape(-1)
+            xs = np.repeat(x[None, :], N + 1, axis=0) if x.shape == (nx,) else np.full((N + 1, nx), np.nan)
+            return MPCSolution(False, status, len(self.solver.log), float("nan"), time.perf_counter() - tic, t,
+                               xs, np.zeros((N, nu)), np.zeros((N, nu, ndx)))
+        nodes = int(round((t - last.t) / self.dt))
+        return MPCSolution(False, status, len(self.solver.log), last.cost, time.perf_counter() - tic,
+                           last.t + max(nodes, 0) * self.dt,
+                           _shift(last.xs, nodes), _shift(last.us, nodes), _shift(last.K, nodes))
