@@ -240,6 +240,27 @@ class RobotDescription:
         pin.framesForwardKinematics(self.pinocchio_model, data, q)
         return {side: data.oMf[fid].translation.copy() for side, fid in self.foot_frame_ids.items()}
 
+    def summary(self) -> dict[str, Any]:
+        """Key numbers of the description as a JSON-friendly dict (units in the key names)."""
+        feet = self.foot_positions_reference()
+        return {
+            "name": self.name,
+            "nq": self.nq, "nv": self.nv, "nu": self.nu,
+            "mass_kg": self.mass,
+            "contact_type": self.contact_type,
+            "foot_frames": dict(self.foot_frames),
+            "foot_radius_m": self.foot_radius,
+            "base_height_reference_m": float(self.q_reference[2]),
+            "com_height_reference_m": self.com_height_reference,
+            "foot_positions_reference_world_m": {side: p.tolist() for side, p in feet.items()},
+            "actuated_joint_names": list(self.actuated_joint_names),
+            "torque_limit_Nm": self.torque_limit.tolist(),
+            "velocity_limit_rad_s": self.velocity_limit.tolist(),
+            "armature_kg_m2": self.armature.tolist(),
+            "urdf_path": str(self.urdf_path),
+            "sources": dict(self.sources),
+        }
+
     def create_pinocchio_data(self) -> pin.Data:
         """A new ``pin.Data`` for ``pinocchio_model``."""
         return self.pinocchio_model.createData()

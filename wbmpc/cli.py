@@ -22,6 +22,7 @@ SUBCOMMAND_MODULES: list[str] = [
     "sequencer.demo",
     "bench.cli",
     "sim.cli",
+    "robots.cli",
 ]
 
 
