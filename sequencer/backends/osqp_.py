@@ -60,7 +60,7 @@ class OsqpBackend:
                 kwargs["Px"] = np.diag(data["P"]).copy()
                 self._alpha = problem.alpha.copy()
             self._solver.update(**kwargs)
-        result = self._solver.solve()
+        result = self._solver.solve(raise_error=False)  # status handled below
         status = str(result.info.status)
         if status in _INFEASIBLE:
             raise InfeasibleStep("footstep QP is infeasible", problem, status, self.name)

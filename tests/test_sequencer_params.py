@@ -1,0 +1,69 @@
+"""SequencerParams: presets, TOML loading, validation messages."""
+
+import dataclasses
+import math
+
+import pytest
+
+from sequencer import SequencerParams
+from wbmpc.errors import ParameterError
+
+
+def test_table_i_preset_matches_the_paper():
+    p = SequencerParams.table_i()
+    assert (p.alpha1, p.alpha2, p.alpha3) == (1e3, 1.0, 1e6)
+    assert p.z_c == 0.31
+    assert (p.l_min, p.l_nom, p.l_max) == pytest.approx((-0.3, 0.1, 0.3))
+    assert (p.w_left_min, p.w_nom("left"), p.w_left_max) == pytest.approx((-0.40, -0.25, -0.10))
+    assert (p.w_right_min, p.w_nom("right"), p.w_right_max) == pytest.approx((0.10, 0.25, 0.40))
+    assert (p.t_min, p.t_nom, p.t_max) == (0.1, 0.3, 1.0)
+    assert p.omega == pytest.approx(math.sqrt(9.81 / 0.31))
+    assert p.v_x == pytest.approx(0.1 / 0.3)
+
+
+def test_bolt_preset_is_narrower_than_table_i_and_uses_bolt_com_height():
+    bolt, table = SequencerParams.bolt_walking(), SequencerParams.table_i()
+    assert abs(bolt.w_nom("left")) < abs(table.w_nom("left"))
+    assert bolt.w_right_min < table.w_right_min
+    assert bolt.z_c == pytest.approx(0.31, abs=0.01)
+
+
+def test_replace_revalidates_and_converts_to_float():
+    p = dataclasses.replace(SequencerParams.table_i(), v_x=0, horizon=2)
+    assert p.l_nom == 0.0 and isinstance(p.horizon, float)
+    with pytest.raises(ParameterError, match=r"z_c=-0.1 must be > 0"):
+        dataclasses.replace(p, z_c=-0.1)
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"l_min": 0.4}, r"l_min=0.4 m must be <= l_max=0.3 m"),
+        ({"w_right_min": 0.5}, r"w_right_min=0.5 m must be <= w_right_max=0.4 m"),
+        ({"z_c": 0.0}, r"z_c=0.0 must be > 0"),
+        ({"t_min": 0.0}, r"t_min=0.0 s must be > 0"),
+        ({"t_min": 0.5}, r"0 < t_min <= t_nom <= t_max, got t_min=0.5 s, t_nom=0.3 s"),
+        ({"alpha3": float("nan")}, r"alpha3=nan must be finite"),
+        ({"horizon": float("inf")}, r"horizon=inf must be finite"),
+        ({"v_x": 2.0}, r"v_x=2.0 m/s gives a nominal step length .* outside \[l_min, l_max\]"),
+        ({"pelvis_width": 0.5}, r"pelvis_width=0.5 m .* nominal left-stance width -0.5 m outside"),
+        ({"alpha1": "big"}, r"alpha1='big' must be a real number"),
+    ],
+)
+def test_bad_parameters_raise_with_field_value_and_range(change, message):
+    with pytest.raises(ParameterError, match=message):
+        dataclasses.replace(SequencerParams.table_i(), **change)
+
+
+def test_toml_round_trip_and_errors(tmp_path):
+    path = tmp_path / "p.toml"
+    path.write_text("z_c = 0.28\nv_x = 0.2\n")
+    p = SequencerParams.from_toml(path)
+    assert p.z_c == 0.28 and p.v_x == 0.2 and p.alpha3 == 1e6
+    path.write_text("zc = 0.28\n")
+    with pytest.raises(ParameterError, match=r"unknown sequencer parameter\(s\) \['zc'\]"):
+        SequencerParams.from_toml(path)
+    with pytest.raises(ParameterError, match="does not exist"):
+        SequencerParams.from_toml(tmp_path / "missing.toml")
+    with pytest.raises(ParameterError, match=r"preset='walk' is not known \(available: \['bolt_walking', 'table_i'\]\)"):
+        SequencerParams.preset("walk")
