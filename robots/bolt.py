@@ -8,9 +8,9 @@ Each number's source is in ``docs/robots.md``.
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 
 from robots.description import MujocoContactSettings, RobotDescription
+from robots.posture import standing_on_floor
 from robots.registry import register_robot
 from robots.urdf_source import build_floating_base_model, example_robot_data_files
 from wbmpc.errors import ParameterError
@@ -30,26 +30,6 @@ FOOT_RADIUS = 0.016  # [m] foot sphere, centred at the FL_FOOT / FR_FOOT frames
 FOOT_FRAMES = {"left": "FL_FOOT", "right": "FR_FOOT"}
 ACTUATED_JOINTS = ("FL_HAA", "FL_HFE", "FL_KFE", "FR_HAA", "FR_HFE", "FR_KFE")
 REFERENCE_POSTURE = "standing"  # SRDF group state
-
-
-def standing_on_floor(model: pin.Model, q: np.ndarray, foot_frames: dict[str, str], frame_height: float) -> np.ndarray:
-    """Shift ``q``'s base height so the lowest foot frame is at ``frame_height`` above z = 0.
-
-    Args:
-        model: Pinocchio model.
-        q: (nq,) configuration (not modified).
-        foot_frames: {side: frame name}.
-        frame_height: wanted height of the foot frames [m] (e.g. the foot sphere radius).
-
-    Returns:
-        (nq,) configuration with ``q[2]`` adjusted.
-    """
-    data = model.createData()
-    pin.framesForwardKinematics(model, data, q)
-    lowest = min(data.oMf[model.getFrameId(frame)].translation[2] for frame in foot_frames.values())
-    q_floor = np.array(q, dtype=float)
-    q_floor[2] += frame_height - lowest
-    return q_floor
 
 
 @register_robot("bolt")

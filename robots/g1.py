@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from robots.bolt import standing_on_floor
 from robots.description import MujocoContactSettings, RobotDescription
+from robots.posture import standing_on_floor
 from robots.registry import register_robot
 from robots.urdf_source import build_floating_base_model, example_robot_data_files
 from wbmpc.errors import ParameterError
