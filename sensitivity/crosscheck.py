@@ -36,8 +36,15 @@ def finite_difference_jacobian(problem: StepProblem, fd_step: float = 1e-6) -> n
     return jacobian
 
 
-def proxqp_backward_jacobian(problem: StepProblem, eps: float = 1e-12) -> np.ndarray:
-    """dx*/dtheta (5, 2) through ProxQP's compute_backward (one backward pass per x_i)."""
+def proxqp_backward_jacobian(problem: StepProblem, eps: float = 1e-10, regularization: float = 1e-14) -> np.ndarray:
+    """dx*/dtheta (5, 2) through ProxQP's compute_backward (one backward pass per x_i).
+
+    Args:
+        eps: ProxQP's forward solve tolerance.
+        regularization: eps, rho_backward and mu_backward of compute_backward. Its defaults
+            (1e-4, 1e-6, 1e-6) regularise the KKT system and bias the derivative by ~1e-3 on this
+            badly scaled QP (alpha3/alpha2 = 1e6); 1e-14 brings the bias to ~1e-8.
+    """
     data = problem.qp_matrices()
     dense = proxsuite.proxqp.dense
     qp = dense.QP(5, 2, 3)
@@ -50,7 +57,7 @@ def proxqp_backward_jacobian(problem: StepProblem, eps: float = 1e-12) -> np.nda
     for i in range(5):
         loss_derivative = np.zeros(5 + 2 + 3)
         loss_derivative[i] = 1.0
-        dense.compute_backward(qp, loss_derivative, 1e-10, 1e-9, 1e-9)
+        dense.compute_backward(qp, loss_derivative, regularization, regularization, regularization)
         jacobian[i] = np.asarray(qp.model.backward_data.dL_dA)[:, 2] * (-problem.decay)
     return jacobian
 
