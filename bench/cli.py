@@ -13,6 +13,7 @@ from wbmpc.cli import add_output_arguments, print_json
 
 # target name -> module path (each module: add_arguments, run, format_report)
 BENCH_MODULES: dict[str, str] = {
+    "sequencer": "bench.sequencer",
     "loop": "bench.loop",
 }
 
