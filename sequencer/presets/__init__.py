@@ -1,0 +1,1 @@
+"""Named SequencerParams presets as TOML files (loaded by SequencerParams.preset)."""
