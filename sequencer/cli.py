@@ -21,6 +21,25 @@ TABLE_I_DCM = (-0.12, -0.07)
 TABLE_I_ELAPSED = 0.229
 
 _ALIASES = {"v_x": ["--vx"], "v_y": ["--vy"]}
+_HELP = {
+    "alpha1": "weight of the step position error [-]",
+    "alpha2": "weight of the step timing error [-]",
+    "alpha3": "weight of the DCM offset error [-]",
+    "z_c": "CoM height of the LIPM [m]",
+    "v_x": "commanded forward velocity [m/s] (l_nom = v_x t_nom)",
+    "v_y": "commanded lateral velocity [m/s]",
+    "l_min": "min step length [m]",
+    "l_max": "max step length [m]",
+    "pelvis_width": "nominal lateral distance between the feet l_p [m]",
+    "w_left_min": "min lateral step while the LEFT foot is in stance [m]",
+    "w_left_max": "max lateral step while the LEFT foot is in stance [m]",
+    "w_right_min": "min lateral step while the RIGHT foot is in stance [m]",
+    "w_right_max": "max lateral step while the RIGHT foot is in stance [m]",
+    "t_min": "min step duration [s]",
+    "t_nom": "nominal step duration [s]",
+    "t_max": "max step duration [s]",
+    "horizon": "H_u: plan until a touchdown at or after t + horizon [s]",
+}
 
 
 def add_params_arguments(parser: argparse.ArgumentParser) -> None:
@@ -34,7 +53,7 @@ def add_params_arguments(parser: argparse.ArgumentParser) -> None:
             continue
         flags = [f"--{field.name.replace('_', '-')}"] + _ALIASES.get(field.name, [])
         group.add_argument(*flags, dest=f"param_{field.name}", type=float, default=None, metavar="VALUE",
-                           help=argparse.SUPPRESS if field.name == "gravity" else None)
+                           help=_HELP.get(field.name, argparse.SUPPRESS))
 
 
 def params_from_args(args: argparse.Namespace) -> SequencerParams:
