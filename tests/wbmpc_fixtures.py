@@ -31,3 +31,17 @@ def alternating_schedule(t0: float, dt: float, n_nodes: int, step_duration: floa
         touchdown[k, swing] = ((step + 1) * step_length, foot_y[swing])
     return ContactSchedule(t0=t0, dt=dt, feet=feet, in_contact=in_contact, swing_phase=phase,
                            swing_duration=duration, touchdown_position=touchdown)
+
+
+def standing_state(robot) -> np.ndarray:
+    """Reference posture at rest, shape (nx,)."""
+    return np.concatenate([np.asarray(robot.q_reference, dtype=float), np.zeros(robot.pinocchio_model.nv)])
+
+
+def random_state(robot, rng: np.random.Generator, q_scale: float = 0.1, v_scale: float = 0.5) -> np.ndarray:
+    """Random state near the reference posture (nx,)."""
+    import pinocchio as pin
+
+    model = robot.pinocchio_model
+    q = pin.integrate(model, np.asarray(robot.q_reference, dtype=float), q_scale * rng.standard_normal(model.nv))
+    return np.concatenate([q, v_scale * rng.standard_normal(model.nv)])

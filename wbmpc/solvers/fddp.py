@@ -23,8 +23,10 @@ from typing import Callable
 
 import numpy as np
 
+from wbmpc.blas import limit_blas_threads
 from wbmpc.errors import ParameterError
 from wbmpc.problem import ShootingProblem
+from wbmpc.solvers.riccati import riccati_backward
 
 
 @dataclass(frozen=True)
@@ -50,61 +52,15 @@ class ForwardPassError(ArithmeticError):
     """NaN in the rollout."""
 
 
-def riccati_backward(Fx, Fu, Lx, Lu, Lxx, Lxu, Luu, fs, preg, is_feasible, Vx, Vxx, Qu, Quu, Quuk, k, K):
-    """Riccati recursion in Crocoddyl's sign (δu = −k − K δx). Fills Vx, Vxx, Qu, Quu, Quuk, k, K.
-
-    Raises BackwardPassError when Quu is not positive definite or the value function is not finite.
-    """
-    N = Fx.shape[0]
-    Vxx[N] = Lxx[N]
-    Vx[N] = Lx[N]
-    Vxx[N] += preg * np.eye(Vxx.shape[1])
-    if not is_feasible:
-        Vx[N] += Vxx[N] @ fs[N]
-    for t in range(N - 1, -1, -1):
-        Vxx_p = Vxx[t + 1]
-        Vx_p = Vx[t + 1]
-        FxT_Vxx = Fx[t].T @ Vxx_p
-        Qx = Lx[t] + Fx[t].T @ Vx_p
-        Qxx = Lxx[t] + FxT_Vxx @ Fx[t]
-        Qu[t] = Lu[t] + Fu[t].T @ Vx_p
-        Quu[t] = Luu[t] + (Fu[t].T @ Vxx_p) @ Fu[t]
-        Qxu = Lxu[t] + FxT_Vxx @ Fu[t]
-        Quu[t] += preg * np.eye(Quu.shape[1])
-        try:
-            L = np.linalg.cholesky(Quu[t])
-        except np.linalg.LinAlgError as err:
-            raise BackwardPassError(f"Quu not positive definite at node {t}") from err
-        Kt = _cho_solve(L, Qxu.T)
-        kt = _cho_solve(L, Qu[t])
-        K[t] = Kt
-        k[t] = kt
-        Quuk[t] = Quu[t] @ kt
-        Vx_t = Qx - Kt.T @ Qu[t]
-        Vxx_t = Qxx - Qxu @ Kt
-        Vxx_t = 0.5 * (Vxx_t + Vxx_t.T)
-        Vxx_t += preg * np.eye(Vxx_t.shape[0])
-        if not is_feasible:
-            Vx_t = Vx_t + Vxx_t @ fs[t]
-        if not (np.all(np.isfinite(Vx_t)) and np.all(np.isfinite(Vxx_t))):
-            raise BackwardPassError(f"value function not finite at node {t}")
-        Vx[t] = Vx_t
-        Vxx[t] = Vxx_t
-
-
-def _cho_solve(L: np.ndarray, b: np.ndarray) -> np.ndarray:
-    from scipy.linalg import solve_triangular
-
-    y = solve_triangular(L, b, lower=True, check_finite=False)
-    return solve_triangular(L.T, y, lower=False, check_finite=False)
-
-
 class SolverFDDP:
     """FDDP solver of a :class:`~wbmpc.problem.ShootingProblem` (same algorithm and defaults as
     Crocoddyl 3.2's SolverFDDP, so both take the same iterates).
 
     Args:
         problem: the shooting problem.
+        single_thread_blas: limit OpenBLAS to one thread for the process (see
+            :func:`wbmpc.blas.limit_blas_threads`; the MPC's small products run 3x faster so on a
+            shared machine). Ignored when OPENBLAS_NUM_THREADS is set.
 
     Attributes (after :meth:`solve`):
         xs (N + 1, nx), us (N, nu): current solution.
@@ -117,7 +73,9 @@ class SolverFDDP:
         th_stepinc=0.01, alphas (line-search trials 1, ½, …, 2⁻⁹; see ``set_max_line_search_trials``).
     """
 
-    def __init__(self, problem: ShootingProblem):
+    def __init__(self, problem: ShootingProblem, single_thread_blas: bool = True):
+        if single_thread_blas:
+            limit_blas_threads(1)
         self.problem = problem
         N, nx, ndx, nu = problem.T, problem.nx, problem.ndx, problem.nu
         self.reg_incfactor = 10.0
@@ -289,8 +247,11 @@ class SolverFDDP:
 
     def _backward_pass(self) -> None:
         p = self.problem
-        riccati_backward(p.Fx, p.Fu, p.Lx, p.Lu, p.Lxx, p.Lxu, p.Luu, self.fs, self.preg, self.is_feasible,
-                         self.Vx, self.Vxx, self.Qu, self.Quu, self.Quuk, self._k, self._K)
+        failed_node = riccati_backward(p.Fx, p.Fu, p.Lx, p.Lu, p.Lxx, p.Lxu, p.Luu, self.fs, self.preg,
+                                       self.is_feasible, self.Vx, self.Vxx, self.Qu, self.Quu, self.Quuk,
+                                       self._k, self._K)
+        if failed_node >= 0:
+            raise BackwardPassError(f"Quu not positive definite or value function not finite at node {failed_node}")
 
     def _update_expected_improvement(self) -> None:
         dg = 0.0

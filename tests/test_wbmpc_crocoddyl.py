@@ -1,0 +1,162 @@
+"""wbmpc against the Crocoddyl oracle on the same problems: nodes, solves, receding horizon, G1."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+crocoddyl = pytest.importorskip("crocoddyl", reason="Crocoddyl (test extra) is the oracle of these comparisons")
+
+from bench.crocoddyl_mirror import CrocoddylMirror  # noqa: E402
+from robots import load_robot  # noqa: E402
+from wbmpc.mpc import WalkingMPC, _shift  # noqa: E402
+from wbmpc.solvers import SolverFDDP  # noqa: E402
+from wbmpc.walking import WalkingOCP, WalkingOCPConfig, quasi_static_controls  # noqa: E402
+from wbmpc_fixtures import alternating_schedule, random_state, standing_state  # noqa: E402
+
+pytestmark = pytest.mark.crocoddyl
+ALL_TERMS = WalkingOCPConfig(foothold_weight=100.0, contact_force_weight=1e-2, friction_cone_weight=10.0,
+                             baumgarte_gains=(20.0, 40.0))
+
+
+def _rel(actual, expected) -> float:
+    actual, expected = np.asarray(actual, dtype=float), np.asarray(expected, dtype=float)
+    return float(np.max(np.abs(actual - expected)) / max(1e-12, np.max(np.abs(expected))))
+
+
+@pytest.fixture(scope="module")
+def bolt():
+    return load_robot("bolt")
+
+
+def _walking_ocp(robot, config, n_nodes, t0=0.0):
+    ocp = WalkingOCP(robot, config, n_nodes=n_nodes, dt=0.01)
+    ocp.update(standing_state(robot), alternating_schedule(t0, 0.01, n_nodes), np.array([0.1, 0.0, 0.3]))
+    return ocp
+
+
+def test_every_node_matches_crocoddyl(bolt):
+    """xnext, cost, Fx, Fu, Lx, Lu, Lxx, Luu, Lxu at random states agree to 1e-9 relative."""
+    ocp = _walking_ocp(bolt, ALL_TERMS, n_nodes=20, t0=0.15)
+    mirror = CrocoddylMirror(ocp.problem)
+    rng = np.random.default_rng(0)
+    xs = [random_state(bolt, rng) for _ in range(21)]
+    us = [0.5 * rng.standard_normal(6) for _ in range(20)]
+    problem, twin = ocp.problem, mirror.problem
+    assert problem.calc(xs, us) == pytest.approx(twin.calc(xs, us), rel=1e-12)
+    problem.calcDiff(xs, us)
+    twin.calcDiff(xs, us)
+    for k in range(21):
+        ours = problem.running_datas[k] if k < 20 else problem.terminal_data
+        theirs = twin.runningDatas[k] if k < 20 else twin.terminalData
+        names = ["xnext", "cost", "Fx", "Lx", "Lxx"] + (["Fu", "Lu", "Luu", "Lxu"] if k < 20 else [])
+        for name in names:
+            assert _rel(getattr(ours, name), getattr(theirs, name)) < 1e-9, f"node {k} {name}"
+
+
+def _solve_both(ocp, mirror, maxiter):
+    x0 = ocp.problem.x0
+    u0 = quasi_static_controls(ocp, x0)
+    N = ocp.problem.T
+    xs0, us0 = [x0] * (N + 1), [u0] * N
+    ours, theirs = SolverFDDP(ocp.problem), crocoddyl.SolverFDDP(mirror.problem)
+    return ours, theirs, ours.solve(xs0, us0, maxiter), theirs.solve(xs0, us0, maxiter)
+
+
+def test_full_solve_matches_crocoddyl(bolt):
+    """Same iterations, cost (1e-9 relative), xs/us (1e-6) and gains (opposite sign)."""
+    ocp = _walking_ocp(bolt, WalkingOCPConfig(), n_nodes=40)
+    mirror = CrocoddylMirror(ocp.problem)
+    ours, theirs, ok_ours, ok_theirs = _solve_both(ocp, mirror, maxiter=50)
+    assert ok_ours == ok_theirs
+    assert ours.iter == theirs.iter
+    assert ours.cost == pytest.approx(theirs.cost, rel=1e-9)
+    np.testing.assert_allclose(ours.xs, np.array(theirs.xs), atol=1e-6)
+    np.testing.assert_allclose(ours.us, np.array(theirs.us), atol=1e-6)
+    np.testing.assert_allclose(ours.K, -np.array(theirs.K), atol=1e-4 * np.max(np.abs(theirs.K)))
+    assert [entry.step_length for entry in ours.log][:20] == pytest.approx(
+        [entry for entry in _crocoddyl_steps(ocp, mirror, 20)])
+
+
+def _crocoddyl_steps(ocp, mirror, maxiter):
+    """Accepted step length of every Crocoddyl iteration (through a callback)."""
+    steps = []
+
+    class Steps(crocoddyl.CallbackAbstract):
+        def __call__(self, solver):
+            steps.append(solver.stepLength)
+
+    x0 = ocp.problem.x0
+    u0 = quasi_static_controls(ocp, x0)
+    N = ocp.problem.T
+    solver = crocoddyl.SolverFDDP(mirror.problem)
+    solver.setCallbacks([Steps()])
+    solver.solve([x0] * (N + 1), [u0] * N, maxiter)
+    return steps
+
+
+def test_receding_horizon_applies_the_same_controls(bolt):
+    """100 MPC ticks (1 iteration each, warm-started by shifting) give Crocoddyl's controls."""
+    n_nodes, dt = 50, 0.01
+    mpc = WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=n_nodes, dt=dt, max_iterations=1, cold_start_iterations=10)
+    mirror = CrocoddylMirror(mpc.problem)
+    twin = crocoddyl.SolverFDDP(mirror.problem)
+    x = standing_state(bolt)
+    previous = None
+    rng = np.random.default_rng(5)
+    worst = 0.0
+    for tick in range(100):
+        t = tick * dt
+        schedule = alternating_schedule(t, dt, n_nodes)
+        com_ref = np.array([0.1 + 0.3 * t, 0.0, 0.3])
+        solution = mpc.update(t, x, schedule, com_ref)
+        assert solution.ok, solution.status
+        mirror.update()
+        if previous is None:
+            xs0 = [x] * (n_nodes + 1)
+            us0 = [quasi_static_controls(mpc.ocp, x)] * n_nodes
+            iterations = 10
+        else:
+            xs0 = list(_shift(np.array(previous.xs), 1))
+            us0 = list(_shift(np.array(previous.us), 1))
+            xs0[0] = x
+            iterations = 1
+        twin.solve(xs0, us0, iterations)
+        previous = twin
+        worst = max(worst, float(np.max(np.abs(solution.us[:2] - np.array(twin.us[:2])))))
+        np.testing.assert_allclose(solution.K[1], -np.array(twin.K[1]), atol=1e-5 * np.max(np.abs(twin.K[1])))
+        # the "plant": the predicted next state with a small disturbance
+        x = solution.xs[1].copy()
+        x[mpc.ocp.state.nq:] += 0.01 * rng.standard_normal(mpc.ocp.state.nv)
+        previous = _Frozen(np.array(twin.xs), np.array(twin.us))
+    assert worst < 1e-6
+
+
+class _Frozen:
+    def __init__(self, xs, us):
+        self.xs, self.us = xs, us
+
+
+def test_g1_flat_feet_solve_matches_crocoddyl():
+    g1 = load_robot("g1")
+    config = WalkingOCPConfig(swing_apex_height=0.08, contact_force_weight=1e-4, baumgarte_gains=(0.0, 30.0))
+    ocp = WalkingOCP(g1, config, n_nodes=10, dt=0.02)
+    x0 = standing_state(g1)
+    schedule = alternating_schedule(0.0, 0.02, 10, step_duration=0.4, foot_y=(0.12, -0.12))
+    ocp.update(x0, schedule, np.array([0.05, 0.0, 0.7]))
+    mirror = CrocoddylMirror(ocp.problem)
+    rng = np.random.default_rng(2)
+    xs = [random_state(g1, rng, 0.05, 0.2) for _ in range(11)]
+    us = [rng.standard_normal(ocp.nu) for _ in range(10)]
+    ocp.problem.calc(xs, us)
+    mirror.problem.calc(xs, us)
+    ocp.problem.calcDiff(xs, us)
+    mirror.problem.calcDiff(xs, us)
+    for k in range(10):
+        for name in ("xnext", "cost", "Fx", "Fu", "Lx", "Lu", "Lxx", "Luu"):
+            assert _rel(getattr(ocp.problem.running_datas[k], name),
+                        getattr(mirror.problem.runningDatas[k], name)) < 1e-9, f"G1 node {k} {name}"
+    ours, theirs, ok_ours, ok_theirs = _solve_both(ocp, mirror, maxiter=5)
+    assert ours.iter == theirs.iter
+    assert ours.cost == pytest.approx(theirs.cost, rel=1e-9)
+    np.testing.assert_allclose(ours.us, np.array(theirs.us), atol=1e-6)

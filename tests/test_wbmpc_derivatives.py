@@ -1,0 +1,206 @@
+"""calc/calcDiff of the wbmpc models and residuals against finite differences at random states."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from robots import load_robot
+from wbmpc.activations import ActivationQuadraticBarrier, ActivationWeightedQuad
+from wbmpc.state import StateMultibody
+from wbmpc.walking import WalkingOCP, WalkingOCPConfig
+from wbmpc_fixtures import alternating_schedule, random_state, standing_state
+
+EPS = 1e-7
+ALL_TERMS = WalkingOCPConfig(foothold_weight=100.0, contact_force_weight=1e-2, friction_cone_weight=10.0,
+                             baumgarte_gains=(20.0, 40.0))
+
+
+@pytest.fixture(scope="module")
+def bolt():
+    return load_robot("bolt")
+
+
+def _tangent_fd(state: StateMultibody, f, x, eps=EPS):
+    """Columns ∂f/∂dx by forward differences along the tangent space of x (f returns a vector)."""
+    f0 = f(x)
+    J = np.zeros((f0.size, state.ndx))
+    for i in range(state.ndx):
+        dx = np.zeros(state.ndx)
+        dx[i] = eps
+        J[:, i] = (f(state.integrate(x, dx)) - f0) / eps
+    return J
+
+
+def _control_fd(f, u, eps=EPS):
+    f0 = f(u)
+    J = np.zeros((f0.size, u.size))
+    for i in range(u.size):
+        du = np.zeros(u.size)
+        du[i] = eps
+        J[:, i] = (f(u + du) - f0) / eps
+    return J
+
+
+def _assert_close(actual, expected, name, rtol=1e-4):
+    scale = max(1.0, float(np.max(np.abs(expected))))
+    err = float(np.max(np.abs(actual - expected)))
+    assert err <= rtol * scale, f"{name}: max error {err:.3e} (scale {scale:.3e})"
+
+
+def test_state_jacobians_match_finite_differences(bolt):
+    state = StateMultibody(bolt.pinocchio_model)
+    rng = np.random.default_rng(1)
+    x0, x1 = random_state(bolt, rng), random_state(bolt, rng)
+    J0, J1 = state.Jdiff(x0, x1)
+    _assert_close(J0, _tangent_fd(state, lambda x: state.diff(x, x1), x0), "Jdiff first")
+    _assert_close(J1, _tangent_fd(state, lambda x: state.diff(x0, x), x1), "Jdiff second")
+    dx = 0.1 * rng.standard_normal(state.ndx)
+    Ji0, Ji1 = state.Jintegrate(x0, dx)
+    _assert_close(Ji0, _tangent_fd(state, lambda x: state.diff(state.integrate(x0, dx), state.integrate(x, dx)), x0),
+                  "Jintegrate first")
+    _assert_close(Ji1, _control_fd(lambda d: state.diff(state.integrate(x0, dx), state.integrate(x0, d)), dx),
+                  "Jintegrate second")
+    np.testing.assert_allclose(state.diff(x0, state.integrate(x0, dx)), dx, atol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def walking_nodes(bolt):
+    ocp = WalkingOCP(bolt, ALL_TERMS, n_nodes=12, dt=0.01)
+    ocp.update(standing_state(bolt), alternating_schedule(0.2, 0.01, 12, t_start=0.0), np.array([0.1, 0.0, 0.3]))
+    return ocp
+
+
+@pytest.mark.parametrize("node", [0, 5, 9])
+def test_integrated_node_derivatives_match_finite_differences(bolt, walking_nodes, node):
+    """Fx, Fu (through the contact dynamics) and the cost gradient Lx, Lu of a running node."""
+    problem = walking_nodes.problem
+    model = problem.running_models[node]
+    data = model.createData()
+    state = problem.state
+    rng = np.random.default_rng(node)
+    x = random_state(bolt, rng)
+    u = 0.5 * rng.standard_normal(model.nu)
+    model.calc(data, x, u)
+    model.calcDiff(data, x, u)
+
+    def xnext_of_x(xx):
+        d = model.createData()
+        model.calc(d, xx, u)
+        return state.diff(data.xnext, d.xnext)
+
+    def xnext_of_u(uu):
+        d = model.createData()
+        model.calc(d, x, uu)
+        return state.diff(data.xnext, d.xnext)
+
+    def cost_of_x(xx):
+        d = model.createData()
+        model.calc(d, xx, u)
+        return np.array([d.cost])
+
+    def cost_of_u(uu):
+        d = model.createData()
+        model.calc(d, x, uu)
+        return np.array([d.cost])
+
+    _assert_close(data.Fx, _tangent_fd(state, xnext_of_x, x), "Fx")
+    _assert_close(data.Fu, _control_fd(xnext_of_u, u), "Fu")
+    _assert_close(data.Lx, _tangent_fd(state, cost_of_x, x)[0], "Lx", rtol=1e-3)
+    _assert_close(data.Lu, _control_fd(cost_of_u, u)[0], "Lu", rtol=1e-3)
+
+
+def test_every_residual_jacobian_matches_finite_differences(bolt, walking_nodes):
+    """Rx, Ru of each active residual of a swing node (foothold, forces, cone, height, ...)."""
+    problem = walking_nodes.problem
+    node = next(k for k in range(problem.T) if any(
+        item.active and name.endswith("_foothold")
+        for name, item in problem.running_models[k].differential.costs.costs.items()))
+    dam = problem.running_models[node].differential
+    state = problem.state
+    rng = np.random.default_rng(7)
+    x = random_state(bolt, rng)
+    u = 0.5 * rng.standard_normal(dam.nu)
+    data = dam.createData()
+    dam.calc(data, x, u)
+    dam.calcDiff(data, x, u)
+    checked = []
+    for name, item in dam.costs.costs.items():
+        if not item.active:
+            continue
+        residual = item.cost.residual
+        rdata = data.costs.terms[name].residual
+
+        def r_of_x(xx, residual=residual):
+            d = dam.createData()
+            dam.calc(d, xx, u)
+            rd = residual.createData()
+            residual.calc(rd, xx, u, d.shared)
+            return rd.r.copy()
+
+        def r_of_u(uu, residual=residual):
+            d = dam.createData()
+            dam.calc(d, x, uu)
+            rd = residual.createData()
+            residual.calc(rd, x, uu, d.shared)
+            return rd.r.copy()
+
+        _assert_close(rdata.Rx, _tangent_fd(state, r_of_x, x), f"{name} Rx")
+        _assert_close(rdata.Ru, _control_fd(r_of_u, u), f"{name} Ru")
+        checked.append(name)
+    assert {"state_regularization", "control_regularization", "control_bounds"} <= set(checked)
+    assert any(n.endswith("_height") for n in checked) and any(n.endswith("_foothold") for n in checked)
+    assert any(n.endswith("_contact_force") for n in checked) and any(n.endswith("_friction_cone") for n in checked)
+
+
+def test_terminal_node_com_and_state_gradient(bolt, walking_nodes):
+    problem = walking_nodes.problem
+    model = problem.terminal_model
+    state = problem.state
+    x = random_state(bolt, np.random.default_rng(3))
+    data = model.createData()
+    model.calc(data, x)
+    model.calcDiff(data, x)
+
+    def cost_of_x(xx):
+        d = model.createData()
+        model.calc(d, xx)
+        return np.array([d.cost])
+
+    _assert_close(data.Lx, _tangent_fd(state, cost_of_x, x)[0], "terminal Lx", rtol=1e-3)
+    np.testing.assert_allclose(data.xnext, x)
+
+
+def test_activation_gradients():
+    rng = np.random.default_rng(0)
+    r = rng.standard_normal(5)
+    for activation in (ActivationWeightedQuad(np.arange(1.0, 6.0)),
+                       ActivationQuadraticBarrier(-0.5 * np.ones(5), 0.5 * np.ones(5))):
+        data = activation.createData()
+        activation.calc(data, r)
+        activation.calcDiff(data, r)
+
+        def a_of(rr, activation=activation):
+            d = activation.createData()
+            activation.calc(d, rr)
+            return np.array([d.a_value])
+
+        _assert_close(data.Ar, _control_fd(a_of, r)[0], type(activation).__name__)
+
+
+def test_bad_inputs_raise_clear_errors(bolt):
+    from wbmpc.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="barrier bounds need lower <= upper"):
+        ActivationQuadraticBarrier(np.ones(2), np.zeros(2))
+    with pytest.raises(ParameterError, match="n_nodes=0"):
+        WalkingOCP(bolt, WalkingOCPConfig(), n_nodes=0, dt=0.01)
+    with pytest.raises(ParameterError, match="control_weight=-1"):
+        WalkingOCPConfig(control_weight=-1.0)
+    state = StateMultibody(bolt.pinocchio_model)
+    with pytest.raises(ParameterError, match=r"x0 has shape \(3,\)"):
+        state.check_state("x0", np.zeros(3))
+    ocp = WalkingOCP(bolt, WalkingOCPConfig(), n_nodes=5, dt=0.01)
+    with pytest.raises(ParameterError, match="schedule has n_nodes=8"):
+        ocp.update(standing_state(bolt), alternating_schedule(0.0, 0.01, 8), np.zeros(3))
