@@ -161,7 +161,7 @@ class StepProblem:
                 f"elapsed time t={self.elapsed:.4g} s exceeds T_max={t_max} s: no touchdown time is feasible",
                 self,
                 "primal infeasible",
-                "bounds",
+                "none (bound check before any solver)",
             )
         return math.exp(self.omega * max(t_min, self.elapsed)), math.exp(self.omega * t_max)
 

@@ -27,12 +27,13 @@ def check_constraints(plan, params):
         assert params.l_min - tol <= d[0] <= params.l_max + tol
         assert w_lo - tol <= d[1] <= w_hi + tol
         assert params.t_min - tol <= step.touchdown_time - start <= params.t_max + tol
-        assert step.touchdown_time >= plan.t0 - tol if start == plan.t_stance_start else True
+        if start == plan.t_stance_start:  # first step: no touchdown in the past
+            assert step.touchdown_time >= plan.t0 - tol
         # the DCM at touchdown is the LIPM DCM propagated from the previous stance (eq. 1b)
         t_from = plan.t0 if start == plan.t_stance_start else start
         expected = previous + (dcm - previous) * math.exp(omega * (step.touchdown_time - t_from))
-        assert step.dcm_at_touchdown == pytest.approx(expected, abs=1e-9)
-        assert step.dcm_at_touchdown == pytest.approx(step.position + step.dcm_offset, abs=1e-15)
+        assert step.dcm_at_touchdown == pytest.approx(expected, abs=1e-9, rel=1e-12)
+        assert step.dcm_at_touchdown == pytest.approx(step.position + step.dcm_offset, abs=1e-15, rel=1e-15)
         previous, stance, start, dcm = step.position, step.foot, step.touchdown_time, step.dcm_at_touchdown
 
 
@@ -139,3 +140,20 @@ def test_plan_input_errors_and_late_touchdown():
     assert plan.steps[0].touchdown_time == pytest.approx(plan.t0)
     with pytest.raises(ParameterError, match="must be a SequencerParams"):
         FootstepSequencer({"z_c": 0.3})
+
+
+@pytest.mark.parametrize("preset", ["table_i", "bolt_walking"])
+def test_random_measured_states_always_give_a_feasible_plan(preset):
+    """What a closed loop sees: any state within T_max plans, and every plan satisfies the bounds."""
+    params = SequencerParams.preset(preset)
+    seq = FootstepSequencer(params)
+    rng = np.random.default_rng(7)
+    for _ in range(300):
+        stance = "left" if rng.random() < 0.5 else "right"
+        p0 = rng.uniform(-1.0, 1.0, 2)
+        dcm = p0 + rng.normal(0.0, 0.3, 2)
+        t_start = rng.uniform(0.0, 5.0)
+        t = t_start + rng.uniform(0.0, params.t_max)
+        plan = seq.plan(t, stance, p0, dcm, t_start)
+        check_constraints(plan, params)
+        assert plan.steps[-1].touchdown_time >= t + params.horizon
