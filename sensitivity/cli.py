@@ -9,7 +9,7 @@ import numpy as np
 from sensitivity.crosscheck import crosscheck
 from sensitivity.studies.fig2 import plot_fig2, run_monte_carlo
 from sequencer.cli import add_params_arguments, add_state_arguments, params_from_args
-from sequencer.step_qp import VARIABLE_NAMES, StepProblem
+from sequencer.step_qp import CONSTRAINT_NAMES, VARIABLE_NAMES, StepProblem
 from wbmpc.cli import add_output_arguments, print_json
 
 
@@ -22,9 +22,7 @@ def sensitivity_report(problem: StepProblem, samples: int, sigma: float, seed: i
         "touchdown_duration": float(np.log(check.x[2]) / problem.omega),
         "dx_dtheta": check.jacobians["analytic"],
         "dx_dtheta_rows": list(VARIABLE_NAMES),
-        "active_set": [name for name, on in zip(
-            ("step_length_min", "step_length_max", "step_width_min", "step_width_max", "time_min", "time_max"),
-            check.active) if on],
+        "active_set": [name for name, on in zip(CONSTRAINT_NAMES, check.active) if on],
         "jacobians": check.jacobians,
         "max_disagreement": check.max_disagreement,
         "worst_route": check.worst_route,

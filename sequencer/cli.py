@@ -26,6 +26,7 @@ _HELP = {
     "alpha2": "weight of the step timing error [-]",
     "alpha3": "weight of the DCM offset error [-]",
     "z_c": "CoM height of the LIPM [m]",
+    "gravity": "gravitational acceleration [m/s^2]",
     "v_x": "commanded forward velocity [m/s] (l_nom = v_x t_nom)",
     "v_y": "commanded lateral velocity [m/s]",
     "l_min": "min step length [m]",
@@ -53,7 +54,7 @@ def add_params_arguments(parser: argparse.ArgumentParser) -> None:
             continue
         flags = [f"--{field.name.replace('_', '-')}"] + _ALIASES.get(field.name, [])
         group.add_argument(*flags, dest=f"param_{field.name}", type=float, default=None, metavar="VALUE",
-                           help=_HELP.get(field.name, argparse.SUPPRESS))
+                           help=_HELP[field.name])
 
 
 def params_from_args(args: argparse.Namespace) -> SequencerParams:
