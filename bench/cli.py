@@ -15,6 +15,7 @@ from wbmpc.cli import add_output_arguments, print_json
 BENCH_MODULES: dict[str, str] = {
     "sequencer": "bench.sequencer",
     "loop": "bench.loop",
+    "ddp": "bench.ddp",
 }
 
 

@@ -1,0 +1,222 @@
+"""FDDP and MPC tick of wbmpc against Crocoddyl on the identical Bolt (and G1) walking problem.
+
+For each horizon N: a cold solve, one iteration split into calc / calcDiff / backward / forward,
+and the receding-horizon MPC tick (shift, warm start, one iteration), median / p90 / p99 / max,
+each with the ratio ours / Crocoddyl measured in the same run (both single-threaded; the two
+solvers alternate tick by tick so machine noise hits both alike). The problems are built once by
+``wbmpc.walking`` and mirrored into Crocoddyl by :mod:`bench.crocoddyl_mirror`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--nodes", type=int, nargs="+", default=[50, 100], help="horizon lengths N (dt = 10 ms)")
+    parser.add_argument("--ticks", type=int, default=200, help="MPC ticks timed per horizon")
+    parser.add_argument("--repeats", type=int, default=20, help="repetitions of the per-phase iteration timing")
+    parser.add_argument("--g1-nodes", type=int, default=50, help="G1 horizon (dt = 20 ms); 0 skips G1")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the state disturbances of the MPC loop")
+
+
+def _stats(samples) -> dict:
+    a = np.asarray(samples, dtype=float) * 1e3
+    return {"median_ms": float(np.median(a)), "p90_ms": float(np.percentile(a, 90)),
+            "p99_ms": float(np.percentile(a, 99)), "max_ms": float(np.max(a)), "n": int(a.size)}
+
+
+def _ratio(ours: dict, theirs: dict) -> dict:
+    return {key: ours[key] / theirs[key] for key in ("median_ms", "p90_ms", "p99_ms", "max_ms")}
+
+
+def _schedule(t0: float, dt: float, n_nodes: int, step_duration: float, foot_y=(0.1, -0.1), step_length=0.1):
+    """Alternating single-support gait starting with the right swing at t = 0."""
+    from sequencer.schedule import ContactSchedule
+
+    times = t0 + dt * np.arange(n_nodes + 1)
+    in_contact = np.ones((n_nodes + 1, 2), dtype=bool)
+    phase = np.full((n_nodes + 1, 2), np.nan)
+    duration = np.full((n_nodes + 1, 2), np.nan)
+    touchdown = np.full((n_nodes + 1, 2, 2), np.nan)
+    for k, t in enumerate(times):
+        step = int(np.floor(t / step_duration + 1e-9))
+        swing = 1 if step % 2 == 0 else 0
+        in_contact[k, swing] = False
+        phase[k, swing] = (t - step * step_duration) / step_duration
+        duration[k, swing] = step_duration
+        touchdown[k, swing] = ((step + 1) * step_length, foot_y[swing])
+    return ContactSchedule(t0=t0, dt=dt, feet=("left", "right"), in_contact=in_contact, swing_phase=phase,
+                           swing_duration=duration, touchdown_position=touchdown)
+
+
+def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot_y, ticks: int, seed: int,
+              speed: float = 0.3) -> dict:
+    """Run both MPCs on the same measured states; returns tick statistics and the control gap."""
+    import crocoddyl
+
+    from bench.crocoddyl_mirror import CrocoddylMirror
+    from wbmpc.mpc import WalkingMPC, _shift
+    from wbmpc.walking import quasi_static_controls
+
+    mpc = WalkingMPC(robot, config, n_nodes=n_nodes, dt=dt, max_iterations=1, cold_start_iterations=20)
+    mirror = CrocoddylMirror(mpc.problem)
+    twin = crocoddyl.SolverFDDP(mirror.problem)
+    nq, nv = mpc.ocp.state.nq, mpc.ocp.state.nv
+    x = np.concatenate([robot.q_reference, np.zeros(nv)])
+    com0 = np.array([0.0, 0.0, 0.0])
+    import pinocchio as pin
+
+    com0 = pin.centerOfMass(robot.pinocchio_model, robot.pinocchio_model.createData(), x[:nq]).copy()
+    rng = np.random.default_rng(seed)
+    ours_times, theirs_times, update_times = [], [], []
+    gap = 0.0
+    previous_xs = previous_us = None
+    for tick in range(ticks + 1):
+        t = tick * dt
+        schedule = _schedule(t, dt, n_nodes, step_duration, foot_y)
+        com_ref = com0 + np.array([speed * (t + n_nodes * dt), 0.0, 0.0])
+        tic = time.perf_counter()
+        solution = mpc.update(t, x, schedule, com_ref)
+        ours = time.perf_counter() - tic
+        mirror.update()  # copies references into the twin (not timed: a C++ user sets them directly)
+        tic = time.perf_counter()
+        if previous_xs is None:
+            xs0 = [x] * (n_nodes + 1)
+            us0 = [quasi_static_controls(mpc.ocp, x)] * n_nodes
+            mirror.problem.x0 = x
+            twin.solve(xs0, us0, 20)
+        else:
+            xs0 = list(_shift(previous_xs, 1))
+            us0 = list(_shift(previous_us, 1))
+            xs0[0] = x
+            mirror.problem.x0 = x
+            twin.solve(xs0, us0, 1)
+        theirs = time.perf_counter() - tic
+        previous_xs, previous_us = np.array(twin.xs), np.array(twin.us)
+        if tick > 0:  # tick 0 is the cold start
+            ours_times.append(ours)
+            theirs_times.append(theirs)
+        if not solution.ok:
+            raise RuntimeError(f"wbmpc MPC failed at tick {tick}: {solution.status}")
+        gap = max(gap, float(np.max(np.abs(solution.us[1] - previous_us[1]))))
+        x = solution.xs[1].copy()
+        x[nq:] += 0.01 * rng.standard_normal(nv)
+    ours_stats, theirs_stats = _stats(ours_times), _stats(theirs_times)
+    return {"ours": ours_stats, "crocoddyl": theirs_stats, "ratio": _ratio(ours_stats, theirs_stats),
+            "max_control_difference_Nm": gap}
+
+
+def _phases(robot, config, n_nodes: int, dt: float, repeats: int) -> dict:
+    """Cold solve and one iteration split into phases, ours and Crocoddyl's."""
+    import crocoddyl
+
+    from bench.crocoddyl_mirror import CrocoddylMirror
+    from wbmpc.solvers import SolverFDDP
+    from wbmpc.walking import WalkingOCP, quasi_static_controls
+
+    ocp = WalkingOCP(robot, config, n_nodes=n_nodes, dt=dt)
+    x0 = np.concatenate([robot.q_reference, np.zeros(robot.pinocchio_model.nv)])
+    ocp.update(x0, _schedule(0.0, dt, n_nodes, 0.3), np.array([0.3, 0.0, 0.3]))
+    mirror = CrocoddylMirror(ocp.problem)
+    u0 = quasi_static_controls(ocp, x0)
+    xs0, us0 = [x0] * (n_nodes + 1), [u0] * n_nodes
+    ours, theirs = SolverFDDP(ocp.problem), crocoddyl.SolverFDDP(mirror.problem)
+    ours.solve(xs0, us0, 1)  # compile / warm caches
+    tic = time.perf_counter()
+    ours.solve(xs0, us0, 100)
+    cold_ours = time.perf_counter() - tic
+    tic = time.perf_counter()
+    theirs.solve(xs0, us0, 100)
+    cold_theirs = time.perf_counter() - tic
+    iterations = (ours.iter, theirs.iter)
+    xs, us = ours.xs.copy(), ours.us.copy()
+    names = ("calc", "calcDiff", "backward", "forward")
+    samples = {"ours": {n: [] for n in names}, "crocoddyl": {n: [] for n in names}}
+    for _ in range(repeats):
+        ours._set_candidate(xs, us, False)
+        ours.iter = 0
+        for name, fn in (("calc", lambda: ocp.problem.calc(ours.xs, ours.us)),
+                         ("calcDiff", lambda: (ocp.problem.calcDiff(ours.xs, ours.us), ours._compute_gaps())),
+                         ("backward", ours._backward_pass),
+                         ("forward", lambda: ours._forward_pass(1.0))):
+            tic = time.perf_counter()
+            fn()
+            samples["ours"][name].append(time.perf_counter() - tic)
+        lxs, lus = list(xs), list(us)
+        theirs.setCandidate(lxs, lus, False)
+        for name, fn in (("calc", lambda: mirror.problem.calc(lxs, lus)),
+                         ("calcDiff", theirs.calcDiff),
+                         ("backward", theirs.backwardPass),
+                         ("forward", lambda: theirs.forwardPass(1.0))):
+            tic = time.perf_counter()
+            fn()
+            samples["crocoddyl"][name].append(time.perf_counter() - tic)
+    result = {"cold_solve": {"ours_s": cold_ours, "crocoddyl_s": cold_theirs, "ratio": cold_ours / cold_theirs,
+                             "ours_iterations": iterations[0], "crocoddyl_iterations": iterations[1]}}
+    for name in names:
+        o = float(np.median(samples["ours"][name])) * 1e3
+        c = float(np.median(samples["crocoddyl"][name])) * 1e3
+        result[name] = {"ours_ms": o, "crocoddyl_ms": c, "ratio": o / c}
+    return result
+
+
+def run(args: argparse.Namespace) -> dict:
+    from robots import load_robot
+    from wbmpc.blas import limit_blas_threads
+    from wbmpc.walking import WalkingOCPConfig
+
+    limit_blas_threads(1)
+    for n in args.nodes:
+        if n < 2:
+            raise ValueError(f"--nodes {n}: every horizon must have at least 2 nodes")
+    bolt = load_robot("bolt")
+    config = WalkingOCPConfig()
+    result = {"robot": "bolt", "dt_s": 0.01, "horizons": {}}
+    for n_nodes in args.nodes:
+        entry = _phases(bolt, config, n_nodes, 0.01, args.repeats)
+        entry["mpc_tick"] = _mpc_loop(bolt, config, n_nodes, 0.01, 0.3, (0.1, -0.1), args.ticks, args.seed)
+        result["horizons"][str(n_nodes)] = entry
+    if args.g1_nodes:
+        g1 = load_robot("g1")
+        g1_config = WalkingOCPConfig(swing_apex_height=0.08, baumgarte_gains=(0.0, 30.0))
+        result["g1"] = {"n_nodes": args.g1_nodes, "dt_s": 0.02,
+                        "mpc_tick": _mpc_loop(g1, g1_config, args.g1_nodes, 0.02, 0.4, (0.12, -0.12),
+                                              max(20, args.ticks // 4), args.seed, speed=0.2)}
+    return result
+
+
+def format_report(result: dict) -> str:
+    lines = ["wbmpc FDDP vs Crocoddyl (single thread, same problem, same run); ratio = ours / Crocoddyl"]
+    for n, entry in result["horizons"].items():
+        cold = entry["cold_solve"]
+        lines.append(f"\nBolt N={n} (dt {result['dt_s'] * 1e3:.0f} ms)")
+        lines.append(f"  cold solve      ours {cold['ours_s'] * 1e3:9.1f} ms ({cold['ours_iterations']} it)   "
+                     f"crocoddyl {cold['crocoddyl_s'] * 1e3:8.1f} ms ({cold['crocoddyl_iterations']} it)   "
+                     f"ratio {cold['ratio']:5.2f}")
+        for phase in ("calc", "calcDiff", "backward", "forward"):
+            p = entry[phase]
+            lines.append(f"  {phase:<14}  ours {p['ours_ms']:9.3f} ms   crocoddyl {p['crocoddyl_ms']:8.3f} ms   "
+                         f"ratio {p['ratio']:5.2f}")
+        lines.extend(_tick_lines(entry["mpc_tick"]))
+    if "g1" in result:
+        g1 = result["g1"]
+        lines.append(f"\nG1 N={g1['n_nodes']} (dt {g1['dt_s'] * 1e3:.0f} ms)")
+        lines.extend(_tick_lines(g1["mpc_tick"]))
+    return "\n".join(lines)
+
+
+def _tick_lines(tick: dict) -> list[str]:
+    o, c, r = tick["ours"], tick["crocoddyl"], tick["ratio"]
+    lines = [f"  MPC tick ({o['n']} ticks)   median / p90 / p99 / max [ms]"]
+    lines.append(f"    ours       {o['median_ms']:7.2f} {o['p90_ms']:7.2f} {o['p99_ms']:7.2f} {o['max_ms']:7.2f}")
+    lines.append(f"    crocoddyl  {c['median_ms']:7.2f} {c['p90_ms']:7.2f} {c['p99_ms']:7.2f} {c['max_ms']:7.2f}")
+    lines.append(f"    ratio      {r['median_ms']:7.2f} {r['p90_ms']:7.2f} {r['p99_ms']:7.2f} {r['max_ms']:7.2f}")
+    lines.append(f"    max |u1 ours - u1 crocoddyl| = {tick['max_control_difference_Nm']:.2e} N·m")
+    return lines
