@@ -148,6 +148,8 @@ class FootstepPlan:
         if com0.shape != (2,) or not np.all(np.isfinite(com0)):
             raise ParameterError(f"com_xy_measured={com_xy_measured!r} must be a finite (x, y) pair")
         times = self._check_times(t)
+        if times.ndim == 0:
+            return self._lipm_com_scalar(float(times), com0)
         flat = np.atleast_1d(times)
         out = np.empty((flat.size, 2))
         segments = list(self._segments())
@@ -168,6 +170,27 @@ class FootstepPlan:
                     + (dcm0 - foot) * (math.exp(self.omega * tau) - math.exp(-self.omega * tau)) / 2.0
                 )
         return out[0] if times.ndim == 0 else out
+
+    def _lipm_com_scalar(self, t: float, com0: np.ndarray) -> np.ndarray:
+        """lipm_com_at for one time, on plain floats (called every control cycle)."""
+        omega = self.omega
+        cx, cy = float(com0[0]), float(com0[1])
+        start = self.t0
+        fx, fy = float(self.stance_position[0]), float(self.stance_position[1])
+        zx, zy = float(self.dcm_measured[0]), float(self.dcm_measured[1])
+        for step in self.steps:
+            end = step.touchdown_time
+            if t < end:
+                break
+            grow, decay = math.exp(omega * (end - start)), math.exp(-omega * (end - start))
+            cx = fx + (cx - fx) * decay + (zx - fx) * (grow - decay) / 2.0
+            cy = fy + (cy - fy) * decay + (zy - fy) * (grow - decay) / 2.0
+            start = end
+            fx, fy = float(step.position[0]), float(step.position[1])
+            zx, zy = float(step.dcm_at_touchdown[0]), float(step.dcm_at_touchdown[1])
+        grow, decay = math.exp(omega * (t - start)), math.exp(-omega * (t - start))
+        return np.array((fx + (cx - fx) * decay + (zx - fx) * (grow - decay) / 2.0,
+                         fy + (cy - fy) * decay + (zy - fy) * (grow - decay) / 2.0))
 
     def mean_velocity(self) -> np.ndarray:
         """Average foothold velocity over the plan, (x, y) [m/s], from the stance foot to the last step.

@@ -106,19 +106,19 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int) -> ContactSchedul
     # index of the stance interval of each node: 0 = current stance, k = after the k-th touchdown
     interval = np.searchsorted(touchdowns, times, side="right")
     stance_starts = np.concatenate([[plan.t_stance_start], touchdowns])
-    stance_feet = [plan.stance_foot] + [step.foot for step in plan.steps]
+    stance_index = np.array([feet.index(plan.stance_foot)] + [feet.index(step.foot) for step in plan.steps])
+    rows = np.arange(n_nodes + 1)
+    stance = stance_index[interval]
+    swing = 1 - stance
+    start, end = stance_starts[interval], touchdowns[interval]
     in_contact = np.zeros((n_nodes + 1, 2), dtype=bool)
+    in_contact[rows, stance] = True
     swing_phase = np.full((n_nodes + 1, 2), np.nan)
+    swing_phase[rows, swing] = np.clip((times - start) / (end - start), 0.0, 1.0)
     swing_duration = np.full((n_nodes + 1, 2), np.nan)
+    swing_duration[rows, swing] = end - start
     touchdown_position = np.full((n_nodes + 1, 2, 2), np.nan)
-    for k, i in enumerate(interval):
-        stance = feet.index(stance_feet[i])
-        swing = 1 - stance
-        in_contact[k, stance] = True
-        start, end = stance_starts[i], touchdowns[i]
-        swing_duration[k, swing] = end - start
-        swing_phase[k, swing] = min(max((times[k] - start) / (end - start), 0.0), 1.0)
-        touchdown_position[k, swing] = plan.steps[i].position
+    touchdown_position[rows, swing] = plan.positions[interval]
     return ContactSchedule(
         t0=t0, dt=dt, feet=feet, in_contact=in_contact, swing_phase=swing_phase,
         swing_duration=swing_duration, touchdown_position=touchdown_position,

@@ -157,3 +157,12 @@ def test_random_measured_states_always_give_a_feasible_plan(preset):
         plan = seq.plan(t, stance, p0, dcm, t_start)
         check_constraints(plan, params)
         assert plan.steps[-1].touchdown_time >= t + params.horizon
+
+
+def test_scalar_and_vector_com_predictions_agree():
+    plan = FootstepSequencer(SequencerParams.table_i()).plan(**TABLE_I_STATE)
+    com0 = np.array([-0.11, -0.01])
+    times = np.concatenate([np.linspace(plan.t0, plan.steps[-1].touchdown_time + 0.2, 37), plan.touchdown_times])
+    vector = plan.lipm_com_at(times, com0)
+    for t, expected in zip(times, vector):
+        assert plan.lipm_com_at(float(t), com0) == pytest.approx(expected, abs=1e-12, rel=1e-12)
