@@ -310,7 +310,7 @@ class WalkingController:
             mpc_solve_time=float(solve_time),
             mpc_tick_time=time.perf_counter() - tic,
             mpc_reference_age=np.nan if self.reference is None else t - self.reference.t,
-            mpc_status_code=float(_STATUS_CODES.get(status, -1)),
+            mpc_status_code=float(mpc_status_code(status)),
         )
         self.last_status = status
         return record
@@ -348,7 +348,13 @@ class WalkingController:
         return tau
 
 
-_STATUS_CODES = {"injected_failure": -2}
+MPC_STATUS_CODES = {"converged": 0, "max_iter": 1, "failed": 2, "injected_failure": 3}
+"""Numeric codes of the MPC statuses in the replan log (``mpc_status_code``); -1 = other."""
+
+
+def mpc_status_code(status: str) -> int:
+    """Code of an MPC status string ("failed: <reason>" counts as "failed")."""
+    return MPC_STATUS_CODES.get(status.split(":", 1)[0], -1)
 
 
 def _is_solver_failure(err: Exception) -> bool:
