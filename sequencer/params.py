@@ -180,8 +180,9 @@ class SequencerParams:
         Differs from Table I in the lateral geometry only: Table I asks for 0.25 m between the
         feet, but Bolt's feet are 0.052 m apart at the standing pose and its legs are ~0.3 m
         long, so the preset uses a nominal width of 0.10 m within [0.04, 0.20] m, step lengths
-        within +-0.20 m and step durations within [0.15, 0.6] s. z_c = 0.31 m is Bolt's CoM
-        height at the standing pose. Weights, T_nom and v_x are Table I's.
+        within +-0.20 m and step durations within [0.15, 0.6] s. z_c = 0.295 m is Bolt's CoM
+        height at ``load_robot("bolt").q_reference`` (feet on the floor; Table I's 0.31 m is the
+        SRDF pose with the feet 30 mm in the air). Weights, T_nom and v_x are Table I's.
         """
         return cls.preset("bolt_walking")
 

@@ -25,7 +25,14 @@ def test_bolt_preset_is_narrower_than_table_i_and_uses_bolt_com_height():
     bolt, table = SequencerParams.bolt_walking(), SequencerParams.table_i()
     assert abs(bolt.w_nom("left")) < abs(table.w_nom("left"))
     assert bolt.w_right_min < table.w_right_min
-    assert bolt.z_c == pytest.approx(0.31, abs=0.01)
+    # z_c is the CoM height of the robot description's standing pose (feet on the floor).
+    import pinocchio as pin
+    from robots import load_robot
+
+    robot = load_robot("bolt")
+    model = robot.pinocchio_model
+    com_height = pin.centerOfMass(model, model.createData(), robot.q_reference)[2]
+    assert bolt.z_c == pytest.approx(com_height, abs=1e-3)
 
 
 def test_replace_revalidates_and_converts_to_float():
