@@ -1,0 +1,226 @@
+"""Summary of a campaign: success rates per variant, per grid axis, over the force grid, per gait phase.
+
+A trial succeeds when its run completes the whole duration without a fall or an error (for push
+campaigns the duration ends ``PUSH_RECOVERY_TIME`` after the latest push, so success means the
+robot recovered and kept walking, the ALIP paper's criterion: "still walking after being pushed").
+Trials that raised count as failures and are also counted apart (``n_error``): an error is a
+bug or a solver breakdown, worth reading before trusting the map.
+
+Variant comparison (e.g. adaptive against fixed step timing): on the pairs of trials that share a
+point and a seed, both recorded,
+
+- ``change_points``: success rate of the variant minus that of the baseline [percentage points];
+- ``relative_change_successes``: (successes of the variant - successes of the baseline) /
+  successes of the baseline, the figure of the ALIP paper ("increased the number of successful
+  recoveries by 36 %", G1, NMPC over ALIP step-to-step dynamics, Fig. 6).
+"""
+
+from __future__ import annotations
+
+import json
+from collections import Counter, defaultdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sim.campaigns.spec import CampaignSpec
+from sim.campaigns.store import SUMMARY_FILE
+from sim.campaigns.trial import make_trials
+
+PAPER_TIMING_GAIN = 0.36  # ALIP paper: adaptive step timing, +36 % successful push recoveries (G1)
+MAX_ERROR_KINDS = 5
+
+
+def _stats(records: list[dict[str, Any]]) -> dict[str, Any]:
+    n = len(records)
+    n_success = sum(bool(r["success"]) for r in records)
+    return {
+        "n": n,
+        "n_success": n_success,
+        "n_fell": sum(r["status"] == "fell" for r in records),
+        "n_error": sum(r["status"] == "error" for r in records),
+        "success_rate": n_success / n if n else None,
+    }
+
+
+def summarize(spec: CampaignSpec, records: list[dict[str, Any]]) -> dict[str, Any]:
+    """Summary of the ``records`` of campaign ``spec`` (records of other specs are ignored).
+
+    Returns:
+        A JSON-able dict: ``variants`` (stats per variant), ``axes`` (per grid axis, per variant, per
+        value), ``force_map`` (when the grid has force_x and force_y: success rate, shape
+        (n_force_y, n_force_x), None where nothing is recorded), ``phase`` (when the grid has
+        phase, with the mean measured phase), ``comparisons`` (each other variant against the
+        first one, on paired trials) and ``errors`` (most frequent error texts).
+    """
+    trials = make_trials(spec)
+    by_key = {r["key"]: r for r in records}
+    variants = list(spec.variants)
+    rows = [(trial, by_key[trial.key]) for trial in trials if trial.key in by_key]
+    summary: dict[str, Any] = {
+        "campaign": spec.name,
+        "scenario": spec.scenario,
+        "controller": spec.controller,
+        "duration": spec.duration,
+        "n_trials": len(trials),
+        "n_recorded": len(rows),
+        "complete": len(rows) == len(trials),
+        "variants": {v: _stats([r for t, r in rows if t.variant == v]) for v in variants},
+    }
+
+    axes: dict[str, Any] = {}
+    for axis, values in spec.grid.items():
+        axes[axis] = {
+            v: [
+                {"value": value, **_stats([r for t, r in rows if t.variant == v and t.params.get(axis) == value])}
+                for value in values
+            ]
+            for v in variants
+        }
+    summary["axes"] = axes
+
+    if "force_x" in spec.grid and "force_y" in spec.grid:
+        fx, fy = spec.grid["force_x"], spec.grid["force_y"]
+        maps = {}
+        for v in variants:
+            rate = np.full((len(fy), len(fx)), np.nan)
+            count = np.zeros((len(fy), len(fx)), dtype=int)
+            cells: dict[tuple[int, int], list[bool]] = defaultdict(list)
+            for t, r in rows:
+                if t.variant == v:
+                    cells[(fy.index(t.params["force_y"]), fx.index(t.params["force_x"]))].append(bool(r["success"]))
+            for (i, j), outcomes in cells.items():
+                rate[i, j], count[i, j] = np.mean(outcomes), len(outcomes)
+            maps[v] = {"force_x": fx, "force_y": fy, "success_rate": rate, "n": count}
+        summary["force_map"] = maps
+
+    if "phase" in spec.grid:
+        phases = {}
+        for v in variants:
+            entries = []
+            for value in spec.grid["phase"]:
+                selected = [r for t, r in rows if t.variant == v and t.params.get("phase") == value]
+                measured = [
+                    r["metrics"].get("push_phase_measured")
+                    for r in selected
+                    if r.get("metrics", {}).get("push_phase_measured") is not None
+                ]
+                entries.append(
+                    {"phase": value, **_stats(selected), "measured_phase_mean": float(np.mean(measured)) if measured else None}
+                )
+            phases[v] = entries
+        summary["phase"] = phases
+
+    if len(variants) > 1:
+        pairs: dict[int, dict[str, bool]] = defaultdict(dict)
+        for t, r in rows:
+            pairs[t.index // len(variants)][t.variant] = bool(r["success"])
+        reference = variants[0]
+        timing_study = all("step_timing" in spec.variants[v] for v in variants)
+        comparisons = []
+        for baseline in variants[1:]:
+            paired = [p for p in pairs.values() if reference in p and baseline in p]
+            s_ref = sum(p[reference] for p in paired)
+            s_base = sum(p[baseline] for p in paired)
+            n = len(paired)
+            comparisons.append(
+                {
+                    "variant": reference,
+                    "baseline": baseline,
+                    "n_pairs": n,
+                    "success_rate": s_ref / n if n else None,
+                    "baseline_success_rate": s_base / n if n else None,
+                    "change_points": 100.0 * (s_ref - s_base) / n if n else None,
+                    "relative_change_successes": (s_ref - s_base) / s_base if s_base else None,
+                    "only_variant_succeeds": sum(p[reference] and not p[baseline] for p in paired),
+                    "only_baseline_succeeds": sum(p[baseline] and not p[reference] for p in paired),
+                    "paper_relative_change": PAPER_TIMING_GAIN if timing_study else None,
+                }
+            )
+        summary["comparisons"] = comparisons
+
+    errors = Counter(r["error"] for _, r in rows if r["status"] == "error")
+    summary["errors"] = [{"error": text, "count": count} for text, count in errors.most_common(MAX_ERROR_KINDS)]
+    return summary
+
+
+def format_summary(summary: dict[str, Any]) -> str:
+    """Human-readable report of :func:`summarize`'s result."""
+
+    def pct(x: float | None) -> str:
+        return "  n/a" if x is None else f"{100 * x:5.1f} %"
+
+    lines = [
+        f"campaign {summary['campaign']} ({summary['scenario']}, controller {summary['controller']}): "
+        f"{summary['n_recorded']}/{summary['n_trials']} trials recorded"
+        + ("" if summary["complete"] else " (incomplete: run again with --resume)")
+    ]
+    for variant, s in summary["variants"].items():
+        lines.append(
+            f"  {variant:<12} success {pct(s['success_rate'])}  ({s['n_success']}/{s['n']}; fell {s['n_fell']}, "
+            f"errors {s['n_error']})"
+        )
+    for variant, entries in summary.get("phase", {}).items():
+        cells = "  ".join(
+            f"{e['phase']:.2f}:{pct(e['success_rate']).strip()}"
+            + ("" if e["measured_phase_mean"] is None else f" (measured {e['measured_phase_mean']:.2f})")
+            for e in entries
+        )
+        lines.append(f"  per phase, {variant}: {cells}")
+    for axis, by_variant in summary["axes"].items():
+        if axis in ("phase", "force_x", "force_y") or len(next(iter(by_variant.values()))) < 2:
+            continue
+        for variant, entries in by_variant.items():
+            cells = "  ".join(f"{e['value']}:{pct(e['success_rate']).strip()}" for e in entries)
+            lines.append(f"  per {axis}, {variant}: {cells}")
+    for c in summary.get("comparisons", []):
+        line = (
+            f"  {c['variant']} vs {c['baseline']} on {c['n_pairs']} paired trials: success "
+            f"{pct(c['success_rate']).strip()} vs {pct(c['baseline_success_rate']).strip()}"
+        )
+        if c["change_points"] is not None:
+            line += f", {c['change_points']:+.1f} points"
+        if c["relative_change_successes"] is not None:
+            line += f", successes {100 * c['relative_change_successes']:+.0f} %"
+        if c["paper_relative_change"] is not None:
+            line += f" (ALIP paper, G1, other controller: {100 * c['paper_relative_change']:+.0f} %)"
+        lines.append(line)
+    for e in summary.get("errors", []):
+        lines.append(f"  error x{e['count']}: {e['error']}")
+    for path in summary.get("files", []):
+        lines.append(f"  wrote {path}")
+    return "\n".join(lines)
+
+
+def write_report(directory: str | Path, plots: bool = True) -> dict[str, Any]:
+    """Summarize the campaign stored in ``directory``: write ``summary.json`` and the figures.
+
+    Figures: ``force_map.png`` (success heatmap over the force grid, one panel per variant, plus
+    the difference when there are two), ``phase.png`` (success rate per gait phase) and
+    ``axes.png`` (success rate along each other grid axis), each when the grid has the axes.
+
+    Returns:
+        The summary, with ``files`` listing what was written.
+    """
+    from sim.campaigns.run import load_campaign
+    from wbmpc.cli import to_jsonable
+
+    directory = Path(directory)
+    spec, records = load_campaign(directory)
+    summary = summarize(spec, records)
+    files: list[str] = []
+    if plots and summary["n_recorded"]:
+        from sim.campaigns import plots as campaign_plots
+
+        if "force_map" in summary:
+            files.append(campaign_plots.plot_force_maps(summary, directory / "force_map.png"))
+        if "phase" in summary:
+            files.append(campaign_plots.plot_success_by_phase(summary, directory / "phase.png"))
+        other_axes = [a for a in summary["axes"] if a not in ("force_x", "force_y", "phase")]
+        if other_axes:
+            files.append(campaign_plots.plot_success_by_axis(summary, other_axes, directory / "axes.png"))
+    files.append(str(directory / SUMMARY_FILE))
+    summary["files"] = files
+    (directory / SUMMARY_FILE).write_text(json.dumps(to_jsonable(summary), indent=2) + "\n")
+    return summary

@@ -1,0 +1,308 @@
+"""One trial of a campaign: its parameters, their translation into ``run_scenario`` arguments, its run.
+
+Campaign parameters that are not arguments of :func:`sim.run_scenario` (translated here):
+
+- ``force_x``, ``force_y`` [N]: push force in the world frame (scenario "push") ->
+  ``force = |(Fx, Fy)|``, ``direction = atan2(Fy, Fx)`` [deg].
+- ``phase`` in [0, 1) and ``push_after`` [s] (scenario "push"): the push starts at
+  ``push_after + phase * T_nom``, T_nom the nominal step duration of the trial's sequencer
+  parameters. The phase measured from the controller's stance switches is recorded in the result
+  (``metrics["push_phase_measured"]``): it can differ from the nominal one when the gait drifts.
+- ``step_timing`` (controller "walking"): "adaptive" (the sequencer's preset, the paper's
+  controller), "fixed" (T_min = T_max = T_nom: the step duration cannot change) or "stiff" (the
+  timing weight alpha_2 raised to ``STIFF_TIMING_WEIGHT``: timing changes cost far more than
+  position changes).
+
+:func:`run_trial` runs in worker processes (local pool or Ray): it takes a picklable
+:class:`Trial`, never raises for a failing trial (the error text is recorded instead) and
+returns a JSON-able record.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import hashlib
+import json
+import math
+import os
+import socket
+import time
+import traceback
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from wbmpc.errors import ParameterError
+
+STEP_TIMINGS = ("adaptive", "fixed", "stiff")
+STIFF_TIMING_WEIGHT = 1e8  # alpha_2 of the "stiff" step timing (preset: 1, alpha_3 = 1e6)
+CAMPAIGN_PARAMETERS = ("force_x", "force_y", "phase", "push_after", "step_timing")
+PD_OPTIONS = ("kp", "kd")
+MAX_TRACEBACK_CHARS = 4000
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One closed-loop run of a campaign.
+
+    Attributes:
+        key: identity of the trial in the results store (variant, parameters and seed).
+        index: position in the campaign's trial order.
+        campaign: campaign name.
+        variant: variant name.
+        params: campaign-level parameters (shared, point and variant overrides), JSON-able.
+        seed: run seed.
+        scenario, robot, controller: as in :func:`sim.run_scenario`.
+        duration: simulated time [s] (None: scenario default).
+        arguments: keyword arguments of :func:`sim.run_scenario` (resolved from ``params``).
+    """
+
+    key: str
+    index: int
+    campaign: str
+    variant: str
+    params: dict[str, Any]
+    seed: int
+    scenario: str
+    robot: str
+    controller: str
+    duration: float | None
+    arguments: dict[str, Any]
+
+
+def trial_key(variant: str, params: dict[str, Any], seed: int) -> str:
+    """Stable identity of a trial: a hash of its variant, parameters (canonical JSON) and seed."""
+    text = json.dumps({"variant": variant, "params": _jsonable(params), "seed": int(seed)}, sort_keys=True)
+    return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+
+def make_trials(spec) -> list[Trial]:
+    """All trials of ``spec`` (a :class:`sim.campaigns.spec.CampaignSpec`), resolved and validated.
+
+    Raises:
+        ParameterError: an unknown parameter or a value the scenario/controller rejects, naming the
+            offending trial's parameters (raised before anything runs).
+    """
+    allowed = _allowed_names(spec.scenario, spec.controller)
+    trials: list[Trial] = []
+    points = spec.points()
+    for seed in spec.seeds:
+        for point in points:
+            for variant, overrides in spec.variants.items():
+                params = {**spec.params, **point, **overrides}
+                unknown = sorted(set(params) - allowed)
+                if unknown:
+                    raise ParameterError(
+                        f"campaign {spec.name!r}: unknown parameter(s) {unknown}; allowed: {sorted(allowed)}"
+                    )
+                try:
+                    arguments = resolve_arguments(spec.scenario, spec.controller, spec.duration, params)
+                except ParameterError as err:
+                    raise ParameterError(f"campaign {spec.name!r}, variant {variant!r}, point {point}: {err}") from err
+                trials.append(
+                    Trial(
+                        key=trial_key(variant, params, seed),
+                        index=len(trials),
+                        campaign=spec.name,
+                        variant=variant,
+                        params=_jsonable(params),
+                        seed=seed,
+                        scenario=spec.scenario,
+                        robot=spec.robot,
+                        controller=spec.controller,
+                        duration=spec.duration,
+                        arguments=arguments,
+                    )
+                )
+    return trials
+
+
+def _allowed_names(scenario: str, controller: str) -> set[str]:
+    from sim.controller import WalkingControllerConfig
+    from sim.runner import RunnerOptions
+    from sim.scenarios import scenario_parameters
+
+    names = set(scenario_parameters(scenario)) | {f.name for f in dataclasses.fields(RunnerOptions)}
+    if controller == "walking":
+        names |= {f.name for f in dataclasses.fields(WalkingControllerConfig)} | {"step_timing"}
+    else:
+        names |= set(PD_OPTIONS)
+    if scenario == "push":
+        names |= {"force_x", "force_y", "phase", "push_after"}
+    return names
+
+
+def resolve_arguments(scenario: str, controller: str, duration: float | None, params: dict[str, Any]) -> dict:
+    """``run_scenario`` keyword arguments for campaign parameters ``params`` (validated).
+
+    Raises:
+        ParameterError: conflicting or out-of-range parameters.
+    """
+    from sim.scenarios import make_scenario, scenario_parameters
+
+    arguments = dict(params)
+    arguments.setdefault("progress", False)
+    step_timing = arguments.pop("step_timing", None)
+    if step_timing is not None:
+        arguments["sequencer_params"] = _sequencer_params(step_timing, arguments.get("sequencer_params"))
+    if "force_x" in arguments or "force_y" in arguments:
+        clash = sorted({"force", "direction"} & set(arguments))
+        if clash:
+            raise ParameterError(f"force_x/force_y and {clash} both set the push; use one form")
+        force_x = _finite("force_x", arguments.pop("force_x", 0.0))
+        force_y = _finite("force_y", arguments.pop("force_y", 0.0))
+        arguments["force"] = math.hypot(force_x, force_y)
+        arguments["direction"] = math.degrees(math.atan2(force_y, force_x)) if arguments["force"] > 0 else 0.0
+    if "phase" in arguments:
+        if "push_time" in arguments:
+            raise ParameterError("phase and push_time both set the push time; use one")
+        phase = _finite("phase", arguments.pop("phase"))
+        if not 0.0 <= phase < 1.0:
+            raise ParameterError(f"phase={phase} must be in [0, 1) (fraction of the nominal step)")
+        push_after = _finite("push_after", arguments.pop("push_after", 0.0))
+        if push_after < 0:
+            raise ParameterError(f"push_after={push_after} s must be >= 0")
+        t_nom = _sequencer_params("adaptive", arguments.get("sequencer_params")).t_nom
+        arguments["push_time"] = push_after + phase * t_nom
+    elif "push_after" in arguments:
+        raise ParameterError("push_after needs a phase (push_time = push_after + phase * T_nom)")
+    scenario_args = {k: v for k, v in arguments.items() if k in scenario_parameters(scenario)}
+    instance = make_scenario(scenario, **scenario_args)
+    events = instance.events()
+    if duration is not None and "push_end" in events and events["push_end"] >= duration:
+        raise ParameterError(
+            f"the push ends at t = {events['push_end']:.3f} s, not before the end of the trial (duration={duration} s)"
+        )
+    if controller == "walking":
+        from sim.controller import WalkingControllerConfig
+
+        config_names = {f.name for f in dataclasses.fields(WalkingControllerConfig)}
+        WalkingControllerConfig(**{k: v for k, v in arguments.items() if k in config_names})
+    return arguments
+
+
+def _sequencer_params(step_timing: str, base: Any = None):
+    """Sequencer parameters for ``step_timing`` from ``base`` (None: the Bolt walking preset)."""
+    from sequencer import SequencerParams
+
+    if step_timing not in STEP_TIMINGS:
+        raise ParameterError(f"step_timing={step_timing!r} must be one of {STEP_TIMINGS}")
+    params = base if base is not None else SequencerParams.bolt_walking()
+    if step_timing == "fixed":
+        return dataclasses.replace(params, t_min=params.t_nom, t_max=params.t_nom, name=f"{params.name}+fixed_timing")
+    if step_timing == "stiff":
+        return dataclasses.replace(params, alpha2=STIFF_TIMING_WEIGHT, name=f"{params.name}+stiff_timing")
+    return params
+
+
+def _finite(name: str, value: Any) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError) as err:
+        raise ParameterError(f"{name}={value!r} must be a number") from err
+    if not math.isfinite(value):
+        raise ParameterError(f"{name}={value} must be finite")
+    return value
+
+
+# ---------------------------------------------------------------------- running
+def run_trial(trial: Trial) -> dict[str, Any]:
+    """Run one trial; returns its record (never raises for a failing trial; Ctrl-C propagates).
+
+    Record keys: key, index, campaign, variant, params, seed, success (the run completed its
+    duration without a fall or an error), status ("completed", "fell", "error"), fall_time [s],
+    fall_reason, error (exception text or None), traceback, metrics (``sim.metrics`` plus
+    ``push_phase_measured``), wall_time [s], host, pid, finished_at (UTC, ISO 8601).
+    """
+    from sim.runner import run_scenario
+
+    record: dict[str, Any] = {
+        "key": trial.key,
+        "index": trial.index,
+        "campaign": trial.campaign,
+        "variant": trial.variant,
+        "params": trial.params,
+        "seed": trial.seed,
+    }
+    tic = time.perf_counter()
+    try:
+        log = run_scenario(
+            trial.scenario,
+            robot=trial.robot,
+            duration=trial.duration,
+            seed=trial.seed,
+            controller=trial.controller,
+            **trial.arguments,
+        )
+    except Exception as err:  # the trial's outcome, recorded; the campaign goes on
+        record.update(
+            success=False,
+            status="error",
+            fall_time=None,
+            fall_reason=None,
+            error=f"{type(err).__name__}: {err}",
+            traceback=traceback.format_exc()[-MAX_TRACEBACK_CHARS:],
+            metrics={},
+        )
+    else:
+        metrics = dict(log.metrics)
+        push_time = log.params.get("events", {}).get("push_start")
+        if push_time is not None:
+            t_nom = _sequencer_params("adaptive", trial.arguments.get("sequencer_params")).t_nom
+            metrics["push_phase_measured"] = measured_gait_phase(log.replans, push_time, t_nom)
+        record.update(
+            success=log.status == "completed",
+            status=log.status,
+            fall_time=log.fall_time,
+            fall_reason=log.fall_reason,
+            error=log.error,
+            traceback=None,
+            metrics=_jsonable(metrics),
+        )
+    record.update(
+        wall_time=time.perf_counter() - tic,
+        host=socket.gethostname(),
+        pid=os.getpid(),
+        finished_at=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+    )
+    return record
+
+
+def measured_gait_phase(replans: dict[str, np.ndarray], t: float, t_nom: float | None = None) -> float | None:
+    """Phase of the walking controller's step at time ``t`` [s], from its logged stance switches.
+
+    phase = (t - start of the current stance) / (duration of the previous step), the previous step
+    being the gait as it was before ``t`` (a push changes the current step's duration). Falls back
+    on ``t_nom`` [s] when no previous step is logged.
+
+    Args:
+        replans: ``RunLog.replans`` (needs the walking controller's ``t`` and ``t_stance_start``).
+        t: time [s].
+        t_nom: nominal step duration [s] for the fallback (None: no fallback).
+
+    Returns:
+        The phase (>= 0; can exceed 1 when the step is late), or None when it cannot be measured
+        (no stance information, e.g. the PD controller, or ``t`` before the first replan).
+    """
+    times = np.asarray(replans.get("t", ()), dtype=float)
+    starts = np.asarray(replans.get("t_stance_start", ()), dtype=float)
+    if len(times) == 0 or len(starts) != len(times):
+        return None
+    before = np.flatnonzero(times <= t + 1e-9)
+    if len(before) == 0:
+        return None
+    current = starts[before[-1]]
+    previous = np.unique(starts[: before[-1] + 1])
+    previous = previous[previous < current - 1e-9]
+    duration = current - previous[-1] if len(previous) else t_nom
+    if duration is None or not duration > 0:
+        return None
+    return float((t - current) / duration)
+
+
+def _jsonable(value: Any) -> Any:
+    from wbmpc.cli import to_jsonable
+
+    return to_jsonable(value)
