@@ -46,7 +46,7 @@ def add_run_arguments(parser: argparse.ArgumentParser) -> None:
         "--mpc-failure-at", type=float, action="append", default=None, metavar="T", help="inject an MPC failure at T [s]"
     )
     parser.add_argument("--controller", choices=("walking", "pd"), default="walking")
-    parser.add_argument("--render", metavar="FILE.mp4", default=None, help="render an offscreen video of the run")
+    parser.add_argument("--render", metavar="FILE", default=None, help="render an offscreen video of the run (.mp4 needs ffmpeg; .gif always works)")
     parser.add_argument(
         "--set", dest="overrides", action="append", type=_parse_assignment, default=[], metavar="NAME=VALUE",
         help="any other scenario/runner/controller parameter (repeatable)",
@@ -91,6 +91,8 @@ def params_from_args(args: argparse.Namespace) -> dict:
 
 
 def _run(args: argparse.Namespace) -> int:
+    if args.render:
+        os.environ.setdefault("MUJOCO_GL", "egl")  # headless offscreen context; read when MuJoCo is imported
     from sim.metrics import paper_comparison
     from sim.runner import run_scenario
 

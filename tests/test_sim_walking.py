@@ -1,0 +1,103 @@
+"""The walking controller in closed loop: a short walk, an injected MPC failure, determinism, and the
+1 kHz feedback law (eqs. 25-26 with the library's gain convention) on a known reference."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from robots import load_robot
+from sim import WalkingController, WalkingControllerConfig, run_scenario
+from sim.controller import _Reference
+from sim.measurement import Measurement
+
+
+@pytest.fixture(scope="module")
+def short_walk():
+    """3 s of walking with two consecutive MPC updates discarded at t = 1.0 and 1.01 s."""
+    return run_scenario("walk", duration=3.0, seed=0, mpc_failure_times=(1.0, 1.01), progress=False)
+
+
+@pytest.mark.slow
+def test_short_walk_completes_without_falling(short_walk):
+    log = short_walk
+    assert log.status == "completed", (log.fall_time, log.fall_reason, log.error)
+    metrics = log.metrics
+    assert metrics["steps"] >= 6
+    assert 0.5 < metrics["distance_x"] < 1.5  # 0.33 m/s command for 3 s, from standing
+    assert metrics["mpc_failures"] == 2  # only the injected ones
+    # the stance foot alternates and the executed footholds move forward
+    stance = log.replans["stance_foot"][log.replans["stance_switched"] > 0.5]
+    assert np.all(np.diff(stance) != 0)
+
+
+@pytest.mark.slow
+def test_injected_mpc_failure_is_survived_and_logged(short_walk):
+    replans = short_walk.replans
+    injected = replans["mpc_injected_failure"] > 0.5
+    np.testing.assert_allclose(replans["t"][injected], [1.0, 1.01], atol=1e-9)
+    assert np.all(replans["mpc_ok"][injected] == 0.0)
+    # while the MPC is down the 1 kHz loop follows the last good solution, 10 then 20 ms old
+    np.testing.assert_allclose(replans["mpc_reference_age"][injected], [0.01, 0.02], atol=1e-9)
+    after = np.flatnonzero(injected)[-1] + 1
+    assert replans["mpc_ok"][after] == 1.0 and replans["mpc_reference_age"][after] == 0.0
+
+
+def test_same_seed_same_walking_log():
+    kwargs = dict(duration=0.15, seed=3, noise_q=1e-4, noise_v=1e-3, progress=False)
+    a = run_scenario("walk", **kwargs)
+    b = run_scenario("walk", **kwargs)
+    for key in ("x", "tau", "dcm", "feet"):
+        np.testing.assert_array_equal(a.ticks[key], b.ticks[key], err_msg=key)
+    np.testing.assert_array_equal(a.replans["mpc_cost"], b.replans["mpc_cost"])
+
+
+@pytest.fixture(scope="module")
+def controller_with_known_reference():
+    """A walking controller whose MPC solution is replaced by a synthetic one (random xs, us, K)."""
+    robot = load_robot("bolt")
+    model = robot.pinocchio_model
+    rng = np.random.default_rng(0)
+    n, nu, ndx = 5, robot.nu, 2 * model.nv
+    xs = np.array([np.concatenate([pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq)),
+                                   rng.normal(size=model.nv)]) for _ in range(n + 1)])
+    reference = _Reference(t=0.5, xs=xs, us=rng.normal(size=(n, nu)), K=rng.normal(size=(n, nu, ndx)))
+    x0 = np.concatenate([robot.q_reference, np.zeros(model.nv)])
+
+    def make(**options):
+        controller = WalkingController(WalkingControllerConfig(n_nodes=n, **options))
+        controller.reset(robot, x0, 0.0)
+        controller.reference = reference
+        return controller
+
+    x_meas = np.concatenate([pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq)),
+                             rng.normal(size=model.nv)])
+    return make, reference, model, Measurement(0.0, x_meas, np.array([True, False]))
+
+
+def _feedback(model, reference, k, x):
+    nq = model.nq
+    dx = np.concatenate([pin.difference(model, reference.xs[k][:nq], x[:nq]), x[nq:] - reference.xs[k][nq:]])
+    return reference.us[k] + reference.K[k] @ dx
+
+
+def test_feedback_law_uses_node_one_by_default_and_the_library_gain_sign(controller_with_known_reference):
+    make, reference, model, measurement = controller_with_known_reference
+    controller = make()
+    # 3 ms after the solution: node 1 (paper's delay model)
+    tau = controller.compute(0.503, measurement)
+    np.testing.assert_allclose(tau, _feedback(model, reference, 1, measurement.x), rtol=1e-12, atol=1e-12)
+    # 12 ms after (a failed update in between): node 2 of the same solution
+    tau = controller.compute(0.512, measurement)
+    np.testing.assert_allclose(tau, _feedback(model, reference, 2, measurement.x), rtol=1e-12, atol=1e-12)
+
+
+def test_feedback_options_no_delay_no_feedback_interpolation(controller_with_known_reference):
+    make, reference, model, measurement = controller_with_known_reference
+    tau = make(delay_nodes=0).compute(0.503, measurement)
+    np.testing.assert_allclose(tau, _feedback(model, reference, 0, measurement.x), rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(make(feedback=False).compute(0.503, measurement), reference.us[1])
+    # interpolation at 30 % of the way from node 1 to node 2 (feed-forward part)
+    tau = make(feedback=False, interpolate=True).compute(0.503, measurement)
+    np.testing.assert_allclose(tau, 0.7 * reference.us[1] + 0.3 * reference.us[2], rtol=1e-9)
