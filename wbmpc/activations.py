@@ -91,7 +91,7 @@ class ActivationQuadraticBarrier:
         below = r - self.lower
         above = r - self.upper
         data.Ar[:] = np.minimum(below, 0.0) + np.maximum(above, 0.0)
-        data.Arr[:] = ((below <= 0.0) | (above >= 0.0)).astype(float)
+        data.Arr[:] = (below <= 0.0) | (above >= 0.0)
 
     def createData(self) -> ActivationData:
         return ActivationData(self.nr)

@@ -22,6 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
+from wbmpc.kernels import contact3d_drift_derivative, contact3d_force_rnea_term
 from wbmpc.state import StateMultibody
 
 
@@ -90,59 +91,49 @@ class ContactModel3D(_ContactBase):
         model = self.state.pinocchio
         fid = self.frame_id
         oMf = pin.updateFramePlacement(model, pdata, fid)
-        data.fJf[:] = pin.getFrameJacobian(model, pdata, fid, pin.LOCAL)
-        data.velocity = pin.getFrameVelocity(model, pdata, fid, pin.LOCAL)
+        data.Jc[:] = pin.getFrameJacobian(model, pdata, fid, pin.LOCAL_WORLD_ALIGNED)[:3]
+        a0 = pin.getFrameClassicalAcceleration(model, pdata, fid, pin.LOCAL_WORLD_ALIGNED).linear
+        kp, kd = self.gains
+        if kp != 0.0:
+            a0 += kp * (oMf.translation - self.reference)
+        if kd != 0.0:
+            a0 += kd * pin.getFrameVelocity(model, pdata, fid, pin.LOCAL_WORLD_ALIGNED).linear
+        data.a0[:] = a0
+
+    def calcDiff(self, data: ContactData, pdata: pin.Data) -> None:
+        """Fill da0_dx (3, ndx). Needs computeRNEADerivatives (kinematic derivatives) first."""
+        model = self.state.pinocchio
+        fid = self.frame_id
+        v_dq, a_dq, a_dv, _ = pin.getJointAccelerationDerivatives(model, pdata, self.joint_id, pin.LOCAL)
+        fJf = data.fJf
+        velocity = pin.getFrameVelocity(model, pdata, fid, pin.LOCAL)
+        # drift re-evaluated with the current joint accelerations (rotation derivative term)
         a0_local = pin.getFrameClassicalAcceleration(model, pdata, fid, pin.LOCAL).linear
+        oMf = pdata.oMf[fid]
         oRf = oMf.rotation
         kp, kd = self.gains
         if kp != 0.0:
             data.position_error_local[:] = oRf.T @ (oMf.translation - self.reference)
             a0_local += kp * data.position_error_local
         if kd != 0.0:
-            a0_local += kd * data.velocity.linear
-        np.matmul(oRf, data.fJf[:3], out=data.Jc)
-        np.matmul(oRf, a0_local, out=data.a0)
-
-    def calcDiff(self, data: ContactData, pdata: pin.Data) -> None:
-        """Fill da0_dx (3, ndx). Needs computeRNEADerivatives (kinematic derivatives) first."""
-        model = self.state.pinocchio
-        nv = self.state.nv
-        v_dq, a_dq, a_dv, _ = pin.getJointAccelerationDerivatives(model, pdata, self.joint_id, pin.LOCAL)
-        fXj = self.fXj
-        fJf = data.fJf
-        vv_skew = skew(data.velocity.linear)
-        vw_skew = skew(data.velocity.angular)
-        fXjdv_dq = fXj @ v_dq
-        fXjda_dq = fXj @ a_dq
-        fXjda_dv = fXj @ a_dv
-        da_dq = fXjda_dq[:3] + vw_skew @ fXjdv_dq[:3] - vv_skew @ fXjdv_dq[3:]
-        da_dv = fXjda_dv[:3] + vw_skew @ fJf[:3] - vv_skew @ fJf[3:]
-        kp, kd = self.gains
-        oMf = pdata.oMf[self.frame_id]
-        oRf = oMf.rotation
-        if kp != 0.0:
-            da_dq += kp * skew(data.position_error_local) @ fJf[3:] + kp * fJf[:3]
-        if kd != 0.0:
-            da_dq += kd * fXjdv_dq[:3]
-            da_dv += kd * fJf[:3]
-        # Drift re-evaluated with the current joint accelerations (the rotation derivative term).
-        a0_local = pin.getFrameClassicalAcceleration(model, pdata, self.frame_id, pin.LOCAL).linear
-        if kp != 0.0:
-            a0_local += kp * data.position_error_local
-        if kd != 0.0:
-            a0_local += kd * data.velocity.linear
-        a0_world = oRf @ a0_local
-        data.da0_dx[:, :nv] = oRf @ da_dq - (skew(a0_world) @ oRf) @ fJf[3:]
-        data.da0_dx[:, nv:] = oRf @ da_dv
+            a0_local += kd * velocity.linear
+        contact3d_drift_derivative(self.fXj, v_dq, a_dq, a_dv, fJf, velocity.linear, velocity.angular,
+                                   data.position_error_local, a0_local, oRf, kp, kd, data.da0_dx)
 
     def update_force(self, data: ContactData, pdata: pin.Data, force: np.ndarray) -> None:
-        """Store the contact force (3,) [N, world axes] and its external force on the parent joint."""
+        """Store the contact force (3,) [N, world axes] (from calc)."""
         data.force[:] = force
+
+    def force_derivative_terms(self, data: ContactData, pdata: pin.Data) -> None:
+        """Frame Jacobian (LOCAL), external force on the parent joint and its RNEA derivative term.
+
+        Called by the dynamics' calcDiff before the RNEA derivatives (and before :meth:`calcDiff`).
+        """
+        data.fJf[:] = pin.getFrameJacobian(self.state.pinocchio, pdata, self.frame_id, pin.LOCAL)
         oRf = pdata.oMf[self.frame_id].rotation
-        f_local = oRf.T @ force
+        f_local = oRf.T @ data.force
         data.fext = self.joint_placement_frame.act(pin.Force(f_local, np.zeros(3)))
-        fJf = data.fJf
-        data.dtau_dq = -fJf[:3].T @ (skew(f_local) @ fJf[3:])
+        data.dtau_dq = contact3d_force_rnea_term(data.fJf, f_local)
 
 
 class ContactModel6D(_ContactBase):
@@ -194,5 +185,8 @@ class ContactModel6D(_ContactBase):
     def update_force(self, data: ContactData, pdata: pin.Data, force: np.ndarray) -> None:
         """Store the contact wrench (6,) = (force [N], torque [N·m]) in the LOCAL sole frame."""
         data.force[:] = force
-        data.fext = self.joint_placement_frame.act(pin.Force(force))
+
+    def force_derivative_terms(self, data: ContactData, pdata: pin.Data) -> None:
+        """External force on the parent joint (a LOCAL wrench adds no RNEA derivative term)."""
+        data.fext = self.joint_placement_frame.act(pin.Force(data.force))
         data.dtau_dq = None

@@ -100,30 +100,40 @@ class CostModelSum:
         return total
 
     def calcDiff(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
-        """Fill data.Lx (ndx,), Lu (nu,), Lxx, Lxu, Luu (Gauss-Newton). Needs calc first."""
-        data.Lx[:] = 0.0
-        data.Lu[:] = 0.0
-        data.Lxx[:] = 0.0
-        data.Lxu[:] = 0.0
-        data.Luu[:] = 0.0
+        """Fill data.Lx (ndx,), Lu (nu,), Lxx, Lxu, Luu (Gauss-Newton). Needs calc first.
+
+        The residual Jacobians of all terms are rows of one matrix R = [Rx Ru] (data.R), so the
+        Hessian is a single product Rᵀ diag(w·Arr) R.
+        """
+        weights_Arr = data.weights_Arr
+        weights_Ar = data.weights_Ar
         for name, item in self.costs.items():
-            if not item.active:
-                continue
             term = data.terms[name]
+            rows = data.rows[name]
+            if not item.active:
+                weights_Arr[rows] = 0.0
+                weights_Ar[rows] = 0.0
+                data.R[rows] = 0.0
+                continue
             rdata = term.residual
             item.cost.residual.calcDiff(rdata, x, u, shared)
             item.cost.activation.calcDiff(term.activation, rdata.r)
-            w = item.weight
-            Ar = term.activation.Ar
-            Arr = term.activation.Arr
-            WArr_Rx = (w * Arr)[:, None] * rdata.Rx
-            data.Lx += rdata.Rx.T @ (w * Ar)
-            data.Lxx += rdata.Rx.T @ WArr_Rx
-            if u is not None and self.nu:
-                WArr_Ru = (w * Arr)[:, None] * rdata.Ru
-                data.Lu += rdata.Ru.T @ (w * Ar)
-                data.Luu += rdata.Ru.T @ WArr_Ru
-                data.Lxu += rdata.Rx.T @ WArr_Ru
+            np.multiply(term.activation.Arr, item.weight, out=weights_Arr[rows])
+            np.multiply(term.activation.Ar, item.weight, out=weights_Ar[rows])
+        R = data.R
+        ndx = self.state.ndx
+        if u is None or not self.nu:
+            Rx = R[:, :ndx]
+            np.matmul(Rx.T, weights_Ar, out=data.Lx)
+            np.matmul(Rx.T, weights_Arr[:, None] * Rx, out=data.Lxx)
+            return
+        gradient = R.T @ weights_Ar
+        hessian = R.T @ (weights_Arr[:, None] * R)
+        data.Lx[:] = gradient[:ndx]
+        data.Lu[:] = gradient[ndx:]
+        data.Lxx[:] = hessian[:ndx, :ndx]
+        data.Lxu[:] = hessian[:ndx, ndx:]
+        data.Luu[:] = hessian[ndx:, ndx:]
 
     def term_costs(self, data: "CostDataSum") -> dict[str, float]:
         """Cost of every term by name (inactive terms report 0)."""
@@ -131,9 +141,26 @@ class CostModelSum:
 
 
 class CostDataSum:
+    """Buffers of a cost sum; every term's residual Jacobians are row views of ``R`` (nr_total, ndx + nu)."""
+
     def __init__(self, model: CostModelSum):
         ndx, nu = model.state.ndx, model.nu
         self.terms = {name: item.cost.createData() for name, item in model.costs.items()}
+        nr_total = sum(item.cost.nr for item in model.costs.values())
+        self.R = np.zeros((nr_total, ndx + nu))
+        self.weights_Ar = np.zeros(nr_total)
+        self.weights_Arr = np.zeros(nr_total)
+        self.rows: dict[str, slice] = {}
+        start = 0
+        for name, item in model.costs.items():
+            rows = slice(start, start + item.cost.nr)
+            rdata = self.terms[name].residual
+            self.R[rows, :ndx] = rdata.Rx
+            self.R[rows, ndx:] = rdata.Ru
+            rdata.Rx = self.R[rows, :ndx]
+            rdata.Ru = self.R[rows, ndx:]
+            self.rows[name] = rows
+            start += item.cost.nr
         self.cost = 0.0
         self.Lx = np.zeros(ndx)
         self.Lu = np.zeros(nu)

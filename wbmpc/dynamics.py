@@ -89,16 +89,14 @@ class DifferentialActionModelContactFwdDynamics:
         else:
             data.xout[:] = np.linalg.solve(pdata.M, data.tau - pdata.nle)
             forces = np.zeros(0)
-        for i in range(len(data.fext)):
-            data.fext[i] = pin.Force.Zero()
         row = 0
         for name in self.active_contacts:
             contact = self.contacts[name]
-            cdata = data.contacts[name]
-            contact.update_force(cdata, pdata, forces[row:row + contact.nc])
-            data.fext[contact.joint_id] = cdata.fext
+            contact.update_force(data.contacts[name], pdata, forces[row:row + contact.nc])
             row += contact.nc
-        data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
+        if data.active_contacts is not self.active_contacts:
+            data.active_contacts = self.active_contacts
+            data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
         data.cost = self.costs.calc(data.costs, x, u, data.shared)
 
     def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
@@ -115,6 +113,15 @@ class DifferentialActionModelContactFwdDynamics:
         nq, nv = self.state.nq, self.state.nv
         q, v = x[:nq], x[nq:]
         nc = self.nc
+        for joint in data.fext_joints:
+            data.fext[joint] = pin.Force.Zero()
+        data.fext_joints = []
+        for name in self.active_contacts:
+            contact = self.contacts[name]
+            cdata = data.contacts[name]
+            contact.force_derivative_terms(cdata, pdata)
+            data.fext[contact.joint_id] = cdata.fext
+            data.fext_joints.append(contact.joint_id)
         pin.computeRNEADerivatives(model, pdata, q, v, data.xout, data.fext)
         dtau_dq = pdata.dtau_dq
         for name in self.active_contacts:
@@ -134,19 +141,17 @@ class DifferentialActionModelContactFwdDynamics:
             contact.calcDiff(cdata, pdata)
             da0_dx[row:row + contact.nc] = cdata.da0_dx
             row += contact.nc
+        # [∂a/∂x; −∂λ/∂x] = −Kinv [∂τ/∂x (RNEA with contact forces); ∂a0/∂x]
+        D = data.D[: nv + nc]
+        D[:nv, :nv] = dtau_dq
+        D[:nv, nv:] = dtau_dv
+        D[nv:] = da0_dx
+        KD = Kinv @ D
+        np.negative(KD[:nv], out=data.Fx)
         a_dtau = Kinv[:nv, :nv]
-        np.matmul(-a_dtau, dtau_dq, out=data.Fx[:, :nv])
-        np.matmul(-a_dtau, dtau_dv, out=data.Fx[:, nv:])
         if nc:
-            a_da = Kinv[:nv, nv:]
-            data.Fx -= a_da @ da0_dx
-            f_dtau = Kinv[nv:, :nv]
-            f_da = Kinv[nv:, nv:]
-            df_dx = np.empty((nc, self.state.ndx))
-            np.matmul(f_dtau, dtau_dq, out=df_dx[:, :nv])
-            np.matmul(f_dtau, dtau_dv, out=df_dx[:, nv:])
-            df_dx += f_da @ da0_dx
-            df_du = -f_dtau[:, 6:]
+            df_dx = KD[nv:]
+            df_du = -Kinv[nv:, 6:nv]
             row = 0
             for name in self.active_contacts:
                 contact = self.contacts[name]
@@ -182,6 +187,9 @@ class DifferentialActionDataContactFwdDynamics:
         self.da0_dx_all = np.zeros((nc_max, ndx))
         self.Jc = self.Jc_all[:0]
         self.a0 = self.a0_all[:0]
+        self.D = np.zeros((nv + nc_max, ndx))
+        self.active_contacts = None
+        self.fext_joints: list[int] = []
         self.fext = pin.StdVec_Force()
         for _ in range(state.pinocchio.njoints):
             self.fext.append(pin.Force.Zero())

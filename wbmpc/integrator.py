@@ -12,6 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
+from wbmpc.kernels import euler_transition_jacobians
 
 
 class IntegratedActionModelEuler:
@@ -59,7 +60,8 @@ class IntegratedActionModelEuler:
         dd = data.differential
         diff.calcDiff(dd, x, u)
         if u is None:
-            data.Fx[:] = np.eye(self.state.ndx)
+            data.Fx[:] = 0.0
+            data.Fx[np.diag_indices(self.state.ndx)] = 1.0
             data.Lx[:] = dd.Lx
             data.Lxx[:] = dd.Lxx
             return
@@ -67,19 +69,11 @@ class IntegratedActionModelEuler:
         nq, nv = state.nq, state.nv
         model = state.pinocchio
         dt = self.dt
-        dt2 = dt * dt
         q = x[:nq]
         dq = data.dx[:nv]
         J_dq = pin.dIntegrate(model, q, dq, pin.ARG1)
         J_q = pin.dIntegrate(model, q, dq, pin.ARG0)
-        top = dd.Fx * dt2
-        top[:, nv:] += dt * np.eye(nv)
-        np.matmul(J_dq, top, out=data.Fx[:nv])
-        data.Fx[:nv, :nv] += J_q
-        np.multiply(dd.Fx, dt, out=data.Fx[nv:])
-        data.Fx[nv:, nv:] += np.eye(nv)
-        np.matmul(J_dq, dd.Fu * dt2, out=data.Fu[:nv])
-        np.multiply(dd.Fu, dt, out=data.Fu[nv:])
+        euler_transition_jacobians(dd.Fx, dd.Fu, J_q, J_dq, dt, data.Fx, data.Fu)
         np.multiply(dd.Lx, dt, out=data.Lx)
         np.multiply(dd.Lu, dt, out=data.Lu)
         np.multiply(dd.Lxx, dt, out=data.Lxx)

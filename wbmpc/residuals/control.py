@@ -24,8 +24,9 @@ class ResidualControl:
             np.subtract(u, self.reference, out=data.r)
 
     def calcDiff(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
-        if u is not None:
-            data.Ru[:] = np.eye(self.nu)
+        """Ru = I is constant (written by createData)."""
 
     def createData(self) -> ResidualData:
-        return ResidualData(self.nr, self.state.ndx, self.nu)
+        data = ResidualData(self.nr, self.state.ndx, self.nu)
+        data.Ru[:] = np.eye(self.nu)
+        return data

@@ -29,7 +29,9 @@ class ResidualState:
     def calcDiff(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
         nq, nv = self.state.nq, self.state.nv
         data.Rx[:nv, :nv] = self.state.Jdiff_second_q(self.reference[:nq], x[:nq])
-        data.Rx[nv:, nv:] = np.eye(nv)
 
     def createData(self) -> ResidualData:
-        return ResidualData(self.nr, self.state.ndx, self.nu)
+        data = ResidualData(self.nr, self.state.ndx, self.nu)
+        nv = self.state.nv
+        data.Rx[nv:, nv:] = np.eye(nv)  # constant block, written once
+        return data

@@ -1,0 +1,75 @@
+"""Numba kernels for the per-node glue of the contact dynamics (small dense products that cost
+more in numpy call overhead than in arithmetic). Compiled on first use and cached on disk."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def skew3(w):
+    """[w]×, shape (3, 3)."""
+    S = np.zeros((3, 3))
+    S[0, 1] = -w[2]
+    S[0, 2] = w[1]
+    S[1, 0] = w[2]
+    S[1, 2] = -w[0]
+    S[2, 0] = -w[1]
+    S[2, 1] = w[0]
+    return S
+
+
+@njit(cache=True)
+def contact3d_drift_derivative(fXj, v_dq, a_dq, a_dv, fJf, v_linear, v_angular, position_error_local,
+                               a0_local, oRf, kp, kd, out):
+    """∂a0/∂x (3, 2 nv) of a LOCAL_WORLD_ALIGNED point contact (Crocoddyl's ContactModel3D).
+
+    Args: fXj (6, 6) joint-to-frame action matrix; v_dq, a_dq, a_dv (6, nv) joint velocity and
+    acceleration derivatives (LOCAL); fJf (6, nv) frame Jacobian (LOCAL); frame velocity
+    (linear, angular) (3,) LOCAL; position error (3,) LOCAL; drift a0 (3,) LOCAL evaluated with
+    the current accelerations; oRf (3, 3); Baumgarte gains kp, kd.
+    """
+    nv = fJf.shape[1]
+    fXjdv_dq = np.dot(fXj, v_dq)
+    fXjda_dq = np.dot(fXj, a_dq)
+    fXjda_dv = np.dot(fXj, a_dv)
+    vv = skew3(v_linear)
+    vw = skew3(v_angular)
+    da_dq = fXjda_dq[:3] + np.dot(vw, fXjdv_dq[:3]) - np.dot(vv, fXjdv_dq[3:])
+    da_dv = fXjda_dv[:3] + np.dot(vw, fJf[:3]) - np.dot(vv, fJf[3:])
+    if kp != 0.0:
+        da_dq += kp * np.dot(skew3(position_error_local), fJf[3:]) + kp * fJf[:3]
+    if kd != 0.0:
+        da_dq += kd * fXjdv_dq[:3]
+        da_dv += kd * fJf[:3]
+    a0_world = np.dot(oRf, a0_local)
+    out[:, :nv] = np.dot(oRf, da_dq) - np.dot(np.dot(skew3(a0_world), oRf), fJf[3:])
+    out[:, nv:] = np.dot(oRf, da_dv)
+
+
+@njit(cache=True)
+def contact3d_force_rnea_term(fJf, f_local):
+    """−J_linᵀ [f]× J_ang (nv, nv): the RNEA derivative of a world-aligned point force."""
+    return -np.dot(np.ascontiguousarray(fJf[:3].T), np.dot(skew3(f_local), fJf[3:]))
+
+
+@njit(cache=True)
+def euler_transition_jacobians(da_dx, da_du, J_q, J_dq, dt, Fx, Fu):
+    """Fx (ndx, ndx), Fu (ndx, nu) of q⁺ = q ⊕ (v dt + a dt²), v⁺ = v + a dt.
+
+    Args: da_dx (nv, ndx), da_du (nv, nu) acceleration derivatives; J_q, J_dq (nv, nv) the
+    Jacobians of q ⊕ δ with respect to q and δ at δ = v dt + a dt².
+    """
+    nv = da_dx.shape[0]
+    dt2 = dt * dt
+    top = da_dx * dt2
+    for i in range(nv):
+        top[i, nv + i] += dt
+    Fx[:nv] = np.dot(J_dq, top)
+    Fx[:nv, :nv] += J_q
+    Fx[nv:] = da_dx * dt
+    for i in range(nv):
+        Fx[nv + i, nv + i] += 1.0
+    Fu[:nv] = np.dot(J_dq, da_du * dt2)
+    Fu[nv:] = da_du * dt
