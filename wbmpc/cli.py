@@ -19,7 +19,7 @@ import numpy as np
 SUBCOMMAND_MODULES: list[str] = [
     "sequencer.cli",
     "sensitivity.cli",
-    "sequencer.demo",
+    "sim.demo",
     "bench.cli",
     "sim.cli",
     "robots.cli",
