@@ -211,7 +211,8 @@ def _finite(name: str, value: Any) -> float:
 def run_trial(trial: Trial) -> dict[str, Any]:
     """Run one trial; returns its record (never raises for a failing trial; Ctrl-C propagates).
 
-    Record keys: key, index, campaign, variant, params, seed, success (the run completed its
+    Record keys: key, index, campaign, variant, params, arguments (the resolved ``run_scenario``
+    arguments, e.g. the sequencer parameters of a step-timing variant), seed, success (the run completed its
     duration without a fall or an error), status ("completed", "fell", "error"), fall_time [s],
     fall_reason, error (exception text or None), traceback, metrics (``sim.metrics`` plus
     ``push_phase_measured``), wall_time [s], host, pid, finished_at (UTC, ISO 8601).
@@ -224,6 +225,7 @@ def run_trial(trial: Trial) -> dict[str, Any]:
         "campaign": trial.campaign,
         "variant": trial.variant,
         "params": trial.params,
+        "arguments": _jsonable(trial.arguments),
         "seed": trial.seed,
     }
     tic = time.perf_counter()

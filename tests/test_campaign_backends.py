@@ -1,0 +1,46 @@
+"""Backends: Ray (optional extra) gives the same records as in-process runs; clear errors otherwise."""
+
+from __future__ import annotations
+
+import sys
+
+import pytest
+
+from sim.campaigns import BackendNotAvailable, ResultStore, builtin_campaign, run_campaign
+from sim.campaigns.backends import make_backend
+from wbmpc.errors import ParameterError
+
+
+def tiny_push_map():
+    return builtin_campaign(
+        "push-map", controller="pd", steps_x=2, steps_y=1, phases=(0.0, 0.5), push_after=0.2, duration=0.5,
+        params={"stop_on_fall": False},
+    )
+
+
+def outcome(records):
+    return {r["key"]: (r["success"], r["status"], r["fall_time"]) for r in records}
+
+
+def test_backend_errors_name_the_problem(monkeypatch):
+    with pytest.raises(BackendNotAvailable, match=r"backend='dask' is unknown \(available: \('local', 'ray', 'inline'\)\)"):
+        make_backend("dask")
+    with pytest.raises(ParameterError, match="workers=0 must be an integer >= 1"):
+        make_backend("local", workers=0)
+    with pytest.raises(ParameterError, match="address='auto' is for the ray backend only"):
+        make_backend("local", address="auto")
+    monkeypatch.setitem(sys.modules, "ray", None)  # as if ray were not installed
+    with pytest.raises(BackendNotAvailable, match="pip install ray"):
+        make_backend("ray", workers=1)
+
+
+def test_ray_on_this_machine_matches_in_process_runs(tmp_path):
+    pytest.importorskip("ray", reason="ray is an optional extra (pip install ray); CI installs only .[test,bench]")
+    inline = run_campaign(tiny_push_map(), tmp_path / "inline", backend="inline", progress=False)
+    on_ray = run_campaign(tiny_push_map(), tmp_path / "ray", backend="ray", workers=2, progress=False)
+    assert (inline.n_run, on_ray.n_run, on_ray.backend, on_ray.workers) == (4, 4, "ray", 2)
+    records = ResultStore(tmp_path / "ray").records()
+    assert outcome(records) == outcome(ResultStore(tmp_path / "inline").records())
+    import ray
+
+    assert not ray.is_initialized()  # the backend shut down the instance it started

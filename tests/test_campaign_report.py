@@ -1,0 +1,106 @@
+"""Campaign report: success maps, per-phase rates, the timing-study comparison, figures and the CLI."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from sim.campaigns import ResultStore, builtin_campaign, make_trials, summarize, write_report
+from sim.campaigns.report import PAPER_TIMING_GAIN, format_summary
+from wbmpc.cli import main
+
+
+def synthetic_records(spec, succeeds):
+    """Records as run_trial writes them, with success decided by ``succeeds(trial)``."""
+    records = []
+    for trial in make_trials(spec):
+        ok = succeeds(trial)
+        records.append({
+            "key": trial.key, "index": trial.index, "campaign": spec.name, "variant": trial.variant,
+            "params": trial.params, "seed": trial.seed, "success": ok, "status": "completed" if ok else "fell",
+            "error": None, "metrics": {"push_phase_measured": trial.params["phase"] + 0.05},
+        })
+    return records
+
+
+def timing_study():
+    return builtin_campaign("push-map", compare_timing="fixed", force_max_x=8.0, force_max_y=8.0, steps_x=5,
+                            steps_y=3, phases=(0.0, 0.5))
+
+
+def test_force_map_phase_rates_and_timing_comparison():
+    spec = timing_study()
+
+    def succeeds(trial):  # adaptive recovers |Fx| <= 4 N; fixed only Fx = 0 and only at phase 0
+        fx = abs(trial.params["force_x"])
+        if trial.variant == "adaptive":
+            return fx <= 4.0
+        return fx == 0.0 and trial.params["phase"] == 0.0
+
+    summary = summarize(spec, synthetic_records(spec, succeeds))
+    assert summary["complete"] and summary["n_recorded"] == 5 * 3 * 2 * 2
+    adaptive = summary["force_map"]["adaptive"]
+    assert adaptive["force_x"] == pytest.approx([-8.0, -4.0, 0.0, 4.0, 8.0])
+    rate = np.asarray(adaptive["success_rate"])
+    assert rate.shape == (3, 5)  # (Fy, Fx)
+    np.testing.assert_array_equal(rate, np.tile([0.0, 1.0, 1.0, 1.0, 0.0], (3, 1)))
+    np.testing.assert_array_equal(summary["force_map"]["fixed"]["success_rate"], np.tile([0, 0, 0.5, 0, 0], (3, 1)))
+    phase = {e["phase"]: e for e in summary["phase"]["fixed"]}
+    assert phase[0.0]["success_rate"] == pytest.approx(3 / 15) and phase[0.5]["success_rate"] == 0.0
+    assert phase[0.5]["measured_phase_mean"] == pytest.approx(0.55)
+    (comparison,) = summary["comparisons"]
+    assert (comparison["variant"], comparison["baseline"], comparison["n_pairs"]) == ("adaptive", "fixed", 30)
+    # 18 adaptive successes against 3 fixed: +15 / 30 pairs = +50 points, +500 % successes
+    assert comparison["change_points"] == pytest.approx(50.0)
+    assert comparison["relative_change_successes"] == pytest.approx(5.0)
+    assert (comparison["only_variant_succeeds"], comparison["only_baseline_succeeds"]) == (15, 0)
+    assert comparison["paper_relative_change"] == PAPER_TIMING_GAIN
+    text = format_summary(summary)
+    assert "adaptive vs fixed on 30 paired trials" in text and "+50.0 points" in text and "+36 %" in text
+
+
+def test_partial_campaign_compares_paired_trials_only():
+    spec = timing_study()
+    records = synthetic_records(spec, lambda trial: trial.variant == "adaptive")
+    partial = records[:7]  # a stopped campaign: 3 full pairs and one adaptive trial alone
+    summary = summarize(spec, partial)
+    assert not summary["complete"] and summary["n_recorded"] == 7
+    assert summary["comparisons"][0]["n_pairs"] == 3
+    assert summary["comparisons"][0]["relative_change_successes"] is None  # no baseline success
+    cells = np.asarray(summary["force_map"]["fixed"]["success_rate"], dtype=float)
+    assert np.isnan(cells).sum() == cells.size - 2  # unrecorded cells stay empty, not 0
+
+
+def test_report_writes_summary_and_figures_and_cli_prints_it(tmp_path, capsys):
+    out = tmp_path / "campaign"
+    # a real (tiny) campaign through the command line, in-process backend
+    code = main([
+        "campaign", "push-map", "--controller", "pd", "--steps-x", "2", "--steps-y", "1", "--phases", "0.0",
+        "--push-after", "0.1", "--duration", "0.4", "--backend", "inline", "--out", str(out), "--json",
+    ])
+    assert code == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed["run"]["n_run"] == 2 and printed["summary"]["n_recorded"] == 2
+    for name in ("force_map.png", "phase.png", "summary.json"):
+        assert (out / name).stat().st_size > 0
+    assert main(["campaign", "report", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "campaign push-map (push, controller pd): 2/2 trials recorded" in text
+    summary = write_report(out, plots=False)
+    assert summary["variants"]["default"]["n"] == 2
+    assert len(ResultStore(out).records()) == 2
+    # user errors: one line, exit code 2
+    assert main(["campaign", "report", str(tmp_path / "nowhere")]) == 2
+    assert "is not a campaign directory" in capsys.readouterr().err
+    assert main(["campaign", "push-map", "--controller", "pd", "--out", str(out), "--backend", "inline"]) == 2
+    assert "with different settings" in capsys.readouterr().err
+
+
+def test_terrain_campaign_spans_seeds_and_densities(tmp_path):
+    spec = builtin_campaign("terrain", seeds=3, densities=(5.0, 10.0))
+    trials = make_trials(spec)
+    assert spec.controller == "walking" and len(trials) == 6
+    assert sorted({t.seed for t in trials}) == [0, 1, 2]
+    assert sorted({t.arguments["density"] for t in trials}) == [5.0, 10.0]
