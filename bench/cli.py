@@ -16,6 +16,7 @@ BENCH_MODULES: dict[str, str] = {
     "sequencer": "bench.sequencer",
     "loop": "bench.loop",
     "ddp": "bench.ddp",
+    "campaign": "bench.campaign",
 }
 
 
