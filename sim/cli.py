@@ -38,6 +38,9 @@ def add_run_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--delay-nodes", type=int, choices=(0, 1), default=None, help="apply MPC node 1 (paper) or node 0"
     )
+    parser.add_argument(
+        "--computation-delay", type=float, default=None, metavar="S", help="simulated solver latency [s] (default 0)"
+    )
     parser.add_argument("--interpolate", action="store_true", help="interpolate references between nodes")
     parser.add_argument("--no-feedback", action="store_true", help="feed-forward only (no Riccati gains)")
     parser.add_argument("--noise-q", type=float, default=None, help="configuration noise std [m, rad]")
@@ -74,6 +77,7 @@ def params_from_args(args: argparse.Namespace) -> dict:
     params: dict = {}
     for option, name in (
         ("speed", "speed"), ("delay_nodes", "delay_nodes"), ("noise_q", "noise_q"), ("noise_v", "noise_v"),
+        ("computation_delay", "computation_delay"),
         ("force", "force"), ("direction", "direction"),
     ):
         value = getattr(args, option, None)

@@ -95,8 +95,13 @@ class WalkingControllerConfig:
         node_dt: MPC node spacing [s], paper: 0.01 (horizon H_u = 1 s).
         replan_period: period of the sequencer + MPC update [s], paper: 0.01 (100 Hz).
         max_iterations: FDDP iterations per MPC update, paper: 1.
-        delay_nodes: 1 applies node 1 of each solution (paper, computation delay of one node);
-            0 applies node 0 (no delay).
+        delay_nodes: 1 applies node 1 of each solution as soon as it is computed (the paper's
+            pipeline: its solver needs about one node, 10 ms, so node 1 is "now" when the solution
+            arrives); 0 applies node 0.
+        computation_delay: simulated solver latency [s]: a solution computed from the state at t
+            is applied from t + computation_delay on (its node index still counts from t). 0 (default)
+            makes it available at once. ``delay_nodes=0, computation_delay=0.01`` emulates the real
+            system the paper's delay model stands for: node 1 applied from t + 10 ms.
         interpolate: interpolate u and x between nodes k and k+1 at 1 kHz (otherwise zero-order hold).
         feedback: apply the Riccati gains (False: feed-forward u_k only, to show what K buys).
         touchdown_detection: "plan" or "contact" (see ``sim.stance``).
@@ -117,6 +122,7 @@ class WalkingControllerConfig:
     replan_period: float = 0.01
     max_iterations: int = 1
     delay_nodes: int = 1
+    computation_delay: float = 0.0
     interpolate: bool = False
     feedback: bool = True
     touchdown_detection: str = "plan"
@@ -134,6 +140,8 @@ class WalkingControllerConfig:
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ParameterError(f"{name}={value} s must be a finite positive number")
+        if not (np.isfinite(self.computation_delay) and 0.0 <= self.computation_delay <= 0.1):
+            raise ParameterError(f"computation_delay={self.computation_delay} s must be in [0, 0.1] s")
         if self.delay_nodes not in (0, 1):
             raise ParameterError(f"delay_nodes={self.delay_nodes!r} must be 0 (no delay) or 1 (paper)")
         if self.touchdown_detection not in TOUCHDOWN_DETECTIONS:
@@ -208,6 +216,7 @@ class WalkingController:
         self.stance.reset(cfg.first_stance_foot, feet_world[stance_index, :2], t0)
         self.plan = None
         self.reference: _Reference | None = None
+        self._pending: list[tuple[float, _Reference]] = []  # (activation time [s], solution)
         self.n_failures = 0
         self.timers = _Timers()
         self._pending_failures = sorted(float(t) for t in cfg.mpc_failure_times)
@@ -297,9 +306,13 @@ class WalkingController:
             ok, status = bool(solution.ok), str(solution.status)
             iterations, cost, solve_time = int(solution.iterations), float(solution.cost), solution.solve_time
             if ok:
-                self.reference = _Reference(
+                reference = _Reference(
                     float(solution.t), np.array(solution.xs), np.array(solution.us), np.array(solution.K)
                 )
+                if cfg.computation_delay > 0.0 and self.reference is not None:
+                    self._pending.append((t + cfg.computation_delay, reference))
+                else:
+                    self.reference = reference
         self.timers.mpc += time.perf_counter() - tic
         if not ok:
             self.n_failures += 1
@@ -318,6 +331,8 @@ class WalkingController:
 
     # ------------------------------------------------------------------ 1 kHz
     def compute(self, t: float, measurement: Measurement) -> np.ndarray:
+        while self._pending and self._pending[0][0] <= t + 1e-9:
+            self.reference = self._pending.pop(0)[1]
         if self.reference is None:
             raise RuntimeError(
                 "WalkingController.compute(): no MPC solution yet (the first update failed: "

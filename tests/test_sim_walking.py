@@ -101,3 +101,14 @@ def test_feedback_options_no_delay_no_feedback_interpolation(controller_with_kno
     # interpolation at 30 % of the way from node 1 to node 2 (feed-forward part)
     tau = make(feedback=False, interpolate=True).compute(0.503, measurement)
     np.testing.assert_allclose(tau, 0.7 * reference.us[1] + 0.3 * reference.us[2], rtol=1e-9)
+
+
+def test_computation_delay_applies_a_new_solution_only_after_the_latency(controller_with_known_reference):
+    make, reference, model, measurement = controller_with_known_reference
+    controller = make(delay_nodes=0, computation_delay=0.01, feedback=False)
+    newer = _Reference(t=0.51, xs=reference.xs, us=reference.us + 100.0, K=reference.K)
+    controller._pending.append((0.52, newer))
+    # at 0.515 s the solution of 0.51 s is still being "computed": node 1 of the 0.5 s one
+    np.testing.assert_array_equal(controller.compute(0.515, measurement), reference.us[1])
+    # from 0.52 s on the newer one applies, at its node 1 (10 ms after its own t)
+    np.testing.assert_array_equal(controller.compute(0.52, measurement), newer.us[1])
