@@ -65,6 +65,7 @@ class CrocoddylMirror:
         self.running_models = [self._node(m) for m in problem.running_models]
         self.terminal_model = self._node(problem.terminal_model)
         self.problem = croc.ShootingProblem(problem.x0.copy(), self.running_models, self.terminal_model)
+        self.problem.nthreads = 1  # single thread, like wbmpc (its OpenMP default spins on busy cores)
         self.update()
 
     # ----------------------------------------------------------------- translation

@@ -1,6 +1,9 @@
 """Activation functions a(r) turning a residual r (nr,) into a scalar cost (Crocoddyl's convention).
 
 Every activation here has a diagonal Hessian, so ``data.Arr`` stores only its diagonal (nr,).
+All three are instances of one row-wise form, a = ½ Σ_i w_i e_i² with the dead-zone error
+e_i = min(r_i − lb_i, 0) + max(r_i − ub_i, 0) (quadratics: lb = ub = 0); ``row_parameters()``
+returns (w, lb, ub) so a cost sum can evaluate all its terms in one compiled pass.
 
 - :class:`ActivationQuad`: a = ½‖r‖².
 - :class:`ActivationWeightedQuad`: a = ½ rᵀ diag(w) r.
@@ -40,6 +43,9 @@ class ActivationQuad:
     def createData(self) -> ActivationData:
         return ActivationData(self.nr)
 
+    def row_parameters(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return np.ones(self.nr), np.zeros(self.nr), np.zeros(self.nr)
+
 
 class ActivationWeightedQuad:
     """a(r) = ½ rᵀ diag(weights) r, weights (nr,) ≥ 0."""
@@ -61,6 +67,9 @@ class ActivationWeightedQuad:
 
     def createData(self) -> ActivationData:
         return ActivationData(self.nr)
+
+    def row_parameters(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self.weights.copy(), np.zeros(self.nr), np.zeros(self.nr)
 
 
 class ActivationQuadraticBarrier:
@@ -95,3 +104,6 @@ class ActivationQuadraticBarrier:
 
     def createData(self) -> ActivationData:
         return ActivationData(self.nr)
+
+    def row_parameters(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return np.ones(self.nr), self.lower.copy(), self.upper.copy()

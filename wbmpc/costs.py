@@ -7,7 +7,9 @@ the weight stays outside the residual so logs and plots show every term by name:
     costs.add("state_regularization", CostModelResidual(ResidualState(state, x_ref, nu),
               ActivationWeightedQuad(w)), weight=1.0)
 
-Derivatives use the Gauss-Newton approximation: Lx = Rxᵀ Ar, Lxx = Rxᵀ diag(Arr) Rx.
+Derivatives use the Gauss-Newton approximation: Lx = Rxᵀ Ar, Lxx = Rxᵀ diag(Arr) Rx. A node's
+terms are evaluated together: their residuals are rows of one vector/Jacobian and every
+activation is the row-wise dead-zone quadratic of :mod:`wbmpc.activations`.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import numpy as np
 
 from wbmpc.activations import ActivationQuad
 from wbmpc.errors import ParameterError
+from wbmpc.kernels import cost_rows_derivatives, cost_rows_value
 from wbmpc.residuals.base import DataCollector
 from wbmpc.state import StateMultibody
 
@@ -85,59 +88,32 @@ class CostModelSum:
         return CostDataSum(self)
 
     def calc(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> float:
-        """Fill every active term's residual and activation; returns and stores the total cost."""
-        total = 0.0
-        for name, item in self.costs.items():
-            term = data.terms[name]
-            if not item.active:
-                term.cost = 0.0
-                continue
-            item.cost.residual.calc(term.residual, x, u, shared)
-            item.cost.activation.calc(term.activation, term.residual.r)
-            term.cost = item.weight * term.activation.a_value
-            total += term.cost
-        data.cost = total
-        return total
+        """Evaluate every active term; returns and stores the total cost (data.cost)."""
+        term_scale = data.term_scale
+        for j, (name, item) in enumerate(self.costs.items()):
+            if item.active:
+                term_scale[j] = item.weight
+                item.cost.residual.calc(data.terms[name].residual, x, u, shared)
+            else:
+                term_scale[j] = 0.0
+        data.cost = cost_rows_value(data.r, data.row_term, term_scale, data.w, data.lb, data.ub, data.term_cost)
+        return data.cost
 
     def calcDiff(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
         """Fill data.Lx (ndx,), Lu (nu,), Lxx, Lxu, Luu (Gauss-Newton). Needs calc first.
 
         The residual Jacobians of all terms are rows of one matrix R = [Rx Ru] (data.R), so the
-        Hessian is a single product Rᵀ diag(w·Arr) R.
+        gradient and Hessian come from one compiled pass over the rows.
         """
-        weights_Arr = data.weights_Arr
-        weights_Ar = data.weights_Ar
         for name, item in self.costs.items():
-            term = data.terms[name]
-            rows = data.rows[name]
-            if not item.active:
-                weights_Arr[rows] = 0.0
-                weights_Ar[rows] = 0.0
-                data.R[rows] = 0.0
-                continue
-            rdata = term.residual
-            item.cost.residual.calcDiff(rdata, x, u, shared)
-            item.cost.activation.calcDiff(term.activation, rdata.r)
-            np.multiply(term.activation.Arr, item.weight, out=weights_Arr[rows])
-            np.multiply(term.activation.Ar, item.weight, out=weights_Ar[rows])
-        R = data.R
-        ndx = self.state.ndx
-        if u is None or not self.nu:
-            Rx = R[:, :ndx]
-            np.matmul(Rx.T, weights_Ar, out=data.Lx)
-            np.matmul(Rx.T, weights_Arr[:, None] * Rx, out=data.Lxx)
-            return
-        gradient = R.T @ weights_Ar
-        hessian = R.T @ (weights_Arr[:, None] * R)
-        data.Lx[:] = gradient[:ndx]
-        data.Lu[:] = gradient[ndx:]
-        data.Lxx[:] = hessian[:ndx, :ndx]
-        data.Lxu[:] = hessian[:ndx, ndx:]
-        data.Luu[:] = hessian[ndx:, ndx:]
+            if item.active:
+                item.cost.residual.calcDiff(data.terms[name].residual, x, u, shared)
+        cost_rows_derivatives(data.r, data.R, data.row_term, data.term_scale, data.w, data.lb, data.ub,
+                              data.gradient, data.hessian)
 
     def term_costs(self, data: "CostDataSum") -> dict[str, float]:
-        """Cost of every term by name (inactive terms report 0)."""
-        return {name: term.cost for name, term in data.terms.items()}
+        """Cost of every term by name after calc (inactive terms report 0)."""
+        return {name: float(data.term_cost[j]) for j, name in enumerate(self.costs)}
 
 
 class CostDataSum:
@@ -147,23 +123,34 @@ class CostDataSum:
         ndx, nu = model.state.ndx, model.nu
         self.terms = {name: item.cost.createData() for name, item in model.costs.items()}
         nr_total = sum(item.cost.nr for item in model.costs.values())
+        n_terms = len(model.costs)
+        self.r = np.zeros(nr_total)
         self.R = np.zeros((nr_total, ndx + nu))
-        self.weights_Ar = np.zeros(nr_total)
-        self.weights_Arr = np.zeros(nr_total)
+        self.w = np.zeros(nr_total)
+        self.lb = np.zeros(nr_total)
+        self.ub = np.zeros(nr_total)
+        self.row_term = np.zeros(nr_total, dtype=np.int64)
+        self.term_scale = np.zeros(n_terms)
+        self.term_cost = np.zeros(n_terms)
         self.rows: dict[str, slice] = {}
         start = 0
-        for name, item in model.costs.items():
+        for j, (name, item) in enumerate(model.costs.items()):
             rows = slice(start, start + item.cost.nr)
             rdata = self.terms[name].residual
             self.R[rows, :ndx] = rdata.Rx
             self.R[rows, ndx:] = rdata.Ru
+            rdata.r = self.r[rows]
             rdata.Rx = self.R[rows, :ndx]
             rdata.Ru = self.R[rows, ndx:]
+            self.w[rows], self.lb[rows], self.ub[rows] = item.cost.activation.row_parameters()
+            self.row_term[rows] = j
             self.rows[name] = rows
             start += item.cost.nr
+        self.gradient = np.zeros(ndx + nu)
+        self.hessian = np.zeros((ndx + nu, ndx + nu))
         self.cost = 0.0
-        self.Lx = np.zeros(ndx)
-        self.Lu = np.zeros(nu)
-        self.Lxx = np.zeros((ndx, ndx))
-        self.Lxu = np.zeros((ndx, nu))
-        self.Luu = np.zeros((nu, nu))
+        self.Lx = self.gradient[:ndx]
+        self.Lu = self.gradient[ndx:]
+        self.Lxx = self.hessian[:ndx, :ndx]
+        self.Lxu = self.hessian[:ndx, ndx:]
+        self.Luu = self.hessian[ndx:, ndx:]

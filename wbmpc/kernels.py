@@ -73,3 +73,62 @@ def euler_transition_jacobians(da_dx, da_du, J_q, J_dq, dt, Fx, Fu):
         Fx[nv + i, nv + i] += 1.0
     Fu[:nv] = np.dot(J_dq, da_du * dt2)
     Fu[nv:] = da_du * dt
+
+
+@njit(cache=True)
+def cost_rows_value(r, row_term, term_scale, w, lb, ub, term_cost):
+    """Σ over rows of term_scale[term] · ½ w e², e = min(r − lb, 0) + max(r − ub, 0).
+
+    Rows of inactive terms (term_scale 0) are skipped, whatever their stale residual holds.
+    Fills term_cost (n_terms,) and returns the total.
+    """
+    term_cost[:] = 0.0
+    for i in range(r.size):
+        scale = term_scale[row_term[i]]
+        if scale == 0.0:
+            continue
+        e = min(r[i] - lb[i], 0.0) + max(r[i] - ub[i], 0.0)
+        term_cost[row_term[i]] += scale * 0.5 * w[i] * e * e
+    total = 0.0
+    for j in range(term_cost.size):
+        total += term_cost[j]
+    return total
+
+
+@njit(cache=True)
+def cost_rows_derivatives(r, R, row_term, term_scale, w, lb, ub, gradient, hessian):
+    """Gauss-Newton gradient Rᵀ (c e) (n,) and Hessian Rᵀ diag(c m) R (n, n) of the stacked
+    residual rows, c = term_scale · w, m = 1 where the row is outside its dead zone."""
+    nrows, n = R.shape
+    coef_g = np.zeros(nrows)
+    coef_h = np.zeros(nrows)
+    for i in range(nrows):
+        scale = term_scale[row_term[i]]
+        if scale == 0.0:
+            continue
+        below = r[i] - lb[i]
+        above = r[i] - ub[i]
+        e = min(below, 0.0) + max(above, 0.0)
+        coef_g[i] = scale * w[i] * e
+        if below <= 0.0 or above >= 0.0:
+            coef_h[i] = scale * w[i]
+    gradient[:] = 0.0
+    hessian[:, :] = 0.0
+    for i in range(nrows):
+        cg = coef_g[i]
+        ch = coef_h[i]
+        if cg == 0.0 and ch == 0.0:
+            continue
+        Ri = R[i]
+        for a in range(n):
+            ra = Ri[a]
+            if ra == 0.0:
+                continue
+            gradient[a] += ra * cg
+            if ch != 0.0:
+                v = ch * ra
+                for b in range(a, n):
+                    hessian[a, b] += v * Ri[b]
+    for a in range(n):
+        for b in range(a + 1, n):
+            hessian[b, a] = hessian[a, b]

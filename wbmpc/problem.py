@@ -100,9 +100,9 @@ class ShootingProblem:
         """Total cost of each named term over the horizon (after calc), running terms scaled by dt."""
         totals: dict[str, float] = {}
         for m, d in zip(self.running_models, self.running_datas):
-            for name, term in d.differential.costs.terms.items():
-                totals[name] = totals.get(name, 0.0) + m.dt * term.cost
-        for name, term in self.terminal_data.differential.costs.terms.items():
-            key = f"terminal_{name}"
-            totals[key] = totals.get(key, 0.0) + term.cost
+            for name, cost in m.differential.costs.term_costs(d.differential.costs).items():
+                totals[name] = totals.get(name, 0.0) + m.dt * cost
+        terminal = self.terminal_model.differential.costs
+        for name, cost in terminal.term_costs(self.terminal_data.differential.costs).items():
+            totals[f"terminal_{name}"] = totals.get(f"terminal_{name}", 0.0) + cost
         return totals
