@@ -11,6 +11,10 @@ Figures are ratios of trials per minute measured in the same run:
 - local pool, 1 worker / in-process: the cost of running trials in worker processes (~1.0);
 - local pool, 2 workers / 1 worker: the scaling ratio (2.0 is perfect; the machine is shared);
 - Ray, 2 workers on this machine / local pool, 2 workers: what Ray's scheduling costs here.
+
+``cores used`` = CPU time of the trials / wall time: how many cores the trials actually got. On
+a shared machine it explains a scaling ratio below 2 (the other cores' load is not ours to take),
+and ``trial CPU / wall`` below 1 shows a trial waiting for a core.
 """
 
 from __future__ import annotations
@@ -41,7 +45,7 @@ def _spec(n_trials: int, duration: float, name: str):
 
 
 def _measure(backend_name: str, workers: int, n_trials: int, duration: float) -> dict:
-    from sim.campaigns import run_campaign
+    from sim.campaigns import ResultStore, run_campaign
     from sim.campaigns.backends import make_backend
 
     tic = time.perf_counter()
@@ -51,8 +55,10 @@ def _measure(backend_name: str, workers: int, n_trials: int, duration: float) ->
             run_campaign(_spec(workers, duration, "warm-up"), os.path.join(tmp, "warm-up"), backend=backend, progress=False)
             startup = time.perf_counter() - tic
             run = run_campaign(_spec(n_trials, duration, "bench"), os.path.join(tmp, "bench"), backend=backend, progress=False)
+            records = ResultStore(os.path.join(tmp, "bench")).records()
     finally:
         backend.close()
+    cpu_time = sum(r["cpu_time"] for r in records)
     return {
         "backend": backend_name,
         "workers": workers,
@@ -60,6 +66,9 @@ def _measure(backend_name: str, workers: int, n_trials: int, duration: float) ->
         "wall_time": run.wall_time,
         "trials_per_minute": run.trials_per_minute,
         "startup_time": startup,
+        "trial_cpu_time_mean": cpu_time / len(records),
+        "trial_wall_time_mean": sum(r["wall_time"] for r in records) / len(records),
+        "cores_used": cpu_time / run.wall_time,
     }
 
 
@@ -104,10 +113,14 @@ def format_report(result: dict) -> str:
     lines = [
         f"campaign throughput: {result['trials']} PD push trials of {result['trial_duration']:.1f} s simulated "
         f"({result['cpu_count']} CPUs, load average {result['load_average_1min']:.1f})",
-        f"  {'configuration':<20} {'trials/min':>10} {'wall [s]':>9} {'start-up [s]':>13}",
+        f"  {'configuration':<20} {'trials/min':>10} {'wall [s]':>9} {'start-up [s]':>13} {'cores used':>11} "
+        f"{'trial CPU / wall':>17}",
     ]
     for label, r in result["configurations"].items():
-        lines.append(f"  {label:<20} {r['trials_per_minute']:10.1f} {r['wall_time']:9.2f} {r['startup_time']:13.2f}")
+        lines.append(
+            f"  {label:<20} {r['trials_per_minute']:10.1f} {r['wall_time']:9.2f} {r['startup_time']:13.2f} "
+            f"{r['cores_used']:11.2f} {r['trial_cpu_time_mean'] / r['trial_wall_time_mean']:17.2f}"
+        )
     lines.append("  ratios (same run):")
     for label, value in result["ratios"].items():
         lines.append(f"    {label:<40} {value:5.2f}")

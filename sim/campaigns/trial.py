@@ -215,7 +215,8 @@ def run_trial(trial: Trial) -> dict[str, Any]:
     arguments, e.g. the sequencer parameters of a step-timing variant), seed, success (the run completed its
     duration without a fall or an error), status ("completed", "fell", "error"), fall_time [s],
     fall_reason, error (exception text or None), traceback, metrics (``sim.metrics`` plus
-    ``push_phase_measured``), wall_time [s], host, pid, finished_at (UTC, ISO 8601).
+    ``push_phase_measured``), wall_time [s], cpu_time [s] (CPU time of the worker process during
+    the trial; below wall_time when the cores are shared), host, pid, finished_at (UTC, ISO 8601).
     """
     from sim.runner import run_scenario
 
@@ -228,7 +229,7 @@ def run_trial(trial: Trial) -> dict[str, Any]:
         "arguments": _jsonable(trial.arguments),
         "seed": trial.seed,
     }
-    tic = time.perf_counter()
+    tic, cpu_tic = time.perf_counter(), time.process_time()
     try:
         log = run_scenario(
             trial.scenario,
@@ -265,6 +266,7 @@ def run_trial(trial: Trial) -> dict[str, Any]:
         )
     record.update(
         wall_time=time.perf_counter() - tic,
+        cpu_time=time.process_time() - cpu_tic,
         host=socket.gethostname(),
         pid=os.getpid(),
         finished_at=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
