@@ -204,3 +204,57 @@ def test_bad_inputs_raise_clear_errors(bolt):
     ocp = WalkingOCP(bolt, WalkingOCPConfig(), n_nodes=5, dt=0.01)
     with pytest.raises(ParameterError, match="schedule has n_nodes=8"):
         ocp.update(standing_state(bolt), alternating_schedule(0.0, 0.01, 8), np.zeros(3))
+
+
+def test_terminal_residuals_match_finite_differences(bolt, walking_nodes):
+    """CoM position and swing-height residuals of the terminal node (no control)."""
+    problem = walking_nodes.problem
+    dam = problem.terminal_model.differential
+    state = problem.state
+    x = random_state(bolt, np.random.default_rng(11))
+    data = dam.createData()
+    dam.calc(data, x)
+    dam.calcDiff(data, x)
+    active = [name for name, item in dam.costs.costs.items() if item.active]
+    assert "com_position" in active
+    for name in active:
+        residual = dam.costs.costs[name].cost.residual
+
+        def r_of_x(xx, residual=residual):
+            d = dam.createData()
+            dam.calc(d, xx)
+            rd = residual.createData()
+            residual.calc(rd, xx, None, d.shared)
+            return rd.r.copy()
+
+        _assert_close(data.costs.terms[name].residual.Rx, _tangent_fd(state, r_of_x, x), f"terminal {name} Rx")
+
+
+def test_flat_foot_contact_dynamics_match_finite_differences():
+    """6D (flat-foot) contacts with Baumgarte gains on G1: Fx and Fu of a running node."""
+    g1 = load_robot("g1")
+    config = WalkingOCPConfig(contact_force_weight=1e-3, baumgarte_gains=(10.0, 20.0))
+    ocp = WalkingOCP(g1, config, n_nodes=4, dt=0.02)
+    schedule = alternating_schedule(0.0, 0.02, 4, step_duration=0.4, foot_y=(0.12, -0.12))
+    ocp.update(standing_state(g1), schedule, np.array([0.0, 0.0, 0.7]))
+    model = ocp.problem.running_models[1]
+    state = ocp.state
+    rng = np.random.default_rng(4)
+    x = random_state(g1, rng, 0.05, 0.2)
+    u = rng.standard_normal(model.nu)
+    data = model.createData()
+    model.calc(data, x, u)
+    model.calcDiff(data, x, u)
+
+    def xnext_of_x(xx):
+        d = model.createData()
+        model.calc(d, xx, u)
+        return state.diff(data.xnext, d.xnext)
+
+    def xnext_of_u(uu):
+        d = model.createData()
+        model.calc(d, x, uu)
+        return state.diff(data.xnext, d.xnext)
+
+    _assert_close(data.Fx, _tangent_fd(state, xnext_of_x, x), "G1 Fx", rtol=1e-3)
+    _assert_close(data.Fu, _control_fd(xnext_of_u, u), "G1 Fu", rtol=1e-3)
