@@ -104,7 +104,8 @@ class WalkingControllerConfig:
             system the paper's delay model stands for: node 1 applied from t + 10 ms.
         interpolate: interpolate u and x between nodes k and k+1 at 1 kHz (otherwise zero-order hold).
         feedback: apply the Riccati gains (False: feed-forward u_k only, to show what K buys).
-        touchdown_detection: "plan" or "contact" (see ``sim.stance``).
+        touchdown_detection: "contact" (switch the stance on the measured touchdown, default) or
+            "plan" (at the planned time); see ``sim.stance``.
         first_stance_foot: stance foot at t0 (both feet are on the ground at start; the other one
             takes the first step).
         velocity_command: initial (v_x, v_y) command [m/s] (world frame); None keeps the preset's.
@@ -125,7 +126,7 @@ class WalkingControllerConfig:
     computation_delay: float = 0.0
     interpolate: bool = False
     feedback: bool = True
-    touchdown_detection: str = "plan"
+    touchdown_detection: str = "contact"
     first_stance_foot: str = "left"
     velocity_command: tuple[float, float] | None = None
     mpc_failure_times: tuple[float, ...] = ()
@@ -202,7 +203,8 @@ class WalkingController:
             params = _with_velocity(params, cfg.velocity_command)
         self.sequencer_params = params
         self.sequencer = FootstepSequencer(params, backend=cfg.sequencer_backend)
-        self.omega = float(np.sqrt(GRAVITY / _com_height(params)))
+        self.com_height = _com_height(params)  # LIPM z_c [m], also the terminal CoM height reference
+        self.omega = float(np.sqrt(GRAVITY / self.com_height))
         self.mpc = WalkingMPC(
             robot,
             cfg.ocp if cfg.ocp is not None else default_ocp_config(),
@@ -281,6 +283,7 @@ class WalkingController:
                 stance_position=self.stance.state.position,
                 dcm_measured=dcm,
                 t_stance_start=self.stance.state.t_start,
+                clamp_elapsed=True,  # a late touchdown: plan as if it were T_max (touchdown now)
             )
         except Exception as err:  # infeasible step QP: keep following the last plan
             if self.plan is None or not _is_solver_failure(err):
@@ -296,7 +299,7 @@ class WalkingController:
 
         tic = time.perf_counter()
         schedule = contact_schedule(self.plan, t, cfg.node_dt, cfg.n_nodes)
-        com_terminal = _terminal_com(self.plan, t + cfg.n_nodes * cfg.node_dt, com)
+        com_terminal = _terminal_com(self.plan, t + cfg.n_nodes * cfg.node_dt, com, self.com_height)
         injected = bool(self._pending_failures) and t >= self._pending_failures[0] - 1e-9
         if injected:
             self._pending_failures.pop(0)
@@ -414,7 +417,11 @@ def _with_velocity(params: Any, command: tuple[float, float]) -> Any:
     return dataclasses.replace(params, **changes)
 
 
-def _terminal_com(plan: Any, t_horizon: float, com: np.ndarray) -> np.ndarray:
-    """CoM reference at the end of the horizon (eq. 24): LIPM prediction in xy, current height."""
+def _terminal_com(plan: Any, t_horizon: float, com: np.ndarray, height: float) -> np.ndarray:
+    """CoM reference at the end of the horizon (eq. 24): LIPM prediction in xy, the LIPM height z_c.
+
+    Holding z at z_c (not at the measured height) matters: with the measured height the terminal
+    cost let the CoM creep up by 1 cm per second of walking (legs stretching) until Bolt fell.
+    """
     com_xy = np.asarray(plan.lipm_com_at(t_horizon, com[:2]), dtype=float)
-    return np.array([com_xy[0], com_xy[1], com[2]])
+    return np.array([com_xy[0], com_xy[1], height])

@@ -2,11 +2,18 @@
 
 The footstep sequencer plans from the current stance foot (``p0``), the time elapsed since its
 touchdown (``t`` in eqs. (5a)-(5b)) and the measured DCM. The closed loop must therefore track the
-stance switches. :class:`StanceTracker` switches the stance to the swinging foot when the plan says
-its touchdown has come (``detection="plan"``), or, with ``detection="contact"``, as soon as the
-simulator reports the swing foot on the ground past half of its planned swing (early touchdown on an
-obstacle), and at the latest at the planned time. The new stance position is the *measured* foot
-position, so that slips and terrain show up in the next plan.
+stance switches. :class:`StanceTracker` switches the stance to the swinging foot:
+
+- ``detection="plan"``: when the plan says its touchdown has come, whatever the contacts say;
+- ``detection="contact"`` (default of the walking controller): when the simulator reports the swing
+  foot on the ground past half of its planned swing (early touchdown, e.g. on an obstacle), or past
+  the planned time once it touches; a foot still in the air ``late_tolerance`` after the planned
+  time is switched anyway. Waiting for the contact matters: declaring a foot that is still 3-4 cm
+  above the ground in stance makes the OCP hold it there as a rigid contact, and the next solution
+  asks for large torques (a fall after 13 s in the ``transition`` scenario with "plan").
+
+The new stance position is the *measured* foot position, so that slips and terrain show up in the
+next plan.
 """
 
 from __future__ import annotations
@@ -34,17 +41,21 @@ class StanceTracker:
 
     Args:
         feet: foot names in the order of the measurements, e.g. ``("left", "right")``.
-        detection: ``"plan"`` (switch at the planned touchdown time) or ``"contact"`` (switch at the
-            first measured contact of the swing foot after half of its swing, or at the planned time).
+        detection: ``"plan"`` or ``"contact"`` (see the module docstring).
+        late_tolerance: with "contact", how long after the planned touchdown to wait for the
+            contact before switching anyway [s].
     """
 
-    def __init__(self, feet: tuple[str, ...], detection: str = "plan") -> None:
+    def __init__(self, feet: tuple[str, ...], detection: str = "contact", late_tolerance: float = 0.05) -> None:
         if detection not in TOUCHDOWN_DETECTIONS:
             raise ParameterError(f"touchdown_detection={detection!r} must be one of {TOUCHDOWN_DETECTIONS}")
         if len(feet) != 2:
             raise ParameterError(f"feet={feet!r}: the stance tracker handles bipeds (2 feet)")
+        if not (np.isfinite(late_tolerance) and late_tolerance >= 0):
+            raise ParameterError(f"late_tolerance={late_tolerance} s must be >= 0")
         self.feet = tuple(feet)
         self.detection = detection
+        self.late_tolerance = float(late_tolerance)
         self.state: StanceState | None = None
         self.n_switches = 0
 
@@ -79,12 +90,14 @@ class StanceTracker:
         if next_touchdown_foot is None or next_touchdown_foot == self.state.foot:
             return False
         index = self.feet.index(next_touchdown_foot)
-        touched = t >= next_touchdown_time - 1e-9
-        t_switch = min(float(next_touchdown_time), t)
-        if not touched and self.detection == "contact" and swing_start_time is not None:
+        if self.detection == "plan":
+            touched = t >= next_touchdown_time - 1e-9
+            t_switch = min(float(next_touchdown_time), t)
+        else:
             half_swing = swing_start_time + 0.5 * (next_touchdown_time - swing_start_time)
-            if foot_in_contact[index] and t >= half_swing:
-                touched, t_switch = True, t
+            in_contact = bool(foot_in_contact[index])
+            touched = (in_contact and t >= half_swing) or t >= next_touchdown_time + self.late_tolerance - 1e-9
+            t_switch = t
         if not touched:
             return False
         self.state = StanceState(next_touchdown_foot, np.array(feet_position_world[index, :2]), t_switch)

@@ -66,19 +66,27 @@ def test_transition_command_changes_at_the_switch():
     assert scenario.velocity_command(5.0) == (0.3, 0.0)
 
 
-def test_stance_tracker_switches_at_the_planned_touchdown_or_on_early_contact():
+def test_stance_tracker_switches_at_the_planned_touchdown_or_on_contact():
     feet = np.array([[0.0, 0.05, 0.016], [0.1, -0.05, 0.016]])
     tracker = StanceTracker(("left", "right"), detection="plan")
     tracker.reset("left", feet[0, :2], 0.0)
     assert not tracker.update(0.2, "right", 0.3, 0.0, feet, np.array([True, True]))
-    assert tracker.update(0.31, "right", 0.3, 0.0, feet, np.array([True, False]))
+    assert tracker.update(0.31, "right", 0.3, 0.0, feet, np.array([True, False]))  # contact ignored
     assert tracker.state.foot == "right" and tracker.state.t_start == pytest.approx(0.3)
     np.testing.assert_allclose(tracker.state.position, feet[1, :2])
-    early = StanceTracker(("left", "right"), detection="contact")
-    early.reset("left", feet[0, :2], 0.0)
-    assert not early.update(0.1, "right", 0.3, 0.0, feet, np.array([True, True]))  # before half swing
-    assert early.update(0.2, "right", 0.3, 0.0, feet, np.array([True, True]))
-    assert early.state.t_start == pytest.approx(0.2)
+
+    contact = StanceTracker(("left", "right"), detection="contact", late_tolerance=0.05)
+    contact.reset("left", feet[0, :2], 0.0)
+    assert not contact.update(0.1, "right", 0.3, 0.0, feet, np.array([True, True]))  # before half swing
+    assert contact.update(0.2, "right", 0.3, 0.0, feet, np.array([True, True]))  # early touchdown
+    assert contact.state.foot == "right" and contact.state.t_start == pytest.approx(0.2)
+    # late touchdown: wait for the contact past the planned time, then force after the tolerance
+    assert not contact.update(0.52, "left", 0.5, 0.2, feet, np.array([False, True]))
+    assert contact.update(0.53, "left", 0.5, 0.2, feet, np.array([True, True]))
+    assert contact.state.t_start == pytest.approx(0.53)
+    assert not contact.update(0.84, "right", 0.8, 0.53, feet, np.array([True, False]))
+    assert contact.update(0.85, "right", 0.8, 0.53, feet, np.array([True, False]))
+    assert contact.n_switches == 3
     with pytest.raises(ParameterError, match="touchdown_detection='vision'"):
         StanceTracker(("left", "right"), detection="vision")
 
