@@ -3,8 +3,9 @@
 Every configuration runs the same ``--trials`` closed-loop trials (push scenario, PD controller,
 ``--duration`` simulated seconds, no stop at the fall, so every trial does the same work) through
 :func:`sim.campaigns.run_campaign`, records included. Each backend is started and warmed up first
-(one trial per worker, untimed: imports, forkserver preload, ``ray.init``); that start-up time is
-reported on its own.
+(untimed: imports, forkserver preload, ``ray.init``); that start-up time is reported on its own.
+The configurations then run in ``--rounds`` interleaved rounds and each ratio is the median of the
+per-round ratios, so a change of the shared machine's load hits every configuration alike.
 
 Figures are ratios of trials per minute measured in the same run:
 
@@ -26,8 +27,9 @@ import time
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--trials", type=int, default=8, help="timed trials per configuration")
+    parser.add_argument("--trials", type=int, default=8, help="timed trials per configuration and round")
     parser.add_argument("--duration", type=float, default=1.0, help="simulated time per trial [s]")
+    parser.add_argument("--rounds", type=int, default=3, help="interleaved rounds (ratios: median over rounds)")
     parser.add_argument("--no-ray", action="store_true", help="skip the Ray configuration")
 
 
@@ -44,39 +46,30 @@ def _spec(n_trials: int, duration: float, name: str):
     )
 
 
-def _measure(backend_name: str, workers: int, n_trials: int, duration: float) -> dict:
+def _timed_run(backend, n_trials: int, duration: float, directory: str) -> dict:
     from sim.campaigns import ResultStore, run_campaign
-    from sim.campaigns.backends import make_backend
 
-    tic = time.perf_counter()
-    backend = make_backend(backend_name, workers=workers)
-    try:
-        with tempfile.TemporaryDirectory() as tmp:
-            run_campaign(_spec(workers, duration, "warm-up"), os.path.join(tmp, "warm-up"), backend=backend, progress=False)
-            startup = time.perf_counter() - tic
-            run = run_campaign(_spec(n_trials, duration, "bench"), os.path.join(tmp, "bench"), backend=backend, progress=False)
-            records = ResultStore(os.path.join(tmp, "bench")).records()
-    finally:
-        backend.close()
+    run = run_campaign(_spec(n_trials, duration, "bench"), directory, backend=backend, progress=False)
+    records = ResultStore(directory).records()
     cpu_time = sum(r["cpu_time"] for r in records)
     return {
-        "backend": backend_name,
-        "workers": workers,
-        "trials": run.n_run,
-        "wall_time": run.wall_time,
         "trials_per_minute": run.trials_per_minute,
-        "startup_time": startup,
-        "trial_cpu_time_mean": cpu_time / len(records),
-        "trial_wall_time_mean": sum(r["wall_time"] for r in records) / len(records),
+        "wall_time": run.wall_time,
         "cores_used": cpu_time / run.wall_time,
+        "trial_cpu_over_wall": cpu_time / sum(r["wall_time"] for r in records),
     }
 
 
 def run(args: argparse.Namespace) -> dict:
+    import numpy as np
+
+    from sim.campaigns.backends import make_backend
     from wbmpc.errors import ParameterError
 
     if args.trials < 2:
         raise ParameterError(f"--trials={args.trials} must be >= 2")
+    if args.rounds < 1:
+        raise ParameterError(f"--rounds={args.rounds} must be >= 1")
     configurations = {
         "in-process": ("inline", 1),
         "local, 1 worker": ("local", 1),
@@ -90,38 +83,76 @@ def run(args: argparse.Namespace) -> dict:
             configurations["ray, 2 workers"] = ("ray", 2)
         except ImportError:
             ray_note = "ray is not installed (pip install ray): Ray figures skipped"
-    results = {label: _measure(name, workers, args.trials, args.duration) for label, (name, workers) in configurations.items()}
-    rate = {label: r["trials_per_minute"] for label, r in results.items()}
-    ratios = {
-        "local 1 worker / in-process": rate["local, 1 worker"] / rate["in-process"],
-        "scaling: local 2 workers / 1 worker": rate["local, 2 workers"] / rate["local, 1 worker"],
+    backends, startup = {}, {}
+    rounds: list[dict[str, dict]] = []
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            for label, (name, workers) in configurations.items():
+                tic = time.perf_counter()
+                backends[label] = make_backend(name, workers=workers)
+                warm_up = os.path.join(tmp, f"warm-up-{name}-{workers}")
+                _timed_run(backends[label], max(workers, 2), args.duration, warm_up)
+                startup[label] = time.perf_counter() - tic
+            for k in range(args.rounds):  # interleaved, so that the machine's load drifts hit every configuration
+                rounds.append(
+                    {
+                        label: _timed_run(backend, args.trials, args.duration, os.path.join(tmp, f"round-{k}-{i}"))
+                        for i, (label, backend) in enumerate(backends.items())
+                    }
+                )
+    finally:
+        for backend in backends.values():
+            backend.close()
+
+    def median(label: str, key: str) -> float:
+        return float(np.median([r[label][key] for r in rounds]))
+
+    def ratio(a: str, b: str) -> float:
+        return float(np.median([r[a]["trials_per_minute"] / r[b]["trials_per_minute"] for r in rounds]))
+
+    results = {
+        label: {
+            "backend": configurations[label][0],
+            "workers": configurations[label][1],
+            "trials_per_minute": median(label, "trials_per_minute"),
+            "startup_time": startup[label],
+            "cores_used": median(label, "cores_used"),
+            "trial_cpu_over_wall": median(label, "trial_cpu_over_wall"),
+        }
+        for label in configurations
     }
-    if "ray, 2 workers" in rate:
-        ratios["ray 2 workers / local 2 workers"] = rate["ray, 2 workers"] / rate["local, 2 workers"]
+    ratios = {
+        "local 1 worker / in-process": ratio("local, 1 worker", "in-process"),
+        "scaling: local 2 workers / 1 worker": ratio("local, 2 workers", "local, 1 worker"),
+    }
+    if "ray, 2 workers" in results:
+        ratios["ray 2 workers / local 2 workers"] = ratio("ray, 2 workers", "local, 2 workers")
     return {
         "trials": args.trials,
         "trial_duration": args.duration,
+        "rounds": args.rounds,
         "cpu_count": os.cpu_count(),
         "load_average_1min": os.getloadavg()[0],
         "configurations": results,
         "ratios": ratios,
+        "per_round": rounds,
         "note": ray_note,
     }
 
 
 def format_report(result: dict) -> str:
     lines = [
-        f"campaign throughput: {result['trials']} PD push trials of {result['trial_duration']:.1f} s simulated "
-        f"({result['cpu_count']} CPUs, load average {result['load_average_1min']:.1f})",
-        f"  {'configuration':<20} {'trials/min':>10} {'wall [s]':>9} {'start-up [s]':>13} {'cores used':>11} "
-        f"{'trial CPU / wall':>17}",
+        f"campaign throughput: {result['trials']} PD push trials of {result['trial_duration']:.1f} s simulated per "
+        f"configuration, {result['rounds']} interleaved round(s) ({result['cpu_count']} CPUs, load average "
+        f"{result['load_average_1min']:.1f})",
+        f"  {'configuration':<20} {'trials/min':>10} {'start-up [s]':>13} {'cores used':>11} {'trial CPU / wall':>17}",
     ]
     for label, r in result["configurations"].items():
         lines.append(
-            f"  {label:<20} {r['trials_per_minute']:10.1f} {r['wall_time']:9.2f} {r['startup_time']:13.2f} "
-            f"{r['cores_used']:11.2f} {r['trial_cpu_time_mean'] / r['trial_wall_time_mean']:17.2f}"
+            f"  {label:<20} {r['trials_per_minute']:10.1f} {r['startup_time']:13.2f} {r['cores_used']:11.2f} "
+            f"{r['trial_cpu_over_wall']:17.2f}"
         )
-    lines.append("  ratios (same run):")
+    lines.append("  ratios of trials/min (median over rounds, each round's configurations run back to back):")
     for label, value in result["ratios"].items():
         lines.append(f"    {label:<40} {value:5.2f}")
     if result.get("note"):
