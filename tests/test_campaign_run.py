@@ -134,3 +134,23 @@ def test_killed_campaign_resumes_on_the_local_pool_and_loses_nothing(tmp_path, i
     assert len({r["pid"] for r in after.values()} - {r["pid"] for r in before.values()}) >= 1
     summary = json.loads((out / "summary.json").read_text())
     assert summary["complete"] and summary["n_recorded"] == 8
+
+
+def test_a_trial_that_raises_is_recorded_with_its_error_and_the_campaign_goes_on(tmp_path):
+    from sim.campaigns import CampaignSpec, summarize
+
+    spec = CampaignSpec(
+        name="bodies", scenario="push", controller="pd", duration=0.3,
+        params={"push_time": 0.1, "force": 1.0}, grid={"base_body": ["base_link", "no_such_body"]},
+    )
+    run = run_campaign(spec, tmp_path, backend="inline", progress=False)
+    assert (run.n_run, run.n_error) == (2, 1)
+    records = {r["params"]["base_body"]: r for r in ResultStore(tmp_path).records()}
+    bad = records["no_such_body"]
+    assert (bad["success"], bad["status"]) == (False, "error")
+    assert bad["error"].startswith("ValueError: base_body='no_such_body' is not a body of the model")
+    assert "initialize_episode" in bad["traceback"]
+    assert records["base_link"]["status"] in ("completed", "fell") and records["base_link"]["error"] is None
+    summary = summarize(spec, list(records.values()))
+    assert summary["variants"]["default"]["n_error"] == 1
+    assert summary["errors"][0]["count"] == 1 and "no_such_body" in summary["errors"][0]["error"]
