@@ -15,7 +15,12 @@ from wbmpc.errors import ParameterError
 @register("slip")
 @dataclass(frozen=True)
 class Slip(Scenario):
-    """Walk at ``speed`` across a low-friction patch under the ``side`` foot."""
+    """Walk at ``speed`` across a low-friction patch under the ``side`` foot.
+
+    The default patch spans y in [-0.03, 0.12] m (left): the left foot's track of the ``walk`` gait
+    (which settles about 5 cm to the right of the start, footholds near y = 0 and y = -0.1 m), and
+    not the right foot's.
+    """
 
     default_duration = 12.0
 
@@ -24,8 +29,8 @@ class Slip(Scenario):
     side: str = "left"  # "left" (y > 0) or "right" (y < 0) foot's track
     x_start: float = 1.0  # [m], world x where the patch begins
     length: float = 0.4  # [m], patch length along x
-    patch_width: float = 0.08  # [m], along y, centred on the foot's track
-    track_offset: float = 0.05  # [m], |y| of the foot's track (half the preset's nominal step width)
+    patch_width: float = 0.15  # [m], along y
+    track_offset: float = 0.045  # [m], |y| of the patch centre: covers y in [-0.03, 0.12] m for "left"
 
     def __post_init__(self) -> None:
         super().__post_init__()
