@@ -73,16 +73,25 @@ class DifferentialActionModelContactFwdDynamics:
             return
         self.actuation.calc(data.tau, u)
         nc = self.nc
-        data.Jc = data.Jc_all[:nc]
-        data.a0 = data.a0_all[:nc]
-        row = 0
-        for name in self.active_contacts:
-            contact = self.contacts[name]
+        if data.active_contacts is not self.active_contacts:
+            data.active_contacts = self.active_contacts
+            data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
+            data.Jc = data.Jc_all[:nc]
+            data.a0 = data.a0_all[:nc]
+        if len(self.active_contacts) == 1:  # one stance foot: its buffers are the stacked ones
+            name = self.active_contacts[0]
             cdata = data.contacts[name]
-            contact.calc(cdata, pdata)
-            data.Jc[row:row + contact.nc] = cdata.Jc
-            data.a0[row:row + contact.nc] = cdata.a0
-            row += contact.nc
+            self.contacts[name].calc(cdata, pdata)
+            data.Jc, data.a0 = cdata.Jc, cdata.a0
+        else:
+            row = 0
+            for name in self.active_contacts:
+                contact = self.contacts[name]
+                cdata = data.contacts[name]
+                contact.calc(cdata, pdata)
+                data.Jc[row:row + contact.nc] = cdata.Jc
+                data.a0[row:row + contact.nc] = cdata.a0
+                row += contact.nc
         if nc:
             data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc, data.a0, 0.0)
             forces = pdata.lambda_c
@@ -94,9 +103,6 @@ class DifferentialActionModelContactFwdDynamics:
             contact = self.contacts[name]
             contact.update_force(data.contacts[name], pdata, forces[row:row + contact.nc])
             row += contact.nc
-        if data.active_contacts is not self.active_contacts:
-            data.active_contacts = self.active_contacts
-            data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
         data.cost = self.costs.calc(data.costs, x, u, data.shared)
 
     def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:

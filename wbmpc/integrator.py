@@ -12,7 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
-from wbmpc.kernels import euler_transition_jacobians
+from wbmpc.kernels import euler_step_tangent, euler_transition_jacobians
 
 
 class IntegratedActionModelEuler:
@@ -47,11 +47,8 @@ class IntegratedActionModelEuler:
         state = self.state
         nq, nv = state.nq, state.nv
         dt = self.dt
-        a = dd.xout
-        data.dx[:nv] = x[nq:] * dt + a * (dt * dt)
-        data.dx[nv:] = a * dt
+        euler_step_tangent(x[nq:], dd.xout, dt, data.dx, data.xnext[nq:])
         data.xnext[:nq] = pin.integrate(state.pinocchio, x[:nq], data.dx[:nv])
-        data.xnext[nq:] = x[nq:] + data.dx[nv:]
         data.cost = dt * dd.cost
 
     def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:

@@ -132,3 +132,29 @@ def cost_rows_derivatives(r, R, row_term, term_scale, w, lb, ub, gradient, hessi
     for a in range(n):
         for b in range(a + 1, n):
             hessian[b, a] = hessian[a, b]
+
+
+@njit(cache=True)
+def euler_step_tangent(v, a, dt, dx, v_next):
+    """dx = [v dt + a dt², a dt] (2 nv,) and v⁺ = v + a dt (nv,)."""
+    nv = v.size
+    dt2 = dt * dt
+    for i in range(nv):
+        dx[i] = v[i] * dt + a[i] * dt2
+        dx[nv + i] = a[i] * dt
+        v_next[i] = v[i] + a[i] * dt
+
+
+@njit(cache=True)
+def feedback_control(u, k, K, dx, alpha, out):
+    """out = u − α k − K dx (Crocoddyl's sign); returns False if the result is not finite."""
+    nu, ndx = K.shape
+    ok = True
+    for i in range(nu):
+        s = u[i] - alpha * k[i]
+        for j in range(ndx):
+            s -= K[i, j] * dx[j]
+        out[i] = s
+        if not np.isfinite(s):
+            ok = False
+    return ok

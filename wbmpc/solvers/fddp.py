@@ -26,6 +26,7 @@ import numpy as np
 from wbmpc.blas import limit_blas_threads
 from wbmpc.errors import ParameterError
 from wbmpc.problem import ShootingProblem
+from wbmpc.kernels import feedback_control
 from wbmpc.solvers.riccati import riccati_backward
 
 
@@ -298,11 +299,12 @@ class SolverFDDP:
             else:
                 self.xs_try[t] = xnext
             state.diff(self.xs[t], self.xs_try[t], out=self.dx[t])
-            self.us_try[t] = self.us[t] - self._k[t] * alpha - self._K[t] @ self.dx[t]
+            if not feedback_control(self.us[t], self._k[t], self._K[t], self.dx[t], alpha, self.us_try[t]):
+                raise ForwardPassError(f"control not finite at node {t}")
             m.calc(d, self.xs_try[t], self.us_try[t])
             xnext = d.xnext
             cost += d.cost
-            if not (math.isfinite(cost) and np.all(np.isfinite(xnext))):
+            if not (math.isfinite(cost) and math.isfinite(xnext.sum())):
                 raise ForwardPassError(f"rollout diverged at node {t}")
         if closing:
             state.integrate(xnext, self.fs[N] * (alpha - 1.0), out=self.xs_try[N])
