@@ -46,6 +46,14 @@ def test_trial_arguments_translate_force_components_phase_and_step_timing():
     assert stiff.alpha2 == STIFF_TIMING_WEIGHT and (stiff.t_min, stiff.t_max) == (base.t_min, base.t_max)
     adaptive = resolve_arguments("push", "walking", 6.0, {**params, "step_timing": "adaptive"})["sequencer_params"]
     assert adaptive == base
+    # campaign files give sequencer parameters as a preset name or a table
+    from_preset = resolve_arguments("push", "walking", 6.0, {"sequencer_params": "table_i", "step_timing": "fixed"})
+    assert from_preset["sequencer_params"].pelvis_width == SequencerParams.table_i().pelvis_width
+    assert from_preset["sequencer_params"].t_min == from_preset["sequencer_params"].t_max
+    table = resolve_arguments("push", "walking", 6.0, {"sequencer_params": {"alpha2": 5.0}})["sequencer_params"]
+    assert table.alpha2 == 5.0 and table.pelvis_width == base.pelvis_width  # the rest: Bolt preset
+    with pytest.raises(ParameterError, match=r"unknown sequencer parameter\(s\) \['alpha9'\]"):
+        resolve_arguments("push", "walking", 6.0, {"sequencer_params": {"alpha9": 5.0}})
     # no push: a zero force has a well-defined direction
     zero = resolve_arguments("push", "pd", 6.0, {"force_x": 0.0, "force_y": 0.0})
     assert zero["force"] == 0.0 and zero["direction"] == 0.0

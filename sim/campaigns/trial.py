@@ -8,6 +8,8 @@ Campaign parameters that are not arguments of :func:`sim.run_scenario` (translat
   ``push_after + phase * T_nom``, T_nom the nominal step duration of the trial's sequencer
   parameters. The phase measured from the controller's stance switches is recorded in the result
   (``metrics["push_phase_measured"]``): it can differ from the nominal one when the gait drifts.
+- ``sequencer_params`` may be a preset name (``"table_i"``) or a table of fields that override the
+  Bolt walking preset (campaign files).
 - ``step_timing`` (controller "walking"): "adaptive" (the sequencer's preset, the paper's
   controller), "fixed" (T_min = T_max = T_nom: the step duration cannot change) or "stiff" (the
   timing weight alpha_2 raised to ``STIFF_TIMING_WEIGHT``: timing changes cost far more than
@@ -144,6 +146,15 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
 
     arguments = dict(params)
     arguments.setdefault("progress", False)
+    if isinstance(arguments.get("sequencer_params"), (str, dict)):
+        from sequencer import SequencerParams
+
+        given = arguments["sequencer_params"]
+        arguments["sequencer_params"] = (
+            SequencerParams.preset(given)
+            if isinstance(given, str)
+            else SequencerParams.from_dict({**SequencerParams.bolt_walking().to_dict(), **given}, "sequencer_params")
+        )
     step_timing = arguments.pop("step_timing", None)
     if step_timing is not None:
         arguments["sequencer_params"] = _sequencer_params(step_timing, arguments.get("sequencer_params"))
