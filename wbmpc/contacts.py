@@ -22,7 +22,9 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
-from wbmpc.kernels import contact3d_drift_derivative, contact3d_force_rnea_term
+from wbmpc.kernels import contact3d_drift_derivative, contact3d_force_terms
+
+_ZERO3 = np.zeros(3)
 from wbmpc.state import StateMultibody
 
 
@@ -43,6 +45,7 @@ class ContactData:
         self.df_dx = np.zeros((nc, ndx))
         self.df_du = np.zeros((nc, nu))
         self.fext = pin.Force.Zero()
+        self.fext_vector = np.zeros(6)
         self.dtau_dq = None  # (nv, nv) extra RNEA derivative of a world-aligned force, or None
         self.fJf = np.zeros((6, nv))
         self.velocity = pin.Motion.Zero()
@@ -64,6 +67,8 @@ class _ContactBase:
         self.joint_id = model.frames[frame_id].parentJoint
         self.joint_placement_frame = model.frames[frame_id].placement  # jMf
         self.fXj = self.joint_placement_frame.inverse().toActionMatrix()
+        self._jRf = self.joint_placement_frame.rotation.copy()
+        self._jpf = self.joint_placement_frame.translation.copy()
         self.gains = (kp, kd)
 
     def createData(self, nu: int) -> ContactData:
@@ -107,18 +112,16 @@ class ContactModel3D(_ContactBase):
         v_dq, a_dq, a_dv, _ = pin.getJointAccelerationDerivatives(model, pdata, self.joint_id, pin.LOCAL)
         fJf = data.fJf
         velocity = pin.getFrameVelocity(model, pdata, fid, pin.LOCAL)
-        # drift re-evaluated with the current joint accelerations (rotation derivative term)
-        a0_local = pin.getFrameClassicalAcceleration(model, pdata, fid, pin.LOCAL).linear
         oMf = pdata.oMf[fid]
         oRf = oMf.rotation
         kp, kd = self.gains
         if kp != 0.0:
             data.position_error_local[:] = oRf.T @ (oMf.translation - self.reference)
-            a0_local += kp * data.position_error_local
-        if kd != 0.0:
-            a0_local += kd * velocity.linear
+        # The rotation term of ∂(oRf a0_local)/∂q multiplies a0_local evaluated at the solved
+        # accelerations, J a + drift + Baumgarte = 0 for an enforced contact (Crocoddyl evaluates
+        # it numerically, ~1e-15): it vanishes.
         contact3d_drift_derivative(self.fXj, v_dq, a_dq, a_dv, fJf, velocity.linear, velocity.angular,
-                                   data.position_error_local, a0_local, oRf, kp, kd, data.da0_dx)
+                                   data.position_error_local, _ZERO3, oRf, kp, kd, data.da0_dx)
 
     def update_force(self, data: ContactData, pdata: pin.Data, force: np.ndarray) -> None:
         """Store the contact force (3,) [N, world axes] (from calc)."""
@@ -130,10 +133,11 @@ class ContactModel3D(_ContactBase):
         Called by the dynamics' calcDiff before the RNEA derivatives (and before :meth:`calcDiff`).
         """
         data.fJf[:] = pin.getFrameJacobian(self.state.pinocchio, pdata, self.frame_id, pin.LOCAL)
-        oRf = pdata.oMf[self.frame_id].rotation
-        f_local = oRf.T @ data.force
-        data.fext = self.joint_placement_frame.act(pin.Force(f_local, np.zeros(3)))
-        data.dtau_dq = contact3d_force_rnea_term(data.fJf, f_local)
+        if data.dtau_dq is None:
+            data.dtau_dq = np.zeros((self.state.nv, self.state.nv))
+        contact3d_force_terms(data.fJf, pdata.oMf[self.frame_id].rotation, data.force, self._jRf, self._jpf,
+                              data.fext_vector, data.dtau_dq)
+        data.fext = pin.Force(data.fext_vector)
 
 
 class ContactModel6D(_ContactBase):

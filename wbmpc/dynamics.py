@@ -129,12 +129,6 @@ class DifferentialActionModelContactFwdDynamics:
             data.fext[contact.joint_id] = cdata.fext
             data.fext_joints.append(contact.joint_id)
         pin.computeRNEADerivatives(model, pdata, q, v, data.xout, data.fext)
-        dtau_dq = pdata.dtau_dq
-        for name in self.active_contacts:
-            extra = data.contacts[name].dtau_dq
-            if extra is not None:
-                dtau_dq = dtau_dq + extra
-        dtau_dv = pdata.dtau_dv
         if nc:
             Kinv = pin.getKKTContactDynamicMatrixInverse(model, pdata, data.Jc)
         else:
@@ -149,8 +143,12 @@ class DifferentialActionModelContactFwdDynamics:
             row += contact.nc
         # [∂a/∂x; −∂λ/∂x] = −Kinv [∂τ/∂x (RNEA with contact forces); ∂a0/∂x]
         D = data.D[: nv + nc]
-        D[:nv, :nv] = dtau_dq
-        D[:nv, nv:] = dtau_dv
+        D[:nv, :nv] = pdata.dtau_dq
+        for name in self.active_contacts:
+            extra = data.contacts[name].dtau_dq
+            if extra is not None:
+                D[:nv, :nv] += extra
+        D[:nv, nv:] = pdata.dtau_dv
         D[nv:] = da0_dx
         KD = Kinv @ D
         np.negative(KD[:nv], out=data.Fx)

@@ -12,7 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
-from wbmpc.kernels import euler_step_tangent, euler_transition_jacobians
+from wbmpc.kernels import euler_step_tangent, euler_transition_jacobians, scale_cost_derivatives
 
 
 class IntegratedActionModelEuler:
@@ -71,11 +71,9 @@ class IntegratedActionModelEuler:
         J_dq = pin.dIntegrate(model, q, dq, pin.ARG1)
         J_q = pin.dIntegrate(model, q, dq, pin.ARG0)
         euler_transition_jacobians(dd.Fx, dd.Fu, J_q, J_dq, dt, data.Fx, data.Fu)
-        np.multiply(dd.Lx, dt, out=data.Lx)
-        np.multiply(dd.Lu, dt, out=data.Lu)
-        np.multiply(dd.Lxx, dt, out=data.Lxx)
-        np.multiply(dd.Lxu, dt, out=data.Lxu)
-        np.multiply(dd.Luu, dt, out=data.Luu)
+        costs = dd.costs
+        scale_cost_derivatives(dt, costs.gradient, costs.hessian, state.ndx,
+                               data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu)
 
 
 class IntegratedActionDataEuler:

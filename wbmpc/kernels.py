@@ -49,12 +49,6 @@ def contact3d_drift_derivative(fXj, v_dq, a_dq, a_dv, fJf, v_linear, v_angular, 
 
 
 @njit(cache=True)
-def contact3d_force_rnea_term(fJf, f_local):
-    """−J_linᵀ [f]× J_ang (nv, nv): the RNEA derivative of a world-aligned point force."""
-    return -np.dot(np.ascontiguousarray(fJf[:3].T), np.dot(skew3(f_local), fJf[3:]))
-
-
-@njit(cache=True)
 def euler_transition_jacobians(da_dx, da_du, J_q, J_dq, dt, Fx, Fu):
     """Fx (ndx, ndx), Fu (ndx, nu) of q⁺ = q ⊕ (v dt + a dt²), v⁺ = v + a dt.
 
@@ -158,3 +152,32 @@ def feedback_control(u, k, K, dx, alpha, out):
         if not np.isfinite(s):
             ok = False
     return ok
+
+
+@njit(cache=True)
+def contact3d_force_terms(fJf, oRf, force_world, jRf, jpf, fext, dtau_dq):
+    """For a world-aligned point force: the spatial force on the parent joint (6,) = jMf·(f_local, 0)
+    and the RNEA derivative term −J_linᵀ [f_local]× J_ang (nv, nv)."""
+    f_local = np.dot(oRf.T, force_world)
+    linear = np.dot(jRf, f_local)
+    fext[:3] = linear
+    fext[3] = jpf[1] * linear[2] - jpf[2] * linear[1]
+    fext[4] = jpf[2] * linear[0] - jpf[0] * linear[2]
+    fext[5] = jpf[0] * linear[1] - jpf[1] * linear[0]
+    dtau_dq[:, :] = -np.dot(np.ascontiguousarray(fJf[:3].T), np.dot(skew3(f_local), fJf[3:]))
+
+
+@njit(cache=True)
+def scale_cost_derivatives(dt, gradient, hessian, ndx, Lx, Lu, Lxx, Lxu, Luu):
+    """Integrated cost derivatives: dt × the continuous gradient (ndx + nu,) and Hessian blocks."""
+    n = gradient.size
+    for i in range(ndx):
+        Lx[i] = dt * gradient[i]
+        for j in range(ndx):
+            Lxx[i, j] = dt * hessian[i, j]
+        for j in range(ndx, n):
+            Lxu[i, j - ndx] = dt * hessian[i, j]
+    for i in range(ndx, n):
+        Lu[i - ndx] = dt * gradient[i]
+        for j in range(ndx, n):
+            Luu[i - ndx, j - ndx] = dt * hessian[i, j]
