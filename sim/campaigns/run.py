@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from sim.campaigns.backends import make_backend
+from sim.campaigns.backends import BACKENDS, make_backend
 from sim.campaigns.errors import CampaignDirectoryError
 from sim.campaigns.spec import CampaignSpec
 from sim.campaigns.store import ResultStore
@@ -110,7 +110,12 @@ def run_campaign(
         todo = todo[:max_trials]
 
     owns_backend = isinstance(backend, str)
-    runner = make_backend(backend, workers=workers, address=address) if owns_backend else backend
+    if owns_backend:
+        # no pool or Ray instance is started when nothing is left to run (an unknown name still raises)
+        start = todo or backend not in BACKENDS
+        runner = make_backend(backend, workers=workers, address=address) if start else make_backend("inline")
+    else:
+        runner = backend
     if progress is None:
         progress = sys.stderr.isatty()
     bar = None
@@ -144,7 +149,7 @@ def run_campaign(
         n_error=n_error,
         n_remaining=len(trials) - n_skipped - n_run,
         wall_time=time.perf_counter() - tic,
-        backend=getattr(runner, "name", type(runner).__name__),
+        backend=backend if owns_backend else getattr(runner, "name", type(runner).__name__),
         workers=int(getattr(runner, "workers", 1)),
     )
 
