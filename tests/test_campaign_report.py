@@ -50,6 +50,9 @@ def test_force_map_phase_rates_and_timing_comparison():
     phase = {e["phase"]: e for e in summary["phase"]["fixed"]}
     assert phase[0.0]["success_rate"] == pytest.approx(3 / 15) and phase[0.5]["success_rate"] == 0.0
     assert phase[0.5]["measured_phase_mean"] == pytest.approx(0.55)
+    bins = summary["phase_measured"]["fixed"]  # measured 0.05 and 0.55: bins [0, 0.2) and [0.4, 0.6)
+    assert [b["n"] for b in bins] == [15, 0, 15, 0, 0]
+    assert bins[0]["success_rate"] == pytest.approx(3 / 15) and bins[0]["phase_range"] == [0.0, 0.2]
     (comparison,) = summary["comparisons"]
     assert (comparison["variant"], comparison["baseline"], comparison["n_pairs"]) == ("adaptive", "fixed", 30)
     # 18 adaptive successes against 3 fixed: +15 / 30 pairs = +50 points, +500 % successes
@@ -104,3 +107,14 @@ def test_terrain_campaign_spans_seeds_and_densities(tmp_path):
     assert spec.controller == "walking" and len(trials) == 6
     assert sorted({t.seed for t in trials}) == [0, 1, 2]
     assert sorted({t.arguments["density"] for t in trials}) == [5.0, 10.0]
+
+
+def test_measured_phase_wraps_around_the_step():
+    from sim.campaigns.report import _circular_mean, _measured_phase
+
+    wrapped = _circular_mean([0.95, 0.05])
+    assert min(wrapped, 1.0 - wrapped) < 1e-9  # 0 on the circle, not 0.5
+    assert _circular_mean([0.2, 0.4]) == pytest.approx(0.3)
+    assert _circular_mean([]) is None
+    assert _measured_phase({"metrics": {"push_phase_measured": 1.25}}) == pytest.approx(0.25)  # a late step
+    assert _measured_phase({"metrics": {}}) is None

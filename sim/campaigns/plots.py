@@ -68,22 +68,40 @@ def plot_force_maps(summary: dict[str, Any], path: str | Path) -> str:
 
 
 def plot_success_by_phase(summary: dict[str, Any], path: str | Path) -> str:
-    """Grouped bars: success rate per (nominal) gait phase of the push, one colour per variant."""
+    """Success rate per gait phase of the push, one colour per variant: by the nominal phase (left)
+    and, when measured, by bins of the measured phase (right, with the trial counts)."""
     plt = _pyplot()
+    measured = summary.get("phase_measured")
+    fig, axes = plt.subplots(1, 2 if measured else 1, figsize=(12.0 if measured else 6.4, 3.6), squeeze=False)
     phases = summary["phase"]
     variants = list(phases)
-    values = [e["phase"] for e in phases[variants[0]]]
     width = 0.8 / len(variants)
-    fig, ax = plt.subplots(figsize=(6.4, 3.6))
-    for k, variant in enumerate(variants):
-        rates = [np.nan if e["success_rate"] is None else e["success_rate"] for e in phases[variant]]
-        ax.bar(np.arange(len(values)) + (k - (len(variants) - 1) / 2) * width, rates, width, label=variant)
-    ax.set_xticks(np.arange(len(values)), [f"{v:.2f}" for v in values])
-    ax.set_xlabel("gait phase of the push (fraction of the nominal step)")
-    ax.set_ylabel("success rate")
-    ax.set_ylim(0.0, 1.05)
-    ax.legend(fontsize=8)
-    ax.set_title(f"campaign {summary['campaign']}: success per gait phase", fontsize=10)
+
+    def bars(ax, labels, rates_by_variant, counts_by_variant=None):
+        for k, variant in enumerate(variants):
+            rates = [np.nan if r is None else r for r in rates_by_variant[variant]]
+            x = np.arange(len(labels)) + (k - (len(variants) - 1) / 2) * width
+            ax.bar(x, rates, width, label=variant)
+            if counts_by_variant is not None:
+                for xi, n in zip(x, counts_by_variant[variant]):
+                    ax.text(xi, 0.02, str(n), ha="center", fontsize=7)
+        ax.set_xticks(np.arange(len(labels)), labels)
+        ax.set_ylabel("success rate")
+        ax.set_ylim(0.0, 1.05)
+        ax.legend(fontsize=8)
+
+    nominal = [f"{e['phase']:.2f}" for e in phases[variants[0]]]
+    bars(axes[0][0], nominal, {v: [e["success_rate"] for e in phases[v]] for v in variants})
+    axes[0][0].set_xlabel("nominal gait phase of the push (fraction of T_nom)")
+    axes[0][0].set_title(f"{summary['campaign']}: success per gait phase", fontsize=10)
+    if measured:
+        labels = [f"[{e['phase_range'][0]:.1f}, {e['phase_range'][1]:.1f})" for e in measured[variants[0]]]
+        bars(
+            axes[0][1], labels, {v: [e["success_rate"] for e in measured[v]] for v in variants},
+            {v: [e["n"] for e in measured[v]] for v in variants},
+        )
+        axes[0][1].set_xlabel("measured gait phase at the push (bins; numbers: trials)")
+        axes[0][1].set_title("success per measured phase", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -6,6 +6,11 @@ robot recovered and kept walking, the ALIP paper's criterion: "still walking aft
 Trials that raised count as failures and are also counted apart (``n_error``): an error is a
 bug or a solver breakdown, worth reading before trusting the map.
 
+Gait phase: the grid's ``phase`` is nominal (push time = push_after + phase * T_nom). The phase
+the push actually hit is measured from the controller's stance switches; it drifts with the gait,
+and differently per variant (a step-timing variant changes the gait itself), so the report also
+bins success by the measured phase (``phase_measured``).
+
 Variant comparison (e.g. adaptive against fixed step timing): on the pairs of trials that share a
 point and a seed, both recorded,
 
@@ -30,6 +35,7 @@ from sim.campaigns.trial import make_trials
 
 PAPER_TIMING_GAIN = 0.36  # ALIP paper: adaptive step timing, +36 % successful push recoveries (G1)
 MAX_ERROR_KINDS = 5
+MEASURED_PHASE_BINS = 5  # bins of the measured push phase over [0, 1)
 
 
 def _stats(records: list[dict[str, Any]]) -> dict[str, Any]:
@@ -44,6 +50,20 @@ def _stats(records: list[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
+def _measured_phase(record: dict[str, Any]) -> float | None:
+    """The push's measured gait phase wrapped to [0, 1) (None when not measured)."""
+    value = record.get("metrics", {}).get("push_phase_measured")
+    return None if value is None else float(value) % 1.0
+
+
+def _circular_mean(phases: list[float]) -> float | None:
+    """Mean of phases in [0, 1) on the circle (0.95 and 0.05 average to 0.0, not 0.5)."""
+    if not phases:
+        return None
+    angle = 2 * np.pi * np.asarray(phases)
+    return float(np.arctan2(np.sin(angle).mean(), np.cos(angle).mean()) / (2 * np.pi) % 1.0)
+
+
 def summarize(spec: CampaignSpec, records: list[dict[str, Any]]) -> dict[str, Any]:
     """Summary of the ``records`` of campaign ``spec`` (records of other specs are ignored).
 
@@ -51,7 +71,8 @@ def summarize(spec: CampaignSpec, records: list[dict[str, Any]]) -> dict[str, An
         A JSON-able dict: ``variants`` (stats per variant), ``axes`` (per grid axis, per variant, per
         value), ``force_map`` (when the grid has force_x and force_y: success rate, shape
         (n_force_y, n_force_x), None where nothing is recorded), ``phase`` (when the grid has
-        phase, with the mean measured phase), ``comparisons`` (each other variant against the
+        phase, with the circular mean of the measured phase), ``phase_measured`` (success per bin
+        of the measured phase, wrapped to [0, 1)), ``comparisons`` (each other variant against the
         first one, on paired trials) and ``errors`` (most frequent error texts).
     """
     trials = make_trials(spec)
@@ -96,21 +117,25 @@ def summarize(spec: CampaignSpec, records: list[dict[str, Any]]) -> dict[str, An
         summary["force_map"] = maps
 
     if "phase" in spec.grid:
-        phases = {}
+        phases, measured_bins = {}, {}
         for v in variants:
             entries = []
             for value in spec.grid["phase"]:
                 selected = [r for t, r in rows if t.variant == v and t.params.get("phase") == value]
-                measured = [
-                    r["metrics"].get("push_phase_measured")
-                    for r in selected
-                    if r.get("metrics", {}).get("push_phase_measured") is not None
-                ]
-                entries.append(
-                    {"phase": value, **_stats(selected), "measured_phase_mean": float(np.mean(measured)) if measured else None}
-                )
+                measured = [_measured_phase(r) for r in selected if _measured_phase(r) is not None]
+                entries.append({"phase": value, **_stats(selected), "measured_phase_mean": _circular_mean(measured)})
             phases[v] = entries
+            with_phase = [r for t, r in rows if t.variant == v and _measured_phase(r) is not None]
+            measured_bins[v] = [
+                {
+                    "phase_range": [k / MEASURED_PHASE_BINS, (k + 1) / MEASURED_PHASE_BINS],
+                    **_stats([r for r in with_phase if int(_measured_phase(r) * MEASURED_PHASE_BINS) == k]),
+                }
+                for k in range(MEASURED_PHASE_BINS)
+            ]
         summary["phase"] = phases
+        if any(entry["n"] for entries in measured_bins.values() for entry in entries):
+            summary["phase_measured"] = measured_bins
 
     if len(variants) > 1:
         pairs: dict[int, dict[str, bool]] = defaultdict(dict)
@@ -168,6 +193,12 @@ def format_summary(summary: dict[str, Any]) -> str:
             for e in entries
         )
         lines.append(f"  per phase, {variant}: {cells}")
+    for variant, entries in summary.get("phase_measured", {}).items():
+        cells = "  ".join(
+            f"[{e['phase_range'][0]:.1f},{e['phase_range'][1]:.1f}):{pct(e['success_rate']).strip()} ({e['n']})"
+            for e in entries
+        )
+        lines.append(f"  per measured phase, {variant}: {cells}")
     for axis, by_variant in summary["axes"].items():
         if axis in ("phase", "force_x", "force_y") or len(next(iter(by_variant.values()))) < 2:
             continue
