@@ -107,6 +107,15 @@ def test_terrain_campaign_spans_seeds_and_densities(tmp_path):
     assert spec.controller == "walking" and len(trials) == 6
     assert sorted({t.seed for t in trials}) == [0, 1, 2]
     assert sorted({t.arguments["density"] for t in trials}) == [5.0, 10.0]
+    # a real (short, PD) terrain campaign: the report plots success along the density axis
+    code = main([
+        "campaign", "terrain", "--controller", "pd", "--seeds", "2", "--densities", "5", "40", "--duration", "0.2",
+        "--backend", "inline", "--out", str(tmp_path), "--no-progress",
+    ])
+    assert code == 0
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["n_recorded"] == 4 and [e["value"] for e in summary["axes"]["density"]["default"]] == [5.0, 40.0]
+    assert (tmp_path / "axes.png").stat().st_size > 0 and not (tmp_path / "force_map.png").exists()
 
 
 def test_measured_phase_wraps_around_the_step():
