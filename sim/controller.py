@@ -298,7 +298,12 @@ class WalkingController:
         record["next_touchdown_time"] = float(step.touchdown_time)
 
         tic = time.perf_counter()
-        schedule = contact_schedule(self.plan, t, cfg.node_dt, cfg.n_nodes)
+        plan_for_mpc = self.plan
+        if cfg.touchdown_detection == "contact":
+            plan_for_mpc, record["touchdown_wait"] = _wait_for_touchdown(
+                self.plan, t, measurement.foot_in_contact[self.feet.index(step.foot)], cfg.node_dt
+            )
+        schedule = contact_schedule(plan_for_mpc, t, cfg.node_dt, cfg.n_nodes)
         com_terminal = _terminal_com(self.plan, t + cfg.n_nodes * cfg.node_dt, com, self.com_height)
         injected = bool(self._pending_failures) and t >= self._pending_failures[0] - 1e-9
         if injected:
@@ -415,6 +420,31 @@ def _with_velocity(params: Any, command: tuple[float, float]) -> Any:
     elif v_y != 0.0:
         raise ParameterError(f"velocity_command v_y={v_y} m/s: the sequencer only takes a forward speed")
     return dataclasses.replace(params, **changes)
+
+
+TOUCHDOWN_WAIT_NODES = 2
+"""With contact detection, a swing foot still in the air when its touchdown is due is kept swinging
+(and driven down by the height cost) for this many more nodes in the OCP's schedule."""
+
+
+def _wait_for_touchdown(plan: Any, t: float, swing_foot_in_contact: bool, node_dt: float) -> tuple[Any, float]:
+    """The plan shifted in time so that a due but not yet measured touchdown lies ahead.
+
+    The sequencer re-plans a late touchdown to "now"; sampled as is, the OCP would hold the swing
+    foot as a rigid contact wherever it is in the air (3-7 cm above the ground were seen), and the
+    next solutions ask for large torques. Instead the whole sequence is delayed so that the swing
+    ends ``TOUCHDOWN_WAIT_NODES`` nodes from now, its height reference reaching the ground there.
+
+    Returns:
+        (plan to sample, delay applied [s], 0 when none).
+    """
+    first = plan.steps[0]
+    target = t + TOUCHDOWN_WAIT_NODES * node_dt
+    if swing_foot_in_contact or first.touchdown_time >= target:
+        return plan, 0.0
+    delay = target - first.touchdown_time
+    steps = tuple(dataclasses.replace(s, touchdown_time=s.touchdown_time + delay) for s in plan.steps)
+    return dataclasses.replace(plan, steps=steps), delay
 
 
 def _terminal_com(plan: Any, t_horizon: float, com: np.ndarray, height: float) -> np.ndarray:

@@ -65,6 +65,7 @@ class StanceTracker:
             raise ParameterError(f"stance foot {foot!r} must be one of {self.feet}")
         self.state = StanceState(foot, np.array(position_xy[:2], dtype=float), float(t_start))
         self.n_switches = 0
+        self.due_since: float | None = None  # first time the current swing's touchdown was due
 
     def update(
         self,
@@ -94,12 +95,18 @@ class StanceTracker:
             touched = t >= next_touchdown_time - 1e-9
             t_switch = min(float(next_touchdown_time), t)
         else:
+            # the sequencer re-plans a late touchdown to "now", so lateness counts from the first time
+            # the touchdown was due, not from the latest plan
+            if self.due_since is None and t >= next_touchdown_time - 1e-9:
+                self.due_since = t
             half_swing = swing_start_time + 0.5 * (next_touchdown_time - swing_start_time)
             in_contact = bool(foot_in_contact[index])
-            touched = (in_contact and t >= half_swing) or t >= next_touchdown_time + self.late_tolerance - 1e-9
+            late = self.due_since is not None and t >= self.due_since + self.late_tolerance - 1e-9
+            touched = (in_contact and t >= half_swing) or late
             t_switch = t
         if not touched:
             return False
         self.state = StanceState(next_touchdown_foot, np.array(feet_position_world[index, :2]), t_switch)
         self.n_switches += 1
+        self.due_since = None
         return True

@@ -112,3 +112,20 @@ def test_computation_delay_applies_a_new_solution_only_after_the_latency(control
     np.testing.assert_array_equal(controller.compute(0.515, measurement), reference.us[1])
     # from 0.52 s on the newer one applies, at its node 1 (10 ms after its own t)
     np.testing.assert_array_equal(controller.compute(0.52, measurement), newer.us[1])
+
+
+def test_a_due_touchdown_not_yet_measured_is_delayed_in_the_schedule():
+    from sequencer import FootstepSequencer, SequencerParams
+    from sim.controller import TOUCHDOWN_WAIT_NODES, _wait_for_touchdown
+
+    plan = FootstepSequencer(SequencerParams.bolt_walking()).plan(
+        t=0.0, stance_foot="left", stance_position=[0.0, 0.05], dcm_measured=[0.0, 0.0], t_stance_start=0.0
+    )
+    first = plan.steps[0].touchdown_time
+    t = first - 0.005  # touchdown due in 5 ms, the foot still in the air
+    delayed, delay = _wait_for_touchdown(plan, t, False, 0.01)
+    assert delay == pytest.approx(t + TOUCHDOWN_WAIT_NODES * 0.01 - first)
+    np.testing.assert_allclose(delayed.touchdown_times, plan.touchdown_times + delay)
+    np.testing.assert_array_equal(delayed.positions, plan.positions)
+    same, no_delay = _wait_for_touchdown(plan, t, True, 0.01)  # foot already on the ground
+    assert same is plan and no_delay == 0.0
