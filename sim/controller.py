@@ -35,6 +35,7 @@ from sim.stance import TOUCHDOWN_DETECTIONS, StanceTracker
 from wbmpc.errors import ParameterError
 
 GRAVITY = 9.81  # [m/s^2]
+VELOCITY_FILTER_TIME = 1.0  # [s], low-pass time constant of the measured speed (velocity integral)
 
 
 @runtime_checkable
@@ -109,6 +110,11 @@ class WalkingControllerConfig:
         first_stance_foot: stance foot at t0 (both feet are on the ground at start; the other one
             takes the first step).
         velocity_command: initial (v_x, v_y) command [m/s] (world frame); None keeps the preset's.
+        velocity_integral_gain: integral action on the walking speed [1/s] (0 = off, the paper): the
+            sequencer is given v* + k ∫ (v* − v̄) dt, v̄ the CoM velocity low-passed over 1 s,
+            the correction bounded by ``velocity_correction_max``. It removes the steady speed
+            bias of the LIPM sequencer on Bolt (docs/closed_loop.md); not part of the paper.
+        velocity_correction_max: bound of that correction [m/s].
         mpc_failure_times: injected failures [s]: the MPC update at the first replan at or after
             each time is discarded as if the solver had failed (the last good solution is kept).
         sequencer_params: ``sequencer.SequencerParams``; None = ``SequencerParams.bolt_walking()``.
@@ -129,6 +135,8 @@ class WalkingControllerConfig:
     touchdown_detection: str = "contact"
     first_stance_foot: str = "left"
     velocity_command: tuple[float, float] | None = None
+    velocity_integral_gain: float = 0.0
+    velocity_correction_max: float = 0.3
     mpc_failure_times: tuple[float, ...] = ()
     sequencer_params: Any = None
     sequencer_backend: str = "exact"
@@ -143,6 +151,10 @@ class WalkingControllerConfig:
                 raise ParameterError(f"{name}={value} s must be a finite positive number")
         if not (np.isfinite(self.computation_delay) and 0.0 <= self.computation_delay <= 0.1):
             raise ParameterError(f"computation_delay={self.computation_delay} s must be in [0, 0.1] s")
+        if not (np.isfinite(self.velocity_integral_gain) and self.velocity_integral_gain >= 0):
+            raise ParameterError(f"velocity_integral_gain={self.velocity_integral_gain} 1/s must be >= 0")
+        if not (np.isfinite(self.velocity_correction_max) and self.velocity_correction_max >= 0):
+            raise ParameterError(f"velocity_correction_max={self.velocity_correction_max} m/s must be >= 0")
         if self.delay_nodes not in (0, 1):
             raise ParameterError(f"delay_nodes={self.delay_nodes!r} must be 0 (no delay) or 1 (paper)")
         if self.touchdown_detection not in TOUCHDOWN_DETECTIONS:
@@ -203,6 +215,9 @@ class WalkingController:
             params = _with_velocity(params, cfg.velocity_command)
         self.sequencer_params = params
         self.sequencer = FootstepSequencer(params, backend=cfg.sequencer_backend)
+        self.command = np.array([params.v_x, getattr(params, "v_y", 0.0)], dtype=float)
+        self._velocity_filtered = self.command * 0.0
+        self._velocity_integral = np.zeros(2)
         self.com_height = _com_height(params)  # LIPM z_c [m], also the terminal CoM height reference
         self.omega = float(np.sqrt(GRAVITY / self.com_height))
         self.mpc = WalkingMPC(
@@ -226,12 +241,29 @@ class WalkingController:
 
     def set_velocity_command(self, v_x: float, v_y: float = 0.0) -> None:
         """Change the walking velocity command [m/s] (takes effect at the next replan)."""
+        self.command = np.array([v_x, v_y], dtype=float)
+        self._apply_sequencer_velocity(self.command + self._velocity_correction())
+
+    def _velocity_correction(self) -> np.ndarray:
+        bound = self.config.velocity_correction_max
+        return np.clip(self.config.velocity_integral_gain * self._velocity_integral, -bound, bound)
+
+    def _apply_sequencer_velocity(self, velocity: np.ndarray) -> None:
         from sequencer import FootstepSequencer
 
-        params = _with_velocity(self.sequencer_params, (v_x, v_y))
-        if params != self.sequencer_params:
-            self.sequencer_params = params
-            self.sequencer = FootstepSequencer(params, backend=self.config.sequencer_backend)
+        current = np.array([self.sequencer_params.v_x, getattr(self.sequencer_params, "v_y", 0.0)])
+        if np.max(np.abs(current - velocity)) > 1e-4:
+            self.sequencer_params = _with_velocity(self.sequencer_params, tuple(velocity))
+            self.sequencer = FootstepSequencer(self.sequencer_params, backend=self.config.sequencer_backend)
+
+    def _update_velocity_integral(self, com_velocity_xy: np.ndarray) -> None:
+        if self.config.velocity_integral_gain <= 0:
+            return
+        period = self.config.replan_period
+        alpha = period / (VELOCITY_FILTER_TIME + period)
+        self._velocity_filtered += alpha * (com_velocity_xy - self._velocity_filtered)
+        self._velocity_integral += (self.command - self._velocity_filtered) * period
+        self._apply_sequencer_velocity(self.command + self._velocity_correction())
 
     # ------------------------------------------------------------------ helpers
     def _feet_position(self, q: np.ndarray) -> np.ndarray:
@@ -251,6 +283,7 @@ class WalkingController:
         x = measurement.x
         q, v = x[: self.nq], x[self.nq :]
         com, dcm = self._dcm(q, v)
+        self._update_velocity_integral(np.array(self.data.vcom[0][:2]))
         feet_world = self._feet_position(q)
 
         # Stance switch from the previous plan (touchdown time reached, or early contact).
@@ -273,6 +306,7 @@ class WalkingController:
             "dcm_x": dcm[0],
             "dcm_y": dcm[1],
             "sequencer_ok": 1.0,
+            "sequencer_v_x": float(self.sequencer_params.v_x),
         }
 
         tic = time.perf_counter()
