@@ -15,6 +15,7 @@ ResidualState                  ResidualModelState
 ResidualControl                ResidualModelControl
 ResidualFrameTranslation       ResidualModelFrameTranslation
 ResidualFrameHeight            ResidualModelFrameTranslation + weights (0, 0, 1)
+ResidualFrameVelocity          ResidualModelFrameVelocity(..., LOCAL)
 ResidualCoMPosition            ResidualModelCoMPosition
 ResidualContactForce           ResidualModelContactForce
 ResidualFrictionCone           ResidualModelContactFrictionCone
@@ -38,6 +39,7 @@ from wbmpc.residuals import (
     ResidualControl,
     ResidualFrameHeight,
     ResidualFrameTranslation,
+    ResidualFrameVelocity,
     ResidualFrictionCone,
     ResidualState,
 )
@@ -95,6 +97,9 @@ class CrocoddylMirror:
             if isinstance(cost.activation, ActivationWeightedQuad):
                 weights = weights * cost.activation.weights[0]
             activation = croc.ActivationModelWeightedQuad(weights)
+        elif isinstance(residual, ResidualFrameVelocity):
+            r = croc.ResidualModelFrameVelocity(self.state, residual.frame_id, pin.Motion(residual.reference),
+                                                pin.LOCAL, nu)
         elif isinstance(residual, ResidualCoMPosition):
             r = croc.ResidualModelCoMPosition(self.state, residual.reference.copy(), nu)
         elif isinstance(residual, ResidualContactForce):
@@ -156,5 +161,7 @@ class CrocoddylMirror:
                 elif isinstance(residual, ResidualContactForce):
                     ref = residual.reference
                     twin.reference = pin.Force(ref) if ref.size == 6 else pin.Force(ref, np.zeros(3))
+                elif isinstance(residual, ResidualFrameVelocity):
+                    twin.reference = pin.Motion(residual.reference)
                 elif isinstance(residual, (ResidualFrameTranslation, ResidualCoMPosition, ResidualState, ResidualControl)):
                     twin.reference = residual.reference.copy()

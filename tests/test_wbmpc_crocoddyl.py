@@ -16,6 +16,7 @@ from wbmpc_fixtures import alternating_schedule, random_state, standing_state  #
 
 pytestmark = pytest.mark.crocoddyl
 ALL_TERMS = WalkingOCPConfig(foothold_weight=100.0, contact_force_weight=1e-2, friction_cone_weight=10.0,
+                             touchdown_height_weight=1e5, touchdown_velocity_weight=1e3,
                              baumgarte_gains=(20.0, 40.0))
 
 

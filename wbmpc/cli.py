@@ -23,6 +23,7 @@ SUBCOMMAND_MODULES: list[str] = [
     "bench.cli",
     "sim.cli",
     "robots.cli",
+    "wbmpc.ocp_cli",
     "sim.campaigns.cli",
 ]
 

@@ -11,6 +11,7 @@ from wbmpc.residuals.contact_force import ResidualContactForce
 from wbmpc.residuals.control import ResidualControl
 from wbmpc.residuals.frame_height import ResidualFrameHeight
 from wbmpc.residuals.frame_translation import ResidualFrameTranslation
+from wbmpc.residuals.frame_velocity import ResidualFrameVelocity
 from wbmpc.residuals.friction_cone import ResidualFrictionCone
 from wbmpc.residuals.state import ResidualState
 
@@ -22,6 +23,7 @@ __all__ = [
     "ResidualControl",
     "ResidualFrameHeight",
     "ResidualFrameTranslation",
+    "ResidualFrameVelocity",
     "ResidualFrictionCone",
     "ResidualState",
 ]
