@@ -67,7 +67,8 @@ class SolverFDDP:
         xs (N + 1, nx), us (N, nu): current solution.
         K (N, nu, ndx): feedback gains, library sign (u = us[k] + K[k] (x ⊖ xs[k])).
         k (N, nu): feedforward search direction, library sign.
-        cost, stop, iter, is_feasible, preg, steplength, log (list of :class:`IterationLog`).
+        cost, stop, is_feasible, preg, steplength, log (list of :class:`IterationLog`, one per
+        iteration run), iter (Crocoddyl's meaning: index of the converging iteration, or maxiter).
 
     Options (attributes): reg_min=1e-9, reg_max=1e9, reg_incfactor=10, reg_decfactor=10,
         th_stop=1e-9, th_grad=1e-12, th_acceptstep=0.1, th_acceptnegstep=2, th_stepdec=0.5,
@@ -201,8 +202,7 @@ class SolverFDDP:
             for callback in self.callbacks:
                 callback(self)
             if self.was_feasible and self.stop < self.th_stop:
-                self.iter += 1
-                return True
+                return True  # like Crocoddyl, iter stays the index of the converged iteration
             self.iter += 1
         return False
 
