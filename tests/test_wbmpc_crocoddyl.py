@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -36,9 +38,10 @@ def _walking_ocp(robot, config, n_nodes, t0=0.0):
     return ocp
 
 
-def test_every_node_matches_crocoddyl(bolt):
+@pytest.mark.parametrize("backend", ["pinocchio", "kkt"])
+def test_every_node_matches_crocoddyl(bolt, backend):
     """xnext, cost, Fx, Fu, Lx, Lu, Lxx, Luu, Lxu at random states agree to 1e-9 relative."""
-    ocp = _walking_ocp(bolt, ALL_TERMS, n_nodes=20, t0=0.15)
+    ocp = _walking_ocp(bolt, dataclasses.replace(ALL_TERMS, dynamics_backend=backend), n_nodes=20, t0=0.15)
     mirror = CrocoddylMirror(ocp.problem)
     rng = np.random.default_rng(0)
     xs = [random_state(bolt, rng) for _ in range(21)]
@@ -138,9 +141,11 @@ class _Frozen:
         self.xs, self.us = xs, us
 
 
-def test_g1_flat_feet_solve_matches_crocoddyl():
+@pytest.mark.parametrize("backend", ["pinocchio", "kkt"])
+def test_g1_flat_feet_solve_matches_crocoddyl(backend):
     g1 = load_robot("g1")
-    config = WalkingOCPConfig(swing_apex_height=0.08, contact_force_weight=1e-4, baumgarte_gains=(0.0, 30.0))
+    config = WalkingOCPConfig(swing_apex_height=0.08, contact_force_weight=1e-4, baumgarte_gains=(10.0, 30.0),
+                              dynamics_backend=backend)
     ocp = WalkingOCP(g1, config, n_nodes=10, dt=0.02)
     x0 = standing_state(g1)
     schedule = alternating_schedule(0.0, 0.02, 10, step_duration=0.4, foot_y=(0.12, -0.12))

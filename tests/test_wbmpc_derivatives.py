@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
-import pinocchio as pin
 import pytest
 
 from robots import load_robot
@@ -66,9 +67,9 @@ def test_state_jacobians_match_finite_differences(bolt):
     np.testing.assert_allclose(state.diff(x0, state.integrate(x0, dx)), dx, atol=1e-12)
 
 
-@pytest.fixture(scope="module")
-def walking_nodes(bolt):
-    ocp = WalkingOCP(bolt, ALL_TERMS, n_nodes=12, dt=0.01)
+@pytest.fixture(scope="module", params=["pinocchio", "kkt"])
+def walking_nodes(bolt, request):
+    ocp = WalkingOCP(bolt, dataclasses.replace(ALL_TERMS, dynamics_backend=request.param), n_nodes=12, dt=0.01)
     ocp.update(standing_state(bolt), alternating_schedule(0.2, 0.01, 12, t_start=0.0), np.array([0.1, 0.0, 0.3]))
     return ocp
 
@@ -230,10 +231,11 @@ def test_terminal_residuals_match_finite_differences(bolt, walking_nodes):
         _assert_close(data.costs.terms[name].residual.Rx, _tangent_fd(state, r_of_x, x), f"terminal {name} Rx")
 
 
-def test_flat_foot_contact_dynamics_match_finite_differences():
+@pytest.mark.parametrize("backend", ["pinocchio", "kkt"])
+def test_flat_foot_contact_dynamics_match_finite_differences(backend):
     """6D (flat-foot) contacts with Baumgarte gains on G1: Fx and Fu of a running node."""
     g1 = load_robot("g1")
-    config = WalkingOCPConfig(contact_force_weight=1e-3, baumgarte_gains=(10.0, 20.0))
+    config = WalkingOCPConfig(contact_force_weight=1e-3, baumgarte_gains=(10.0, 20.0), dynamics_backend=backend)
     ocp = WalkingOCP(g1, config, n_nodes=4, dt=0.02)
     schedule = alternating_schedule(0.0, 0.02, 4, step_duration=0.4, foot_y=(0.12, -0.12))
     ocp.update(standing_state(g1), schedule, np.array([0.0, 0.0, 0.7]))

@@ -127,6 +127,20 @@ class ContactModel3D(_ContactBase):
         """Store the contact force (3,) [N, world axes] (from calc)."""
         data.force[:] = force
 
+    def rigid_constraint_model(self) -> pin.RigidConstraintModel:
+        """The same constraint as a Pinocchio RigidConstraintModel (CONTACT_3D, LOCAL_WORLD_ALIGNED,
+        same Baumgarte gains, reference point on the universe)."""
+        frame = self.state.pinocchio.frames[self.frame_id]
+        constraint = pin.RigidConstraintModel(pin.ContactType.CONTACT_3D, self.state.pinocchio, frame.parentJoint,
+                                              frame.placement, 0, pin.SE3(np.eye(3), self.reference),
+                                              pin.LOCAL_WORLD_ALIGNED)
+        constraint.setBaumgarteCorrectorParameters(pin.BaumgarteCorrectorParameters(*self.gains))
+        return constraint
+
+    def reference_placement(self) -> pin.SE3:
+        """Placement of the reference point (identity rotation), for the Baumgarte position term."""
+        return pin.SE3(np.eye(3), self.reference)
+
     def force_derivative_terms(self, data: ContactData, pdata: pin.Data) -> None:
         """Frame Jacobian (LOCAL), external force on the parent joint and its RNEA derivative term.
 
@@ -189,6 +203,18 @@ class ContactModel6D(_ContactBase):
     def update_force(self, data: ContactData, pdata: pin.Data, force: np.ndarray) -> None:
         """Store the contact wrench (6,) = (force [N], torque [N·m]) in the LOCAL sole frame."""
         data.force[:] = force
+
+    def rigid_constraint_model(self) -> pin.RigidConstraintModel:
+        """The same constraint as a Pinocchio RigidConstraintModel (CONTACT_6D, LOCAL, same
+        Baumgarte gains, reference placement on the universe)."""
+        frame = self.state.pinocchio.frames[self.frame_id]
+        constraint = pin.RigidConstraintModel(pin.ContactType.CONTACT_6D, self.state.pinocchio, frame.parentJoint,
+                                              frame.placement, 0, pin.SE3(self.reference), pin.LOCAL)
+        constraint.setBaumgarteCorrectorParameters(pin.BaumgarteCorrectorParameters(*self.gains))
+        return constraint
+
+    def reference_placement(self) -> pin.SE3:
+        return pin.SE3(self.reference)
 
     def force_derivative_terms(self, data: ContactData, pdata: pin.Data) -> None:
         """External force on the parent joint (a LOCAL wrench adds no RNEA derivative term)."""

@@ -111,6 +111,8 @@ class WalkingOCPConfig:
         friction_cone_weight: linearised friction-cone barrier (point feet); 0 = off.
         friction_coefficient: μ of the friction cone.
         baumgarte_gains: (Kp [1/s²], Kd [1/s]) of the contact constraints.
+        dynamics_backend: "pinocchio" (constraintDynamics and its derivatives, fast) or "kkt"
+            (Crocoddyl's formulas written out); same results (see :mod:`wbmpc.dynamics`).
         max_line_search_trials: FDDP line-search steps tried (1, ½, …).
         reg_min, reg_max: FDDP regularisation bounds.
         th_stop: FDDP stopping threshold.
@@ -131,6 +133,7 @@ class WalkingOCPConfig:
     friction_cone_weight: float = 0.0
     friction_coefficient: float = 0.7
     baumgarte_gains: tuple[float, float] = (0.0, 50.0)
+    dynamics_backend: str = "pinocchio"
     max_line_search_trials: int = 10
     reg_min: float = 1e-9
     reg_max: float = 1e9
@@ -152,6 +155,8 @@ class WalkingOCPConfig:
             raise ParameterError(f"baumgarte_gains={self.baumgarte_gains} must be (Kp >= 0, Kd >= 0)")
         if int(self.max_line_search_trials) != self.max_line_search_trials or self.max_line_search_trials < 1:
             raise ParameterError(f"max_line_search_trials={self.max_line_search_trials} must be an integer >= 1")
+        if self.dynamics_backend not in ("pinocchio", "kkt"):
+            raise ParameterError(f"dynamics_backend={self.dynamics_backend!r} must be 'pinocchio' or 'kkt'")
         if not (0 < self.reg_min <= self.reg_max):
             raise ParameterError(f"need 0 < reg_min={self.reg_min} <= reg_max={self.reg_max}")
 
@@ -265,7 +270,8 @@ class WalkingOCP:
             costs.add("com_position",
                       CostModelResidual(ResidualCoMPosition(state, np.zeros(3), nu)), cfg.com_terminal_weight)
         contacts = {foot: self._contact(foot) for foot in self.feet}
-        dam = DifferentialActionModelContactFwdDynamics(state, self.actuation, contacts, costs)
+        dam = DifferentialActionModelContactFwdDynamics(state, self.actuation, contacts, costs,
+                                                        backend=cfg.dynamics_backend)
         return IntegratedActionModelEuler(dam, 0.0 if terminal else self.dt)
 
     # ------------------------------------------------------------------ update

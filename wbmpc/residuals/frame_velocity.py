@@ -36,7 +36,11 @@ class ResidualFrameVelocity:
         self.nu = nu
 
     def calc(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
-        velocity = pin.getFrameVelocity(self.state.pinocchio, shared.pinocchio, self.frame_id, pin.LOCAL)
+        # From the world-frame joint velocity (data.ov): both dynamics backends compute it, while
+        # Pinocchio's constraintDynamics leaves the LOCAL joint velocities (data.v) untouched.
+        model, pdata = self.state.pinocchio, shared.pinocchio
+        oMf = pin.updateFramePlacement(model, pdata, self.frame_id)
+        velocity = oMf.actInv(pdata.ov[model.frames[self.frame_id].parentJoint])
         np.subtract(velocity.vector, self.reference, out=data.r)
 
     def calcDiff(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
