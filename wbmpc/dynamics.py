@@ -58,6 +58,8 @@ class DifferentialActionModelContactFwdDynamics:
         self.costs = costs
         if costs.nu != self.nu:
             raise ParameterError(f"costs were built for nu={costs.nu}, the actuation has nu={self.nu}")
+        self._costs_use_force_derivatives = any(
+            getattr(item.cost.residual, "uses_contact_forces", False) for item in costs.costs.values())
         self.constraint_models = {name: c.rigid_constraint_model() for name, c in self.contacts.items()}
         self.proximal_settings = pin.ProximalSettings(1e-12, 0.0, 1)  # mu = 0: the exact KKT solve
         names = list(self.contacts) if active_contacts is None else list(active_contacts)
@@ -72,8 +74,13 @@ class DifferentialActionModelContactFwdDynamics:
         self.active_key = tuple(self.active_contacts)
         self.nc = sum(self.contacts[name].nc for name in self.active_contacts)
         self.active_constraints = pin.StdVec_RigidConstraintModel()
+        self._active_rows = []  # (contact name, rows in the stacked force vector)
+        row = 0
         for name in self.active_contacts:
             self.active_constraints.append(self.constraint_models[name])
+            self._active_rows.append((name, slice(row, row + self.contacts[name].nc)))
+            row += self.contacts[name].nc
+        self._moving_references = [name for name in self.active_contacts if self.contacts[name].gains[0] != 0.0]
 
     def createData(self) -> "DifferentialActionDataContactFwdDynamics":
         return DifferentialActionDataContactFwdDynamics(self)
@@ -131,21 +138,16 @@ class DifferentialActionModelContactFwdDynamics:
 
     def _calc_constraint_dynamics(self, data, q, v, u) -> None:
         """Pinocchio backend of calc: constraintDynamics with the active RigidConstraintModels."""
-        model = self.state.pinocchio
         pdata, constraint_datas = data.select_pinocchio(self)
-        for name in self.active_contacts:
-            contact = self.contacts[name]
-            if contact.gains[0] != 0.0:  # the position reference may have been moved
-                self.constraint_models[name].joint2_placement = contact.reference_placement()
-        self.actuation.calc(data.tau, u)
-        data.xout[:] = pin.constraintDynamics(model, pdata, q, v, data.tau, self.active_constraints,
+        for name in self._moving_references:  # the Baumgarte position reference may have moved
+            self.constraint_models[name].joint2_placement = self.contacts[name].reference_placement()
+        data.tau[6:] = u
+        data.xout[:] = pin.constraintDynamics(self.state.pinocchio, pdata, q, v, data.tau, self.active_constraints,
                                               constraint_datas, self.proximal_settings)
         forces = pdata.lambda_c
-        row = 0
-        for name in self.active_contacts:
-            contact = self.contacts[name]
-            contact.update_force(data.contacts[name], pdata, forces[row:row + contact.nc])
-            row += contact.nc
+        contacts = data.contacts
+        for name, rows in self._active_rows:
+            contacts[name].force[:] = forces[rows]
         if data.active_contacts is not self.active_contacts:
             data.active_contacts = self.active_contacts
             data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
@@ -160,15 +162,13 @@ class DifferentialActionModelContactFwdDynamics:
         data.Fx[:, :nv] = ddq_dq
         data.Fx[:, nv:] = ddq_dv
         data.Fu[:] = ddq_dtau[:, 6:]
-        row = 0
-        for name in self.active_contacts:
-            contact = self.contacts[name]
+        if not self._costs_use_force_derivatives:
+            return
+        for name, rows in self._active_rows:
             cdata = data.contacts[name]
-            rows = slice(row, row + contact.nc)
             cdata.df_dx[:, :nv] = dlambda_dq[rows]
             cdata.df_dx[:, nv:] = dlambda_dv[rows]
             cdata.df_du[:] = dlambda_dtau[rows, 6:]
-            row += contact.nc
 
     def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
         """Fill data.Fx (nv, ndx), Fu (nv, nu), force derivatives and the cost derivatives.

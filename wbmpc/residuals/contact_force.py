@@ -21,6 +21,8 @@ class ResidualContactForce:
         nu: control dimension.
     """
 
+    uses_contact_forces = True  # reads the force derivatives the dynamics computes
+
     def __init__(self, state: StateMultibody, contact_name: str, force_reference: np.ndarray, nu: int):
         self.state = state
         self.contact_name = contact_name

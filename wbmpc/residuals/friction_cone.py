@@ -55,6 +55,8 @@ class ResidualFrictionCone:
         nu: control dimension.
     """
 
+    uses_contact_forces = True  # reads the force derivatives the dynamics computes
+
     def __init__(self, state: StateMultibody, contact_name: str, mu: float, nu: int, n_facets: int = 4,
                  inner_approximation: bool = True):
         self.state = state
