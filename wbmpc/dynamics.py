@@ -70,7 +70,10 @@ class DifferentialActionModelContactFwdDynamics:
         unknown = set(names) - set(self.contacts)
         if unknown:
             raise ParameterError(f"unknown contact(s) {sorted(unknown)}; known contacts: {list(self.contacts)}")
-        self.active_contacts = [name for name in self.contacts if name in set(names)]
+        active = [name for name in self.contacts if name in set(names)]
+        if getattr(self, "active_key", None) == tuple(active):
+            return  # unchanged: keep the cached constraint set (datas compare it by identity)
+        self.active_contacts = active
         self.active_key = tuple(self.active_contacts)
         self.nc = sum(self.contacts[name].nc for name in self.active_contacts)
         self.active_constraints = pin.StdVec_RigidConstraintModel()
