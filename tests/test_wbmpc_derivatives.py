@@ -260,3 +260,21 @@ def test_flat_foot_contact_dynamics_match_finite_differences(backend):
 
     _assert_close(data.Fx, _tangent_fd(state, xnext_of_x, x), "G1 Fx", rtol=1e-3)
     _assert_close(data.Fu, _control_fd(xnext_of_u, u), "G1 Fu", rtol=1e-3)
+
+
+def test_compiled_state_difference_matches_pinocchio(bolt):
+    """The compiled free-flyer difference equals pin.difference, small to half-turn rotations."""
+    import pinocchio as pin
+
+    state = StateMultibody(bolt.pinocchio_model)
+    assert state._compiled_difference
+    rng = np.random.default_rng(9)
+    model = bolt.pinocchio_model
+    for scale in (1e-9, 1e-4, 0.3, 3.0):
+        for _ in range(20):
+            x0 = random_state(bolt, rng)
+            x1 = np.concatenate([pin.integrate(model, x0[: model.nq], scale * rng.standard_normal(model.nv)),
+                                 rng.standard_normal(model.nv)])
+            expected = np.concatenate([pin.difference(model, x0[: model.nq], x1[: model.nq]),
+                                       x1[model.nq:] - x0[model.nq:]])
+            np.testing.assert_allclose(state.diff(x0, x1), expected, rtol=0, atol=1e-11)

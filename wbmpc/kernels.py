@@ -181,3 +181,86 @@ def scale_cost_derivatives(dt, gradient, hessian, ndx, Lx, Lu, Lxx, Lxu, Luu):
         Lu[i - ndx] = dt * gradient[i]
         for j in range(ndx, n):
             Luu[i - ndx, j - ndx] = dt * hessian[i, j]
+
+
+@njit(cache=True)
+def _quaternion_matrix(q, R):
+    """Rotation matrix of the quaternion (x, y, z, w) (Eigen's toRotationMatrix)."""
+    x, y, z, w = q[0], q[1], q[2], q[3]
+    tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
+    twx, twy, twz = tx * w, ty * w, tz * w
+    txx, txy, txz = tx * x, ty * x, tz * x
+    tyy, tyz, tzz = ty * y, tz * y, tz * z
+    R[0, 0] = 1.0 - (tyy + tzz)
+    R[0, 1] = txy - twz
+    R[0, 2] = txz + twy
+    R[1, 0] = txy + twz
+    R[1, 1] = 1.0 - (txx + tzz)
+    R[1, 2] = tyz - twx
+    R[2, 0] = txz - twy
+    R[2, 1] = tyz + twx
+    R[2, 2] = 1.0 - (txx + tyy)
+
+
+@njit(cache=True)
+def free_flyer_difference(q0, q1, nq, out):
+    """pin.difference for a free-flyer root followed by 1-dof joints (nq = nv + 1), written in out
+    (nv,). Returns False (out untouched beyond use) when the relative rotation is within 1e-2 rad
+    of π, where Pinocchio's log3 takes a special branch: the caller then uses Pinocchio."""
+    R0 = np.empty((3, 3))
+    R1 = np.empty((3, 3))
+    _quaternion_matrix(q0[3:7], R0)
+    _quaternion_matrix(q1[3:7], R1)
+    R = np.dot(R0.T, R1)
+    dp = np.empty(3)
+    for i in range(3):
+        dp[i] = q1[i] - q0[i]
+    p = np.dot(R0.T, dp)
+    trace = R[0, 0] + R[1, 1] + R[2, 2]
+    if trace >= 3.0:
+        theta = 0.0
+    elif trace <= -1.0:
+        return False
+    else:
+        theta = np.arccos((trace - 1.0) / 2.0)
+    if theta >= np.pi - 1e-2:
+        return False
+    # log3 (Pinocchio): w = θ / (2 sin θ) vee(R − Rᵀ), with the limit 1/2 for small θ
+    eps3 = 1e-5  # a safe small-angle threshold; the Taylor limit is exact to 1e-11 below it
+    t = (theta / np.sin(theta) if theta > eps3 else 1.0) / 2.0
+    w0 = t * (R[2, 1] - R[1, 2])
+    w1 = t * (R[0, 2] - R[2, 0])
+    w2 = t * (R[1, 0] - R[0, 1])
+    t2 = theta * theta
+    if t2 < 1e-8:
+        alpha = 1.0 - t2 / 12.0 - t2 * t2 / 720.0
+        beta = 1.0 / 12.0 + t2 / 720.0
+    else:
+        st = np.sin(theta)
+        ct = np.cos(theta)
+        alpha = theta * st / (2.0 * (1.0 - ct))
+        beta = 1.0 / t2 - st / (2.0 * theta * (1.0 - ct))
+    wp = w0 * p[0] + w1 * p[1] + w2 * p[2]
+    cross0 = w1 * p[2] - w2 * p[1]
+    cross1 = w2 * p[0] - w0 * p[2]
+    cross2 = w0 * p[1] - w1 * p[0]
+    out[0] = alpha * p[0] - 0.5 * cross0 + beta * wp * w0
+    out[1] = alpha * p[1] - 0.5 * cross1 + beta * wp * w1
+    out[2] = alpha * p[2] - 0.5 * cross2 + beta * wp * w2
+    out[3] = w0
+    out[4] = w1
+    out[5] = w2
+    for i in range(7, nq):
+        out[i - 1] = q1[i] - q0[i]
+    return True
+
+
+@njit(cache=True)
+def free_flyer_state_difference(x0, x1, nq, out):
+    """x1 ⊖ x0 (2 nv,) for a free-flyer root followed by 1-dof joints; False near a half turn."""
+    nv = nq - 1
+    if not free_flyer_difference(x0[:nq], x1[:nq], nq, out[:nv]):
+        return False
+    for i in range(nv):
+        out[nv + i] = x1[nq + i] - x0[nq + i]
+    return True

@@ -14,6 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
+from wbmpc.kernels import free_flyer_state_difference
 
 
 class StateMultibody:
@@ -34,6 +35,11 @@ class StateMultibody:
         self.nv = pinocchio_model.nv
         self.nx = self.nq + self.nv
         self.ndx = 2 * self.nv
+        # A free-flyer root followed by 1-dof joints has a compiled difference (same values as
+        # pin.difference to ~1e-13; Pinocchio takes over near a half-turn relative rotation).
+        self._compiled_difference = (
+            pinocchio_model.njoints >= 2 and pinocchio_model.joints[1].nq == 7 and pinocchio_model.joints[1].nv == 6
+            and self.nq == self.nv + 1)
 
     def zero(self) -> np.ndarray:
         """Neutral configuration and zero velocity, shape (nx,)."""
@@ -53,6 +59,8 @@ class StateMultibody:
         nq, nv = self.nq, self.nv
         if out is None:
             out = np.empty(self.ndx)
+        if self._compiled_difference and free_flyer_state_difference(x0, x1, nq, out):
+            return out
         out[:nv] = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
         np.subtract(x1[nq:], x0[nq:], out=out[nv:])
         return out
