@@ -90,10 +90,10 @@ class CostModelSum:
     def calc(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> float:
         """Evaluate every active term; returns and stores the total cost (data.cost)."""
         term_scale = data.term_scale
-        for j, (name, item) in enumerate(self.costs.items()):
+        for j, item, residual, rdata in data.loop:
             if item.active:
                 term_scale[j] = item.weight
-                item.cost.residual.calc(data.terms[name].residual, x, u, shared)
+                residual.calc(rdata, x, u, shared)
             else:
                 term_scale[j] = 0.0
         data.cost = cost_rows_value(data.r, data.row_term, term_scale, data.w, data.lb, data.ub, data.term_cost)
@@ -105,9 +105,9 @@ class CostModelSum:
         The residual Jacobians of all terms are rows of one matrix R = [Rx Ru] (data.R), so the
         gradient and Hessian come from one compiled pass over the rows.
         """
-        for name, item in self.costs.items():
+        for _, item, residual, rdata in data.loop:
             if item.active:
-                item.cost.residual.calcDiff(data.terms[name].residual, x, u, shared)
+                residual.calcDiff(rdata, x, u, shared)
         cost_rows_derivatives(data.r, data.R, data.row_term, data.term_scale, data.w, data.lb, data.ub,
                               data.gradient, data.hessian)
 
@@ -146,6 +146,9 @@ class CostDataSum:
             self.row_term[rows] = j
             self.rows[name] = rows
             start += item.cost.nr
+        # (term index, item, residual model, residual data) in order, for the evaluation loops
+        self.loop = [(j, item, item.cost.residual, self.terms[name].residual)
+                     for j, (name, item) in enumerate(model.costs.items())]
         self.gradient = np.zeros(ndx + nu)
         self.hessian = np.zeros((ndx + nu, ndx + nu))
         self.cost = 0.0
