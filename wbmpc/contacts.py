@@ -28,11 +28,6 @@ _ZERO3 = np.zeros(3)
 from wbmpc.state import StateMultibody
 
 
-def skew(w: np.ndarray) -> np.ndarray:
-    """Skew-symmetric matrix [w]× of a 3-vector, shape (3, 3)."""
-    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
-
-
 class ContactData:
     """Buffers of one contact: Jc (nc, nv), a0 (nc,), da0_dx (nc, ndx), force (nc,), df_dx, df_du."""
 
@@ -49,7 +44,6 @@ class ContactData:
         self.dtau_dq = None  # (nv, nv) extra RNEA derivative of a world-aligned force, or None
         self.fJf = np.zeros((6, nv))
         self.velocity = pin.Motion.Zero()
-        self.a0_local = np.zeros(nc)
         self.position_error_local = np.zeros(3)
         self.rMf = pin.SE3.Identity()
 

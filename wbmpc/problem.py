@@ -88,6 +88,20 @@ class ShootingProblem:
         self.cost = cost
         return cost
 
+    def calc_and_diff(self, xs, us) -> float:
+        """calc then calcDiff node by node (one pass, the node's data still in cache); returns the
+        total cost. Same results as :meth:`calc` followed by :meth:`calcDiff`."""
+        cost = 0.0
+        for m, d, x, u in zip(self.running_models, self.running_datas, xs, us):
+            m.calc(d, x, u)
+            m.calcDiff(d, x, u)
+            cost += d.cost
+        self.terminal_model.calc(self.terminal_data, xs[-1])
+        self.terminal_model.calcDiff(self.terminal_data, xs[-1])
+        cost += self.terminal_data.cost
+        self.cost = cost
+        return cost
+
     def rollout(self, us) -> list[np.ndarray]:
         """States obtained by integrating the controls from x0, list of N + 1 arrays (nx,)."""
         xs = [self.x0.copy()]

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from wbmpc.activations import ActivationQuad, ActivationQuadraticBarrier, ActivationWeightedQuad
+from wbmpc.activations import ActivationQuadraticBarrier, ActivationWeightedQuad
 from wbmpc.actuation import ActuationFloatingBase
 from wbmpc.contacts import ContactModel3D, ContactModel6D
 from wbmpc.costs import CostModelResidual, CostModelSum

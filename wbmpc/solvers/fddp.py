@@ -233,9 +233,10 @@ class SolverFDDP:
 
     def _calc_diff(self) -> None:
         problem = self.problem
-        if self.iter == 0:
-            problem.calc(self.xs, self.us)
-        self.cost = problem.calcDiff(self.xs, self.us)
+        if self.iter == 0:  # the guess was never evaluated: calc and calcDiff in one pass
+            self.cost = problem.calc_and_diff(self.xs, self.us)
+        else:  # the accepted rollout already ran calc at (xs, us)
+            self.cost = problem.calcDiff(self.xs, self.us)
         self._compute_gaps()
 
     def _compute_gaps(self) -> None:
