@@ -5,7 +5,7 @@ Definitions (all times in s, velocities in m/s, world frame):
 - ``velocity_error_x/y``: |mean base velocity - command| over the steady window, the paper's
   epsilon_V = |V_bar - V*| (paper, walk at 0.33 m/s: (5.2, 1.1) mm/s). The steady window starts
   ``steady_start`` after the beginning of the run or the last command change, whichever is later.
-- ``rise_time`` (when the command changes): time from the change until the running average of the
+- ``rise_time`` (scenarios with a ``speed_switch`` event): time from the switch until the running average of the
   base x velocity (window ``AVERAGE_WINDOW``) first reaches 90 % of the step in command
   (paper, transition 0 -> 0.3 m/s: 4.35 s).
 - ``push_recovery_time``: time from the end of the push until the running average of the base y
@@ -77,10 +77,11 @@ def compute_metrics(log) -> dict[str, Any]:
         metrics["mean_velocity_x"], metrics["mean_velocity_y"] = float(mean_velocity[0]), float(mean_velocity[1])
         metrics["velocity_error_x"], metrics["velocity_error_y"] = float(error[0]), float(error[1])
 
-    # Rise time after the last command change.
-    if len(changes):
-        i_change = changes[-1] + 1
-        before, after = command[i_change - 1, 0], command[i_change, 0]
+    # Rise time after a step in the command (scenarios with a "speed_switch" event).
+    events = log.params.get("events", {})
+    if "speed_switch" in events and t[-1] > events["speed_switch"]:
+        i_change = int(np.searchsorted(t, events["speed_switch"] - 1e-9))
+        before, after = command[max(i_change - 1, 0), 0], command[i_change, 0]
         average_x = running_average(t, velocity[:, 0])
         target = before + 0.9 * (after - before)
         later = np.arange(i_change, len(t))
@@ -88,7 +89,6 @@ def compute_metrics(log) -> dict[str, Any]:
         metrics["rise_time"] = float(t[reached[0]] - t[i_change]) if len(reached) else None
 
     # Push recovery.
-    events = log.params.get("events", {})
     if "push_start" in events and "push_end" in events:
         push_start, push_end = events["push_start"], events["push_end"]
         metrics["push_applied"] = bool(t[-1] >= push_end)

@@ -60,10 +60,13 @@ def test_slip_patch_friction_is_the_one_used_in_contacts():
     assert robot.mujoco_contact.friction == pytest.approx(1.0)
 
 
-def test_transition_command_changes_at_the_switch():
+def test_transition_command_changes_at_the_switch_and_walk_ramps():
     scenario = make_scenario("transition")
     assert scenario.velocity_command(4.99) == (0.0, 0.0)
     assert scenario.velocity_command(5.0) == (0.3, 0.0)
+    walk = make_scenario("walk", speed=0.3, ramp_time=2.0)
+    assert walk.velocity_command(0.5) == pytest.approx((0.075, 0.0))
+    assert walk.velocity_command(2.5) == (0.3, 0.0)
 
 
 def test_stance_tracker_switches_at_the_planned_touchdown_or_on_contact():
@@ -117,7 +120,7 @@ def test_velocity_error_and_rise_time_definitions():
     # first-order response to a step 0 -> 0.3 m/s at t = 2 s, time constant 1 s, plus an offset
     velocity = np.where(t < 2, 0.0, 0.3 * (1 - np.exp(-(t - 2) / 1.0))) + 0.005
     command = np.where(t < 2, 0.0, 0.3)
-    metrics = compute_metrics(_synthetic_log(t, velocity, command))
+    metrics = compute_metrics(_synthetic_log(t, velocity, command, events={"speed_switch": 2.0}))
     # running average (1 s window) of a first-order step reaches 90 % of the step later than the signal
     average = running_average(t, velocity)
     expected = t[np.argmax((t >= 2) & (average >= 0.27))] - 2.0

@@ -72,9 +72,11 @@ class Scenario:
     steady_start: ClassVar[float] = 3.0  # [s], start of the steady part used by the metrics
 
     speed: float = 0.33  # [m/s], forward velocity command
+    ramp_time: float = 0.0  # [s], the command rises linearly from 0 to ``speed`` over this time
 
     def __post_init__(self) -> None:
         _check_range("speed", self.speed, -1.0, 1.0, "m/s")
+        _check_range("ramp_time", self.ramp_time, 0.0, 100.0, "s")
 
     def modify_spec(self, spec: Any, rng: np.random.Generator) -> None:
         """Edit the MuJoCo model specification before compilation (default: nothing)."""
@@ -86,7 +88,9 @@ class Scenario:
         """Act on the simulation before the step at time ``t`` [s] (default: nothing)."""
 
     def velocity_command(self, t: float) -> tuple[float, float]:
-        """Walking command (v_x, v_y) [m/s], world frame, at time ``t`` [s]."""
+        """Walking command (v_x, v_y) [m/s], world frame, at time ``t`` [s] (after the ramp: ``speed``)."""
+        if self.ramp_time > 0.0 and t < self.ramp_time:
+            return (self.speed * t / self.ramp_time, 0.0)
         return (self.speed, 0.0)
 
     def events(self) -> dict[str, float]:
