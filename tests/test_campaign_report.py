@@ -62,6 +62,10 @@ def test_force_map_phase_rates_and_timing_comparison():
     assert comparison["paper_relative_change"] == PAPER_TIMING_GAIN
     text = format_summary(summary)
     assert "adaptive vs fixed on 30 paired trials" in text and "+50.0 points" in text and "+36 %" in text
+    # control trials (no push): adaptive always walks on, fixed fails at phase 0.5 -> flagged
+    assert summary["unpushed"]["adaptive"]["success_rate"] == 1.0
+    assert (summary["unpushed"]["fixed"]["n"], summary["unpushed"]["fixed"]["n_success"]) == (2, 1)
+    assert "WARNING fixed: 1/2 trials WITHOUT push failed" in text and "WARNING adaptive" not in text
 
 
 def test_partial_campaign_compares_paired_trials_only():

@@ -70,7 +70,9 @@ def summarize(spec: CampaignSpec, records: list[dict[str, Any]]) -> dict[str, An
     Returns:
         A JSON-able dict: ``variants`` (stats per variant), ``axes`` (per grid axis, per variant, per
         value), ``force_map`` (when the grid has force_x and force_y: success rate, shape
-        (n_force_y, n_force_x), None where nothing is recorded), ``phase`` (when the grid has
+        (n_force_y, n_force_x), None where nothing is recorded), ``unpushed`` (stats of the
+        zero-force cell, the control trials: below 100 % the map mixes walking failures with
+        push failures), ``phase`` (when the grid has
         phase, with the circular mean of the measured phase), ``phase_measured`` (success per bin
         of the measured phase, wrapped to [0, 1)), ``comparisons`` (each other variant against the
         first one, on paired trials) and ``errors`` (most frequent error texts).
@@ -115,6 +117,11 @@ def summarize(spec: CampaignSpec, records: list[dict[str, Any]]) -> dict[str, An
                 rate[i, j], count[i, j] = np.mean(outcomes), len(outcomes)
             maps[v] = {"force_x": fx, "force_y": fy, "success_rate": rate, "n": count}
         summary["force_map"] = maps
+        if 0.0 in fx and 0.0 in fy:  # the control trials: no push at all
+            summary["unpushed"] = {
+                v: _stats([r for t, r in rows if t.variant == v and t.params["force_x"] == 0 and t.params["force_y"] == 0])
+                for v in variants
+            }
 
     if "phase" in spec.grid:
         phases, measured_bins = {}, {}
@@ -186,6 +193,12 @@ def format_summary(summary: dict[str, Any]) -> str:
             f"  {variant:<12} success {pct(s['success_rate'])}  ({s['n_success']}/{s['n']}; fell {s['n_fell']}, "
             f"errors {s['n_error']})"
         )
+    for variant, s in summary.get("unpushed", {}).items():
+        if s["n"] and s["n_success"] < s["n"]:
+            lines.append(
+                f"  WARNING {variant}: {s['n'] - s['n_success']}/{s['n']} trials WITHOUT push failed: the map mixes "
+                "walking failures with push failures (check the controller on the plain walk first)"
+            )
     for variant, entries in summary.get("phase", {}).items():
         cells = "  ".join(
             f"{e['phase']:.2f}:{pct(e['success_rate']).strip()}"
