@@ -165,3 +165,16 @@ def test_measured_gait_phase_uses_the_previous_step_duration():
     assert measured_gait_phase(replans, 0.15, t_nom=0.3) == pytest.approx(0.5)  # first step: nominal
     assert measured_gait_phase(replans, 0.15) is None
     assert measured_gait_phase({"t": t}, 0.5, t_nom=0.3) is None  # no stance information (PD)
+
+
+def test_example_campaign_file_loads():
+    from pathlib import Path
+
+    import sim.campaigns
+
+    path = Path(sim.campaigns.__file__).parent / "examples" / "timing_study_small.toml"
+    spec = CampaignSpec.from_toml(path)
+    trials = make_trials(spec)
+    assert len(trials) == 3 * 4 * 2 * 2
+    assert {t.arguments["sequencer_params"].t_max for t in trials if t.variant == "fixed"} == {0.3}
+    assert max(t.arguments["push_time"] for t in trials) + 0.1 < spec.duration
