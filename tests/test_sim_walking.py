@@ -25,7 +25,7 @@ def test_short_walk_completes_without_falling(short_walk):
     assert log.status == "completed", (log.fall_time, log.fall_reason, log.error)
     metrics = log.metrics
     assert metrics["steps"] >= 6
-    assert 0.5 < metrics["distance_x"] < 1.5  # 0.33 m/s command for 3 s, from standing
+    assert 0.3 < metrics["distance_x"] < 1.2  # command ramped 0 -> 0.33 m/s over 2 s, then 1 s
     assert metrics["mpc_failures"] == 2  # only the injected ones
     # the stance foot alternates and the executed footholds move forward
     stance = log.replans["stance_foot"][log.replans["stance_switched"] > 0.5]

@@ -69,10 +69,10 @@ class Scenario:
 
     name: ClassVar[str] = "base"
     default_duration: ClassVar[float] = 10.0  # [s]
-    steady_start: ClassVar[float] = 3.0  # [s], start of the steady part used by the metrics
+    steady_start: ClassVar[float] = 3.0  # [s] after the last command change: start of the steady part
 
     speed: float = 0.33  # [m/s], forward velocity command
-    ramp_time: float = 0.0  # [s], the command rises linearly from 0 to ``speed`` over this time
+    ramp_time: float = 2.0  # [s], the command rises linearly from 0 to ``speed`` over this time
 
     def __post_init__(self) -> None:
         _check_range("speed", self.speed, -1.0, 1.0, "m/s")

@@ -10,7 +10,7 @@ from sim.scenarios.base import Scenario, _check_range, register
 @register("transition")
 @dataclass(frozen=True)
 class Transition(Scenario):
-    """Command ``speed_before`` until ``switch_time``, then ``speed`` [m/s]."""
+    """Command ``speed_before`` until ``switch_time``, then ``speed`` [m/s] (a step: ``ramp_time`` unused)."""
 
     default_duration = 15.0
 
