@@ -254,9 +254,9 @@ class DifferentialActionDataContactFwdDynamics:
         nv, ndx, nu = state.nv, state.ndx, model.nu
         nc_max = sum(c.nc for c in model.contacts.values())
         self._model = state.pinocchio
-        self._kkt_pinocchio = state.pinocchio.createData()
-        self._constraint_pinocchio: dict[tuple, tuple] = {}
-        self.pinocchio = self._kkt_pinocchio
+        self.pinocchio = state.pinocchio.createData()
+        self._constraint_key = None
+        self._constraint_datas = None
         self.contacts = {name: c.createData(nu) for name, c in model.contacts.items()}
         self.shared = DataCollector(self.pinocchio, {})
         self.costs = model.costs.createData()
@@ -280,27 +280,19 @@ class DifferentialActionDataContactFwdDynamics:
         self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu = c.Lx, c.Lu, c.Lxx, c.Lxu, c.Luu
 
     def select_pinocchio(self, model):
-        """Pinocchio data of the current evaluation, made current for the costs.
+        """Pinocchio data of the node (one per node: a small working set across the horizon).
 
-        ``model=None``: the data of the KKT path (and of terminal nodes). Otherwise the data and
-        RigidConstraintData of ``model``'s active contact set (one Pinocchio data per set, so
-        switching contacts between solves never re-sizes a data in use).
+        ``model=None``: the data for the KKT path and terminal nodes. Otherwise also the
+        RigidConstraintData of ``model``'s active contact set; the data is re-initialised for
+        constraint dynamics only when the node's contact set changed (a few nodes per MPC tick).
         """
         if model is None:
-            pdata = self._kkt_pinocchio
-            entry = None
-        else:
-            entry = self._constraint_pinocchio.get(model.active_key)
-            if entry is None:
-                pdata = self._model.createData()
-                constraint_datas = pin.StdVec_RigidConstraintData()
-                for constraint in model.active_constraints:
-                    constraint_datas.append(constraint.createData())
-                pin.initConstraintDynamics(self._model, pdata, model.active_constraints, constraint_datas)
-                entry = (pdata, constraint_datas)
-                self._constraint_pinocchio[model.active_key] = entry
-            pdata = entry[0]
-        if self.pinocchio is not pdata:
-            self.pinocchio = pdata
-            self.shared.pinocchio = pdata
-        return pdata if model is None else entry
+            return self.pinocchio
+        if self._constraint_key != model.active_key:
+            constraint_datas = pin.StdVec_RigidConstraintData()
+            for constraint in model.active_constraints:
+                constraint_datas.append(constraint.createData())
+            pin.initConstraintDynamics(self._model, self.pinocchio, model.active_constraints, constraint_datas)
+            self._constraint_datas = constraint_datas
+            self._constraint_key = model.active_key
+        return self.pinocchio, self._constraint_datas

@@ -213,23 +213,6 @@ class WalkingOCP:
         running = [self._node(terminal=False) for _ in range(self.n_nodes)]
         terminal = self._node(terminal=True)
         self.problem = ShootingProblem(self.x_reference, running, terminal)
-        self._prepare_contact_sets()
-
-    def _prepare_contact_sets(self) -> None:
-        """Create every node's Pinocchio data for each stance set now (one per non-empty set of
-        feet), so no MPC tick pays for it when the gait brings a new set to a node."""
-        import itertools
-
-        sets = [list(c) for r in range(1, len(self.feet) + 1) for c in itertools.combinations(self.feet, r)]
-        for model, data in zip(self.problem.running_models, self.problem.running_datas):
-            dam = model.differential
-            if dam.backend != "pinocchio":
-                continue
-            current = list(dam.active_contacts)
-            for stance in sets:
-                dam.set_active_contacts(stance)
-                data.differential.select_pinocchio(dam)
-            dam.set_active_contacts(current)
 
     # ------------------------------------------------------------------ construction
     def _contact(self, foot: str):
