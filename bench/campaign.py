@@ -1,7 +1,8 @@
 """Campaign throughput: trials per minute in-process, on the local pool (1 and 2 workers) and on Ray.
 
-Every configuration runs the same ``--trials`` closed-loop trials (push scenario, PD controller,
-``--duration`` simulated seconds, no stop at the fall, so every trial does the same work) through
+Every configuration runs the same ``--trials`` closed-loop trials (push scenario, PD controller by
+default or ``--controller walking``, ``--duration`` simulated seconds, no stop at the fall, so
+every trial does the same work; the push of 0.1 s at 0.1 s) through
 :func:`sim.campaigns.run_campaign`, records included. Each backend is started and warmed up first
 (untimed: imports, forkserver preload, ``ray.init``); that start-up time is reported on its own.
 The configurations then run in ``--rounds`` interleaved rounds and each ratio is the median of the
@@ -30,26 +31,30 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--trials", type=int, default=8, help="timed trials per configuration and round")
     parser.add_argument("--duration", type=float, default=1.0, help="simulated time per trial [s]")
     parser.add_argument("--rounds", type=int, default=3, help="interleaved rounds (ratios: median over rounds)")
+    parser.add_argument(
+        "--controller", choices=("pd", "walking"), default="pd",
+        help="trial controller: pd (pure simulation, default) or walking (MPC-bound, ~100x slower)",
+    )
     parser.add_argument("--no-ray", action="store_true", help="skip the Ray configuration")
 
 
-def _spec(n_trials: int, duration: float, name: str):
+def _spec(n_trials: int, duration: float, name: str, controller: str = "pd"):
     from sim.campaigns import CampaignSpec
 
     return CampaignSpec(
         name=name,
         scenario="push",
-        controller="pd",
+        controller=controller,
         duration=duration,
-        params={"stop_on_fall": False, "push_time": 0.2, "push_duration": 0.1, "direction": 90.0},
+        params={"stop_on_fall": False, "push_time": 0.1, "push_duration": 0.1, "direction": 90.0},
         grid={"force": [float(f) for f in range(n_trials)]},
     )
 
 
-def _timed_run(backend, n_trials: int, duration: float, directory: str) -> dict:
+def _timed_run(backend, n_trials: int, duration: float, directory: str, controller: str) -> dict:
     from sim.campaigns import ResultStore, run_campaign
 
-    run = run_campaign(_spec(n_trials, duration, "bench"), directory, backend=backend, progress=False)
+    run = run_campaign(_spec(n_trials, duration, "bench", controller), directory, backend=backend, progress=False)
     records = ResultStore(directory).records()
     cpu_time = sum(r["cpu_time"] for r in records)
     return {
@@ -68,6 +73,8 @@ def run(args: argparse.Namespace) -> dict:
 
     if args.trials < 2:
         raise ParameterError(f"--trials={args.trials} must be >= 2")
+    if not args.duration > 0.2:
+        raise ParameterError(f"--duration={args.duration} s must be > 0.2 s (the push ends at 0.2 s)")
     if args.rounds < 1:
         raise ParameterError(f"--rounds={args.rounds} must be >= 1")
     configurations = {
@@ -91,12 +98,14 @@ def run(args: argparse.Namespace) -> dict:
                 tic = time.perf_counter()
                 backends[label] = make_backend(name, workers=workers)
                 warm_up = os.path.join(tmp, f"warm-up-{name}-{workers}")
-                _timed_run(backends[label], max(workers, 2), args.duration, warm_up)
+                _timed_run(backends[label], max(workers, 2), args.duration, warm_up, args.controller)
                 startup[label] = time.perf_counter() - tic
             for k in range(args.rounds):  # interleaved, so that the machine's load drifts hit every configuration
                 rounds.append(
                     {
-                        label: _timed_run(backend, args.trials, args.duration, os.path.join(tmp, f"round-{k}-{i}"))
+                        label: _timed_run(
+                            backend, args.trials, args.duration, os.path.join(tmp, f"round-{k}-{i}"), args.controller
+                        )
                         for i, (label, backend) in enumerate(backends.items())
                     }
                 )
@@ -130,6 +139,7 @@ def run(args: argparse.Namespace) -> dict:
     return {
         "trials": args.trials,
         "trial_duration": args.duration,
+        "controller": args.controller,
         "rounds": args.rounds,
         "cpu_count": os.cpu_count(),
         "load_average_1min": os.getloadavg()[0],
@@ -142,7 +152,7 @@ def run(args: argparse.Namespace) -> dict:
 
 def format_report(result: dict) -> str:
     lines = [
-        f"campaign throughput: {result['trials']} PD push trials of {result['trial_duration']:.1f} s simulated per "
+        f"campaign throughput: {result['trials']} push trials ({result['controller']} controller) of {result['trial_duration']:.1f} s simulated per "
         f"configuration, {result['rounds']} interleaved round(s) ({result['cpu_count']} CPUs, load average "
         f"{result['load_average_1min']:.1f})",
         f"  {'configuration':<20} {'trials/min':>10} {'start-up [s]':>13} {'cores used':>11} {'trial CPU / wall':>17}",
