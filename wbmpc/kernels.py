@@ -264,3 +264,15 @@ def free_flyer_state_difference(x0, x1, nq, out):
     for i in range(nv):
         out[nv + i] = x1[nq + i] - x0[nq + i]
     return True
+
+
+@njit(cache=True)
+def free_flyer_feedback_control(x_ref, x, u, k, K, alpha, nq, dx, out):
+    """dx = x ⊖ x_ref (free-flyer models) and out = u − α k − K dx (Crocoddyl's sign) in one call.
+
+    Returns 0 on success, 1 when the difference needs Pinocchio (relative rotation near a half
+    turn; nothing written to out), 2 when the control is not finite.
+    """
+    if not free_flyer_state_difference(x_ref, x, nq, dx):
+        return 1
+    return 0 if feedback_control(u, k, K, dx, alpha, out) else 2

@@ -26,7 +26,7 @@ import numpy as np
 from wbmpc.blas import limit_blas_threads
 from wbmpc.errors import ParameterError
 from wbmpc.problem import ShootingProblem
-from wbmpc.kernels import feedback_control
+from wbmpc.kernels import feedback_control, free_flyer_feedback_control
 from wbmpc.solvers.riccati import riccati_backward
 
 
@@ -294,15 +294,23 @@ class SolverFDDP:
         cost = 0.0
         xnext = problem.x0
         closing = not (self.is_feasible or alpha == 1.0)
+        compiled = state._compiled_difference
+        nq = state.nq
+        xs, xs_try, us, us_try, k, K, dx = self.xs, self.xs_try, self.us, self.us_try, self._k, self._K, self.dx
         for t, (m, d) in enumerate(zip(problem.running_models, problem.running_datas)):
+            x_try = xs_try[t]
             if closing:
-                state.integrate(xnext, self.fs[t] * (alpha - 1.0), out=self.xs_try[t])
+                state.integrate(xnext, self.fs[t] * (alpha - 1.0), out=x_try)
             else:
-                self.xs_try[t] = xnext
-            state.diff(self.xs[t], self.xs_try[t], out=self.dx[t])
-            if not feedback_control(self.us[t], self._k[t], self._K[t], self.dx[t], alpha, self.us_try[t]):
+                x_try[:] = xnext
+            code = free_flyer_feedback_control(xs[t], x_try, us[t], k[t], K[t], alpha, nq, dx[t], us_try[t]) \
+                if compiled else 1
+            if code == 1:
+                state.diff(xs[t], x_try, out=dx[t])
+                code = 0 if feedback_control(us[t], k[t], K[t], dx[t], alpha, us_try[t]) else 2
+            if code == 2:
                 raise ForwardPassError(f"control not finite at node {t}")
-            m.calc(d, self.xs_try[t], self.us_try[t])
+            m.calc(d, x_try, us_try[t])
             xnext = d.xnext
             cost += d.cost
             if not (math.isfinite(cost) and math.isfinite(xnext.sum())):
