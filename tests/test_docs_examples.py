@@ -31,8 +31,18 @@ def python_blocks(page: str) -> list[str]:
     return _BLOCK.findall((DOCS / page).read_text())
 
 
+@pytest.fixture
+def isolated_registries(monkeypatch):
+    """Robots and scenarios registered by an example are forgotten after the test."""
+    import robots.registry
+    import sim.scenarios.base
+
+    monkeypatch.setattr(robots.registry, "_BUILDERS", dict(robots.registry._BUILDERS))
+    monkeypatch.setattr(sim.scenarios.base, "_REGISTRY", dict(sim.scenarios.base._REGISTRY))
+
+
 @pytest.mark.parametrize("page", DOC_PAGES)
-def test_documented_examples_run(page, tmp_path, monkeypatch):
+def test_documented_examples_run(page, tmp_path, monkeypatch, isolated_registries):
     blocks = python_blocks(page)
     assert blocks, f"docs/{page} has no python example"
     monkeypatch.chdir(tmp_path)  # examples that write files write them here
