@@ -422,11 +422,9 @@ def default_sequencer_params():
     seed 0), with 0.30 m it recovered. Table I allows 0.40 m; 0.30 m keeps the hip abduction
     Bolt can reach. The nominal width (0.10 m) is unchanged, so nominal walking is not affected.
     """
-    import dataclasses as _dataclasses
-
     from sequencer import SequencerParams
 
-    return _dataclasses.replace(
+    return dataclasses.replace(
         SequencerParams.bolt_walking(), w_left_min=-MAX_STEP_WIDTH, w_right_max=MAX_STEP_WIDTH
     )
 
