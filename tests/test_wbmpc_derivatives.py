@@ -278,3 +278,32 @@ def test_compiled_state_difference_matches_pinocchio(bolt):
             expected = np.concatenate([pin.difference(model, x0[: model.nq], x1[: model.nq]),
                                        x1[model.nq:] - x0[model.nq:]])
             np.testing.assert_allclose(state.diff(x0, x1), expected, rtol=0, atol=1e-11)
+
+
+@pytest.mark.parametrize("backend", ["pinocchio", "kkt"])
+def test_flight_node_after_stance_matches_finite_differences(bolt, backend):
+    """A node without contact, evaluated after it was a stance node (its data reused): Fx, Fu."""
+    ocp = WalkingOCP(bolt, WalkingOCPConfig(dynamics_backend=backend), n_nodes=4, dt=0.01)
+    ocp.update(standing_state(bolt), alternating_schedule(0.0, 0.01, 4), np.array([0.0, 0.0, 0.3]))
+    rng = np.random.default_rng(0)
+    x, u = random_state(bolt, rng), rng.standard_normal(6)
+    model, data = ocp.problem.running_models[2], ocp.problem.running_datas[2]
+    model.calc(data, x, u)
+    model.calcDiff(data, x, u)
+    model.differential.set_active_contacts([])
+    model.calc(data, x, u)
+    model.calcDiff(data, x, u)
+    state = ocp.state
+
+    def xnext_of_x(xx):
+        d = model.createData()
+        model.calc(d, xx, u)
+        return state.diff(data.xnext, d.xnext)
+
+    def xnext_of_u(uu):
+        d = model.createData()
+        model.calc(d, x, uu)
+        return state.diff(data.xnext, d.xnext)
+
+    _assert_close(data.Fx, _tangent_fd(state, xnext_of_x, x), "flight Fx")
+    _assert_close(data.Fu, _control_fd(xnext_of_u, u), "flight Fu")

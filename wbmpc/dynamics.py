@@ -31,6 +31,11 @@ from wbmpc.residuals.base import DataCollector
 from wbmpc.state import StateMultibody
 
 
+def _symmetric_from_upper(M: np.ndarray) -> np.ndarray:
+    """CRBA fills the upper triangle of M only (the lower one may hold stale values)."""
+    return np.triu(M) + np.triu(M, 1).T
+
+
 class DifferentialActionModelContactFwdDynamics:
     """Continuous-time node: a = f(x, u) under rigid contacts, and the node's running cost l(x, u).
 
@@ -130,7 +135,9 @@ class DifferentialActionModelContactFwdDynamics:
             data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc, data.a0, 0.0)
             forces = pdata.lambda_c
         else:
-            data.xout[:] = np.linalg.solve(pdata.M, data.tau - pdata.nle)
+            # no contact (flight): keep M⁻¹ of this point, RNEA derivatives overwrite data.M
+            data.Minv = np.linalg.inv(_symmetric_from_upper(pdata.M))
+            data.xout[:] = data.Minv @ (data.tau - pdata.nle)
             forces = np.zeros(0)
         row = 0
         for name in self.active_contacts:
@@ -205,7 +212,7 @@ class DifferentialActionModelContactFwdDynamics:
         if nc:
             Kinv = pin.getKKTContactDynamicMatrixInverse(model, pdata, data.Jc)
         else:
-            Kinv = np.linalg.inv(pdata.M)
+            Kinv = data.Minv
         row = 0
         da0_dx = data.da0_dx_all[:nc]
         for name in self.active_contacts:
@@ -254,7 +261,9 @@ class DifferentialActionDataContactFwdDynamics:
         nv, ndx, nu = state.nv, state.ndx, model.nu
         nc_max = sum(c.nc for c in model.contacts.values())
         self._model = state.pinocchio
-        self.pinocchio = state.pinocchio.createData()
+        self._plain_pinocchio = state.pinocchio.createData()
+        self._constraint_pinocchio = None  # created on the first constraint-dynamics evaluation
+        self.pinocchio = self._plain_pinocchio
         self._constraint_key = None
         self._constraint_datas = None
         self.contacts = {name: c.createData(nu) for name, c in model.contacts.items()}
@@ -268,6 +277,7 @@ class DifferentialActionDataContactFwdDynamics:
         self.Jc = self.Jc_all[:0]
         self.a0 = self.a0_all[:0]
         self.D = np.zeros((nv + nc_max, ndx))
+        self.Minv = np.zeros((nv, nv))
         self.active_contacts = None
         self.fext_joints: list[int] = []
         self.fext = pin.StdVec_Force()
@@ -280,19 +290,27 @@ class DifferentialActionDataContactFwdDynamics:
         self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu = c.Lx, c.Lu, c.Lxx, c.Lxu, c.Luu
 
     def select_pinocchio(self, model):
-        """Pinocchio data of the node (one per node: a small working set across the horizon).
+        """Pinocchio data of the current evaluation, made current for the costs.
 
-        ``model=None``: the data for the KKT path and terminal nodes. Otherwise also the
-        RigidConstraintData of ``model``'s active contact set; the data is re-initialised for
-        constraint dynamics only when the node's contact set changed (a few nodes per MPC tick).
+        ``model=None`` (KKT path, flight and terminal nodes): a data never used by constraint
+        dynamics (after ``constraintDynamics`` a data gives wrong RNEA derivatives). Otherwise
+        the node's constraint-dynamics data and the RigidConstraintData of ``model``'s active
+        contact set, re-initialised only when the set changed (a few nodes per MPC tick).
         """
         if model is None:
-            return self.pinocchio
-        if self._constraint_key != model.active_key:
-            constraint_datas = pin.StdVec_RigidConstraintData()
-            for constraint in model.active_constraints:
-                constraint_datas.append(constraint.createData())
-            pin.initConstraintDynamics(self._model, self.pinocchio, model.active_constraints, constraint_datas)
-            self._constraint_datas = constraint_datas
-            self._constraint_key = model.active_key
-        return self.pinocchio, self._constraint_datas
+            pdata = self._plain_pinocchio
+        else:
+            pdata = self._constraint_pinocchio
+            if pdata is None:
+                pdata = self._constraint_pinocchio = self._model.createData()
+            if self._constraint_key != model.active_key:
+                constraint_datas = pin.StdVec_RigidConstraintData()
+                for constraint in model.active_constraints:
+                    constraint_datas.append(constraint.createData())
+                pin.initConstraintDynamics(self._model, pdata, model.active_constraints, constraint_datas)
+                self._constraint_datas = constraint_datas
+                self._constraint_key = model.active_key
+        if self.pinocchio is not pdata:
+            self.pinocchio = pdata
+            self.shared.pinocchio = pdata
+        return pdata if model is None else (pdata, self._constraint_datas)
