@@ -1,4 +1,4 @@
-"""Command line: wbmpc plan / sensitivity / demo (JSON output, plots, error messages)."""
+"""Command line: wbmpc plan / sensitivity (JSON output, plots, error messages)."""
 
 import json
 
@@ -61,10 +61,3 @@ def test_sensitivity_json_and_fig2(capsys, tmp_path):
     other = run_json(capsys, ["sensitivity", "--samples", "10", "--json", "--dcm", "-0.10", "-0.05", "--t", "0.1",
                               "--stance-position", "-0.12", "0.11", "--alpha3", "1e5", "--l-max", "0.25"])
     assert not np.allclose(np.array(other["dx_dtheta"]), J)
-
-
-def test_demo_writes_both_figures(capsys, tmp_path):
-    result = run_json(capsys, ["demo", "--out", str(tmp_path / "demo"), "--json"])
-    for name in ("plan.png", "sensitivity.png"):
-        assert (tmp_path / "demo" / name).stat().st_size > 10_000
-    assert result["mean_velocity"][0] == pytest.approx(1 / 3, abs=2e-3)
