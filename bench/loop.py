@@ -20,6 +20,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--duration", type=float, default=5.0, help="simulated time [s]")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--scenario", default="walk", help="scenario to run (default: walk)")
+    parser.add_argument(
+        "--max-iterations", type=int, default=None, help="FDDP iterations per MPC update (default: the controller's, 3)"
+    )
 
 
 def _bare_step_time(n_steps: int = 3000) -> float:
@@ -48,7 +51,8 @@ def run(args: argparse.Namespace) -> dict:
     from sim.runner import run_scenario
 
     bare = _bare_step_time()
-    log = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False)
+    extra = {} if args.max_iterations is None else {"max_iterations": args.max_iterations}
+    log = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False, **extra)
     timing = dict(log.timing)
     total = timing["total"]
     simulated = timing.get("simulated_time", 0.0)
@@ -64,6 +68,7 @@ def run(args: argparse.Namespace) -> dict:
     n_ticks = len(log.ticks["t"])
     return {
         "scenario": args.scenario,
+        "max_iterations": args.max_iterations or log.params["controller_options"].get("max_iterations", 3),
         "status": log.status,
         "simulated_time": simulated,
         "wall_time": total,
@@ -80,7 +85,8 @@ def run(args: argparse.Namespace) -> dict:
 
 def format_report(result: dict) -> str:
     lines = [
-        f"closed loop '{result['scenario']}' ({result['status']}): {result['simulated_time']:.2f} s simulated "
+        f"closed loop '{result['scenario']}' ({result['status']}, {result['max_iterations']} FDDP iteration(s) per "
+        f"update): {result['simulated_time']:.2f} s simulated "
         f"in {result['wall_time']:.2f} s wall",
         f"  real-time factor        {result['real_time_factor']:.2f} x   (target >= {result['target_real_time_factor']})",
         f"  loop tick / bare mj_step {result['loop_tick_over_bare_step']:.1f} x   "
