@@ -10,6 +10,7 @@ Definitions (all times in s, velocities in m/s, world frame):
   (paper, transition 0 -> 0.3 m/s: 4.35 s).
 - ``push_recovery_time``: time from the end of the push until the running average of the base y
   velocity is back within ``RECOVERY_BAND`` of its value before the push, and stays there.
+- ``max_stance_slide``: largest distance between the stance foot and its touchdown point (slips).
 - ``max_torque_ratio``: max |tau_command| / torque limit (> 1 means the limits clipped the command);
   ``saturated_fraction``: fraction of ticks with at least one clipped joint.
 - MPC tick time: wall time of each warm-started MPC update (median, p99) [s], the first (cold
@@ -42,6 +43,26 @@ def running_average(t: np.ndarray, signal: np.ndarray, window: float = AVERAGE_W
     index = np.arange(1, len(signal) + 1)
     start = np.maximum(index - n, 0)
     return (cumulative[index] - cumulative[start]) / (index - start)
+
+
+def max_stance_slide(t: np.ndarray, feet: np.ndarray, replans: dict) -> float:
+    """Largest horizontal distance between the stance foot and where it touched down [m].
+
+    At every replan the stance foot's measured position is compared with the stance position the
+    controller recorded at its touchdown (``stance_x``, ``stance_y``): a slip shows up as a large
+    distance even when the sliding foot loses and regains contact.
+
+    Args:
+        t: (n,) tick times [s]; feet: (n, n_feet, 3) foot positions, world frame [m].
+        replans: the replan log (``t``, ``stance_foot``, ``stance_x``, ``stance_y``).
+    """
+    if not {"stance_foot", "stance_x", "stance_y"} <= set(replans) or len(replans["t"]) == 0:
+        return 0.0
+    index = np.clip(np.searchsorted(t, replans["t"]), 0, len(t) - 1)
+    foot = replans["stance_foot"].astype(int)
+    measured = feet[index, foot, :2]
+    recorded = np.column_stack([replans["stance_x"], replans["stance_y"]])
+    return float(np.max(np.linalg.norm(measured - recorded, axis=1)))
 
 
 def compute_metrics(log) -> dict[str, Any]:
@@ -109,6 +130,10 @@ def compute_metrics(log) -> dict[str, Any]:
             metrics["push_max_dcm_deviation_y"] = float(
                 np.max(np.abs(ticks["dcm"][after, 1] - ticks["dcm"][before][-1, 1]))
             )
+
+    # Foot slip: stance foot away from where it touched down.
+    if "feet" in ticks:
+        metrics["max_stance_slide"] = max_stance_slide(t, ticks["feet"], replans)
 
     # Torques.
     limit = np.asarray(log.params.get("torque_limit", np.full(ticks["tau"].shape[1], np.inf)))

@@ -132,3 +132,19 @@ def test_velocity_error_and_rise_time_definitions():
     assert metrics["velocity_error_x"] == pytest.approx(abs(0.005 - residual), abs=1e-4)
     assert metrics["max_torque_ratio"] == pytest.approx(0.5)
     assert metrics["real_time_factor"] == pytest.approx(10.0)
+
+
+def test_max_stance_slide_compares_the_stance_foot_with_its_touchdown_point():
+    from sim.metrics import max_stance_slide
+
+    t = np.arange(0.0, 1.0, 0.001)
+    feet = np.zeros((len(t), 2, 3))
+    feet[:, 1, 0] = 0.1  # right foot still at x = 0.1
+    feet[500:, 0, 1] = np.linspace(0.0, 0.05, 500)  # left foot slides 5 cm sideways
+    replans = {"t": np.arange(0.0, 1.0, 0.01), "stance_foot": np.zeros(100), "stance_x": np.zeros(100),
+               "stance_y": np.zeros(100)}
+    # last replan at 0.99 s: the foot has slid 0.05 * 490 / 499 m by then
+    assert max_stance_slide(t, feet, replans) == pytest.approx(0.05 * 490 / 499)
+    replans["stance_foot"][:] = 1
+    replans["stance_x"][:] = 0.1
+    assert max_stance_slide(t, feet, replans) == pytest.approx(0.0)
