@@ -13,7 +13,7 @@ import os
 
 from wbmpc.cli import add_output_arguments, print_json
 
-DEMO_DURATION = 10.0  # [s] of simulated walking
+DEMO_DURATION = 20.0  # [s] of simulated walking (the speed integral settles within ~10 s)
 
 
 def register(subparsers) -> None:
