@@ -130,3 +130,42 @@ def test_fall_criteria():
     assert base_tilt(q[3:7]) == pytest.approx(angle)
     with pytest.raises(ParameterError, match="max_tilt"):
         FallCriteria(max_tilt=0.0)
+
+
+class _InterruptedController(JointPDController):
+    """Emulates Ctrl-C in the middle of a run."""
+
+    def compute(self, t, measurement):
+        if t >= 0.03:
+            raise KeyboardInterrupt
+        return super().compute(t, measurement)
+
+
+def test_log_is_written_on_ctrl_c(tmp_path):
+    with pytest.raises(KeyboardInterrupt):
+        run_scenario("walk", controller=_InterruptedController(), duration=1.0, out=str(tmp_path), progress=False)
+    log = load_run(tmp_path)
+    assert log.status == "interrupted"
+    assert log.ticks["t"][-1] == pytest.approx(0.03)
+
+
+def test_run_log_pickles_for_worker_processes(pd_fall):
+    import pickle
+
+    log, _ = pd_fall
+    again = pickle.loads(pickle.dumps(log))
+    np.testing.assert_array_equal(again.ticks["x"], log.ticks["x"])
+    assert again.metrics == log.metrics
+
+
+def test_cli_run_prints_metrics_as_json(capsys, tmp_path):
+    from wbmpc.cli import main
+
+    code = main(["run", "walk", "--controller", "pd", "--duration", "0.2", "--json", "--out", str(tmp_path)])
+    summary = json.loads(capsys.readouterr().out)
+    assert code == 0 and summary["status"] == "completed"
+    assert summary["metrics"]["simulated_time"] == pytest.approx(0.2)
+    assert {os.path.basename(p) for p in summary["files"]} == {"figures.png", "log.npz", "metrics.json"}
+    code = main(["run", "walk", "--controller", "pd", "--set", "sped=0.3", "--duration", "0.1"])
+    assert code == 2  # unknown parameter: one-line error, exit code 2
+    assert "unknown parameter(s) ['sped']" in capsys.readouterr().err
