@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -113,9 +113,10 @@ class WalkingControllerConfig:
         first_stance_foot: stance foot at t0 (both feet are on the ground at start; the other one
             takes the first step).
         velocity_command: initial (v_x, v_y) command [m/s] (world frame); None keeps the preset's.
-        velocity_integral_gain: integral action on the walking speed [1/s] (0 = off, the paper's
-            pipeline): the sequencer is given v* + k ∫ (v* − v̄) dt, v̄ the CoM velocity low-passed
-            over 1 s, the correction bounded by ``velocity_correction_max``. Default 0.5: without
+        velocity_integral_gain: integral action on the forward speed [1/s] (0 = off, the paper's
+            pipeline): the sequencer is given v*_x + k ∫ (v*_x − v̄_x) dt, v̄ the CoM velocity
+            low-passed over 1 s, the correction bounded by ``velocity_correction_max`` (and the
+            integral clamped accordingly: anti-windup). Default 1.0: without
             it Bolt settles in a gait at 0.6 m/s for a 0.33 m/s command when it starts from
             standing (steps of 0.185 m, near l_max), see docs/closed_loop.md.
         velocity_correction_max: bound of that correction [m/s].
@@ -139,7 +140,7 @@ class WalkingControllerConfig:
     touchdown_detection: str = "contact"
     first_stance_foot: str = "left"
     velocity_command: tuple[float, float] | None = None
-    velocity_integral_gain: float = 0.5
+    velocity_integral_gain: float = 1.0
     velocity_correction_max: float = 0.3
     mpc_failure_times: tuple[float, ...] = ()
     sequencer_params: Any = None
@@ -186,7 +187,6 @@ class _Timers:
     sequencer: float = 0.0
     mpc: float = 0.0
     feedback: float = 0.0
-    extras: dict = field(default_factory=dict)
 
 
 class WalkingController:
@@ -220,7 +220,7 @@ class WalkingController:
         self.sequencer_params = params
         self.sequencer = FootstepSequencer(params, backend=cfg.sequencer_backend)
         self.command = np.array([params.v_x, getattr(params, "v_y", 0.0)], dtype=float)
-        self._velocity_filtered = self.command * 0.0
+        self._velocity_filtered = np.zeros(2)  # Bolt starts at rest
         self._velocity_integral = np.zeros(2)
         self.com_height = _com_height(params)  # LIPM z_c [m], also the terminal CoM height reference
         self.omega = float(np.sqrt(GRAVITY / self.com_height))
@@ -266,7 +266,10 @@ class WalkingController:
         period = self.config.replan_period
         alpha = period / (VELOCITY_FILTER_TIME + period)
         self._velocity_filtered += alpha * (com_velocity_xy - self._velocity_filtered)
-        self._velocity_integral += (self.command - self._velocity_filtered) * period
+        # forward speed only: a lateral correction would shift the sequencer's nominal step widths
+        self._velocity_integral[0] += (self.command[0] - self._velocity_filtered[0]) * period
+        bound = self.config.velocity_correction_max / self.config.velocity_integral_gain  # anti-windup
+        np.clip(self._velocity_integral, -bound, bound, out=self._velocity_integral)
         self._apply_sequencer_velocity(self.command + self._velocity_correction())
 
     # ------------------------------------------------------------------ helpers
