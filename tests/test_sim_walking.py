@@ -129,3 +129,17 @@ def test_a_due_touchdown_not_yet_measured_is_delayed_in_the_schedule():
     np.testing.assert_array_equal(delayed.positions, plan.positions)
     same, no_delay = _wait_for_touchdown(plan, t, True, 0.01)  # foot already on the ground
     assert same is plan and no_delay == 0.0
+
+
+def test_speed_integral_acts_on_the_forward_speed_with_anti_windup(controller_with_known_reference):
+    make, _, _, _ = controller_with_known_reference
+    controller = make(velocity_integral_gain=1.0, velocity_correction_max=0.2)
+    controller.set_velocity_command(0.3, 0.0)
+    assert controller.sequencer_params.v_x == pytest.approx(0.3)
+    for _ in range(1000):  # 10 s standing still while 0.3 m/s forward is asked, drifting sideways
+        controller._update_velocity_integral(np.array([0.0, 0.5]))
+    assert controller.sequencer_params.v_x == pytest.approx(0.5)  # 0.3 + the 0.2 m/s bound
+    assert controller.sequencer_params.v_y == 0.0
+    for _ in range(150):  # now too fast: the clamped integral unwinds once the filtered speed passes 0.3
+        controller._update_velocity_integral(np.array([0.6, 0.0]))
+    assert controller.sequencer_params.v_x < 0.5
