@@ -25,7 +25,9 @@ def test_short_walk_completes_without_falling(short_walk):
     assert log.status == "completed", (log.fall_time, log.fall_reason, log.error)
     metrics = log.metrics
     assert metrics["steps"] >= 6
-    assert 0.3 < metrics["distance_x"] < 1.2  # command ramped 0 -> 0.33 m/s over 2 s, then 1 s
+    # command ramped 0 -> 0.33 m/s over 2 s (0.66 m in 3 s); Bolt overshoots to ~0.6 m/s at first,
+    # which the speed integral removes over the next seconds (docs/closed_loop.md)
+    assert 0.3 < metrics["distance_x"] < 1.6
     assert metrics["mpc_failures"] == 2  # only the injected ones
     # the stance foot alternates and the executed footholds move forward
     stance = log.replans["stance_foot"][log.replans["stance_switched"] > 0.5]
