@@ -35,7 +35,6 @@ from sim.stance import TOUCHDOWN_DETECTIONS, StanceTracker
 from wbmpc.errors import ParameterError
 
 GRAVITY = 9.81  # [m/s^2]
-VELOCITY_FILTER_TIME = 1.0  # [s], low-pass time constant of the measured speed (velocity integral)
 
 
 @runtime_checkable
@@ -120,6 +119,7 @@ class WalkingControllerConfig:
             it Bolt settles in a gait at 0.6 m/s for a 0.33 m/s command when it starts from
             standing (steps of 0.185 m, near l_max), see docs/closed_loop.md.
         velocity_correction_max: bound of that correction [m/s].
+        velocity_filter_time: time constant of the low-pass filter on the measured speed [s].
         mpc_failure_times: injected failures [s]: the MPC update at the first replan at or after
             each time is discarded as if the solver had failed (the last good solution is kept).
         sequencer_params: ``sequencer.SequencerParams``; None = :func:`default_sequencer_params`.
@@ -142,6 +142,7 @@ class WalkingControllerConfig:
     velocity_command: tuple[float, float] | None = None
     velocity_integral_gain: float = 1.0
     velocity_correction_max: float = 0.3
+    velocity_filter_time: float = 1.0
     mpc_failure_times: tuple[float, ...] = ()
     sequencer_params: Any = None
     sequencer_backend: str = "exact"
@@ -158,6 +159,8 @@ class WalkingControllerConfig:
             raise ParameterError(f"computation_delay={self.computation_delay} s must be in [0, 0.1] s")
         if not (np.isfinite(self.velocity_integral_gain) and self.velocity_integral_gain >= 0):
             raise ParameterError(f"velocity_integral_gain={self.velocity_integral_gain} 1/s must be >= 0")
+        if not (np.isfinite(self.velocity_filter_time) and self.velocity_filter_time > 0):
+            raise ParameterError(f"velocity_filter_time={self.velocity_filter_time} s must be > 0")
         if not (np.isfinite(self.velocity_correction_max) and self.velocity_correction_max >= 0):
             raise ParameterError(f"velocity_correction_max={self.velocity_correction_max} m/s must be >= 0")
         if self.delay_nodes not in (0, 1):
@@ -264,7 +267,7 @@ class WalkingController:
         if self.config.velocity_integral_gain <= 0:
             return
         period = self.config.replan_period
-        alpha = period / (VELOCITY_FILTER_TIME + period)
+        alpha = period / (self.config.velocity_filter_time + period)
         self._velocity_filtered += alpha * (com_velocity_xy - self._velocity_filtered)
         # forward speed only: a lateral correction would shift the sequencer's nominal step widths
         self._velocity_integral[0] += (self.command[0] - self._velocity_filtered[0]) * period
