@@ -114,10 +114,10 @@ class WalkingControllerConfig:
         velocity_command: initial (v_x, v_y) command [m/s] (world frame); None keeps the preset's.
         velocity_integral_gain: integral action on the forward speed [1/s] (0 = off, the paper's
             pipeline): the sequencer is given v*_x + k ∫ (v*_x − v̄_x) dt, v̄ the CoM velocity
-            low-passed over ``velocity_filter_time`` (0.5 s), the correction bounded by ``velocity_correction_max`` (and the
-            integral clamped accordingly: anti-windup). Default 1.0: without
-            it Bolt settles in a gait at 0.6 m/s for a 0.33 m/s command when it starts from
-            standing (steps of 0.185 m, near l_max), see docs/closed_loop.md.
+            low-passed over ``velocity_filter_time``, the correction bounded by
+            ``velocity_correction_max`` (and the integral clamped accordingly: anti-windup).
+            Default 1.0: without it Bolt settles in a gait at 0.6 m/s for a 0.33 m/s command when
+            it starts from standing (steps of 0.185 m, near l_max), see docs/closed_loop.md.
         velocity_correction_max: bound of that correction [m/s].
         velocity_filter_time: time constant of the low-pass filter on the measured speed [s].
         mpc_failure_times: injected failures [s]: the MPC update at the first replan at or after
