@@ -142,7 +142,7 @@ class WalkingControllerConfig:
     velocity_command: tuple[float, float] | None = None
     velocity_integral_gain: float = 1.0
     velocity_correction_max: float = 0.3
-    velocity_filter_time: float = 0.5
+    velocity_filter_time: float = 1.0
     mpc_failure_times: tuple[float, ...] = ()
     sequencer_params: Any = None
     sequencer_backend: str = "exact"
