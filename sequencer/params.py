@@ -14,12 +14,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 from sequencer.nominal import nominal_dcm_offset, nominal_step_width, stance_sign
 from wbmpc.errors import ParameterError
+from wbmpc.toml_files import read_toml
 
 PRESET_DIR = Path(__file__).resolve().parent / "presets"
 
@@ -141,15 +141,7 @@ class SequencerParams:
     @classmethod
     def from_toml(cls, path: str | Path) -> "SequencerParams":
         """Load parameters from a TOML file with one key per field (missing keys keep defaults)."""
-        path = Path(path)
-        try:
-            with path.open("rb") as stream:
-                data = tomllib.load(stream)
-        except FileNotFoundError as err:
-            raise ParameterError(f"parameter file {str(path)!r} does not exist") from err
-        except tomllib.TOMLDecodeError as err:
-            raise ParameterError(f"parameter file {str(path)!r} is not valid TOML: {err}") from err
-        return cls.from_dict(data, source=str(path))
+        return cls.from_dict(read_toml(path, "parameter file"), source=str(path))
 
     @classmethod
     def from_dict(cls, data: dict, source: str = "dict") -> "SequencerParams":

@@ -45,7 +45,6 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -53,6 +52,7 @@ from typing import Any
 import numpy as np
 
 from wbmpc.errors import ParameterError
+from wbmpc.toml_files import read_toml
 
 CONTROLLERS = ("walking", "pd")
 DEFAULT_VARIANT = "default"
@@ -214,15 +214,7 @@ class CampaignSpec:
     @classmethod
     def from_toml(cls, path: str | Path) -> "CampaignSpec":
         """Load a campaign file (see the module docstring for the format)."""
-        path = Path(path)
-        try:
-            with path.open("rb") as stream:
-                data = tomllib.load(stream)
-        except FileNotFoundError as err:
-            raise ParameterError(f"campaign file {str(path)!r} does not exist") from err
-        except tomllib.TOMLDecodeError as err:
-            raise ParameterError(f"campaign file {str(path)!r} is not valid TOML: {err}") from err
-        return cls.from_dict(data, source=str(path))
+        return cls.from_dict(read_toml(path, "campaign file"), source=str(path))
 
 
 def _axis_values(name: str, values: Any) -> list[Any]:
