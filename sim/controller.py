@@ -123,6 +123,10 @@ class WalkingControllerConfig:
         mpc_failure_times: injected failures [s]: the MPC update at the first replan at or after
             each time is discarded as if the solver had failed (the last good solution is kept).
         sequencer_params: ``sequencer.SequencerParams``; None = :func:`default_sequencer_params`.
+        sequencer_params_from: None, or (t_switch [s], ``SequencerParams``): from t_switch on the
+            sequencer uses these parameters instead (the current velocity command, integral
+            correction included, carries over). Used to compare gaits after a common start, e.g.
+            fixed step timing from t_switch (a start from standing with fixed timing falls).
         sequencer_backend: QP backend of the sequencer: "exact" (closed-form solution of the same QP,
             verified against OSQP in the sequencer tests, fastest), "osqp" (the paper's) or "proxqp".
         ocp: ``wbmpc.WalkingOCPConfig``; None = :func:`default_ocp_config` (the OCP's defaults with
@@ -145,6 +149,7 @@ class WalkingControllerConfig:
     velocity_filter_time: float = 1.0
     mpc_failure_times: tuple[float, ...] = ()
     sequencer_params: Any = None
+    sequencer_params_from: tuple[float, Any] | None = None
     sequencer_backend: str = "exact"
     ocp: Any = None
 
@@ -173,6 +178,12 @@ class WalkingControllerConfig:
             raise ParameterError(f"first_stance_foot={self.first_stance_foot!r} must be 'left' or 'right'")
         if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
             raise ParameterError(f"max_iterations={self.max_iterations!r} must be an integer >= 1")
+        if self.sequencer_params_from is not None:
+            switch = self.sequencer_params_from
+            if not (isinstance(switch, tuple) and len(switch) == 2 and np.isfinite(switch[0]) and switch[0] >= 0):
+                raise ParameterError(
+                    f"sequencer_params_from={switch!r} must be None or (t_switch >= 0 [s], SequencerParams)"
+                )
 
 
 @dataclass
@@ -222,6 +233,12 @@ class WalkingController:
             params = _with_velocity(params, cfg.velocity_command)
         self.sequencer_params = params
         self.sequencer = FootstepSequencer(params, backend=cfg.sequencer_backend)
+        self._params_switch = cfg.sequencer_params_from  # applied once, at the first replan at or after its time
+        if self._params_switch is not None and self._params_switch[1].z_c != params.z_c:
+            raise ParameterError(
+                f"sequencer_params_from z_c={self._params_switch[1].z_c} m must equal the initial "
+                f"sequencer_params z_c={params.z_c} m (the LIPM frequency omega is fixed for the run)"
+            )
         self.command = np.array([params.v_x, getattr(params, "v_y", 0.0)], dtype=float)
         self._velocity_filtered = np.zeros(2)  # Bolt starts at rest
         self._velocity_integral = np.zeros(2)
@@ -263,6 +280,15 @@ class WalkingController:
             self.sequencer_params = _with_velocity(self.sequencer_params, tuple(velocity))
             self.sequencer = FootstepSequencer(self.sequencer_params, backend=self.config.sequencer_backend)
 
+    def _switch_sequencer_params(self, params: Any) -> None:
+        """Plan with ``params`` from now on, keeping the current sequencer velocity (command + correction)."""
+        from sequencer import FootstepSequencer
+
+        velocity = (self.sequencer_params.v_x, getattr(self.sequencer_params, "v_y", 0.0))
+        self.sequencer_params = _with_velocity(params, velocity)
+        self.sequencer = FootstepSequencer(self.sequencer_params, backend=self.config.sequencer_backend)
+        self._params_switch = None
+
     def _update_velocity_integral(self, com_velocity_xy: np.ndarray) -> None:
         if self.config.velocity_integral_gain <= 0:
             return
@@ -294,6 +320,8 @@ class WalkingController:
         q, v = x[: self.nq], x[self.nq :]
         com, dcm = self._dcm(q, v)
         self._update_velocity_integral(np.array(self.data.vcom[0][:2]))
+        if self._params_switch is not None and t >= self._params_switch[0]:
+            self._switch_sequencer_params(self._params_switch[1])
         feet_world = self._feet_position(q)
 
         # Stance switch from the previous plan (touchdown time reached, or early contact).

@@ -37,7 +37,9 @@ def test_trial_arguments_translate_force_components_phase_and_step_timing():
     arguments = resolve_arguments("push", "walking", 6.0, params)
     assert arguments["force"] == pytest.approx(5.0)
     assert arguments["direction"] == pytest.approx(math.degrees(math.atan2(4.0, -3.0)))
-    base = SequencerParams.bolt_walking()
+    from sim.controller import default_sequencer_params
+
+    base = default_sequencer_params()  # the walking controller's own parameters: 'adaptive' is the default controller
     assert arguments["push_time"] == pytest.approx(3.0 + 0.5 * base.t_nom)
     fixed = arguments["sequencer_params"]
     assert fixed.t_min == fixed.t_max == fixed.t_nom == base.t_nom
@@ -176,5 +178,9 @@ def test_example_campaign_file_loads():
     spec = CampaignSpec.from_toml(path)
     trials = make_trials(spec)
     assert len(trials) == 3 * 4 * 2 * 2
-    assert {t.arguments["sequencer_params"].t_max for t in trials if t.variant == "fixed"} == {0.3}
+    fixed = [t for t in trials if t.variant == "fixed"]
+    # both variants start adaptive; the fixed timing applies from step_timing_from, before every push
+    assert {t.arguments["sequencer_params_from"][1].t_max for t in fixed} == {0.3}
+    assert all(t.arguments["sequencer_params"].t_max > 0.3 for t in trials)
+    assert all(t.arguments["sequencer_params_from"][0] < t.arguments["push_time"] for t in fixed)
     assert max(t.arguments["push_time"] for t in trials) + 0.1 < spec.duration

@@ -10,10 +10,13 @@ Campaign parameters that are not arguments of :func:`sim.run_scenario` (translat
   (``metrics["push_phase_measured"]``): it can differ from the nominal one when the gait drifts.
 - ``sequencer_params`` may be a preset name (``"table_i"``) or a table of fields that override the
   Bolt walking preset (campaign files).
-- ``step_timing`` (controller "walking"): "adaptive" (the sequencer's preset, the paper's
-  controller), "fixed" (T_min = T_max = T_nom: the step duration cannot change) or "stiff" (the
-  timing weight alpha_2 raised to ``STIFF_TIMING_WEIGHT``: timing changes cost far more than
-  position changes).
+- ``step_timing`` (controller "walking"): "adaptive" (the walking controller's sequencer
+  parameters, the paper's controller), "fixed" (T_min = T_max = T_nom: the step duration cannot
+  change) or "stiff" (the timing weight alpha_2 raised to ``STIFF_TIMING_WEIGHT``: timing changes
+  cost far more than position changes).
+- ``step_timing_from`` [s] (with ``step_timing``; default 0): the variant's timing applies from
+  this time on, the start being adaptive (``WalkingControllerConfig.sequencer_params_from``), so
+  that variants are compared on the same walking gait rather than on starting from standing.
 
 :func:`run_trial` runs in worker processes (local pool or Ray): it takes a picklable
 :class:`Trial`, never raises for a failing trial (the error text is recorded instead) and
@@ -40,7 +43,7 @@ from wbmpc.errors import ParameterError
 
 STEP_TIMINGS = ("adaptive", "fixed", "stiff")
 STIFF_TIMING_WEIGHT = 1e8  # alpha_2 of the "stiff" step timing (preset: 1, alpha_3 = 1e6)
-CAMPAIGN_PARAMETERS = ("force_x", "force_y", "phase", "push_after", "step_timing")
+CAMPAIGN_PARAMETERS = ("force_x", "force_y", "phase", "push_after", "step_timing", "step_timing_from")
 PD_OPTIONS = ("kp", "kd")
 MAX_TRACEBACK_CHARS = 4000
 
@@ -128,7 +131,7 @@ def _allowed_names(scenario: str, controller: str) -> set[str]:
 
     names = set(scenario_parameters(scenario)) | {f.name for f in dataclasses.fields(RunnerOptions)}
     if controller == "walking":
-        names |= {f.name for f in dataclasses.fields(WalkingControllerConfig)} | {"step_timing"}
+        names |= {f.name for f in dataclasses.fields(WalkingControllerConfig)} | {"step_timing", "step_timing_from"}
     else:
         names |= set(PD_OPTIONS)
     if scenario == "push":
@@ -156,8 +159,18 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
             else SequencerParams.from_dict({**SequencerParams.bolt_walking().to_dict(), **given}, "sequencer_params")
         )
     step_timing = arguments.pop("step_timing", None)
+    step_timing_from = _finite("step_timing_from", arguments.pop("step_timing_from", 0.0))
+    if step_timing_from < 0:
+        raise ParameterError(f"step_timing_from={step_timing_from} s must be >= 0")
     if step_timing is not None:
-        arguments["sequencer_params"] = _sequencer_params(step_timing, arguments.get("sequencer_params"))
+        timed = _sequencer_params(step_timing, arguments.get("sequencer_params"))
+        if step_timing_from > 0:
+            arguments["sequencer_params"] = _sequencer_params("adaptive", arguments.get("sequencer_params"))
+            arguments["sequencer_params_from"] = (step_timing_from, timed)
+        else:
+            arguments["sequencer_params"] = timed
+    elif step_timing_from > 0:
+        raise ParameterError("step_timing_from needs a step_timing")
     if "force_x" in arguments or "force_y" in arguments:
         clash = sorted({"force", "direction"} & set(arguments))
         if clash:
@@ -195,12 +208,12 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
 
 
 def _sequencer_params(step_timing: str, base: Any = None):
-    """Sequencer parameters for ``step_timing`` from ``base`` (None: the Bolt walking preset)."""
-    from sequencer import SequencerParams
+    """Sequencer parameters for ``step_timing`` from ``base`` (None: the walking controller's default)."""
+    from sim.controller import default_sequencer_params
 
     if step_timing not in STEP_TIMINGS:
         raise ParameterError(f"step_timing={step_timing!r} must be one of {STEP_TIMINGS}")
-    params = base if base is not None else SequencerParams.bolt_walking()
+    params = base if base is not None else default_sequencer_params()
     if step_timing == "fixed":
         return dataclasses.replace(params, t_min=params.t_nom, t_max=params.t_nom, name=f"{params.name}+fixed_timing")
     if step_timing == "stiff":

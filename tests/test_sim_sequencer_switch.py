@@ -1,0 +1,59 @@
+"""Changing the sequencer's parameters during a run (fixed step timing after a common start)."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from robots import load_robot
+from sim.campaigns.trial import resolve_arguments
+from sim.controller import MAX_STEP_WIDTH, WalkingController, WalkingControllerConfig, default_sequencer_params
+from sim.measurement import Measurement
+from wbmpc.errors import ParameterError
+
+
+def fixed_timing(params):
+    return dataclasses.replace(params, t_min=params.t_nom, t_max=params.t_nom, name=f"{params.name}+fixed_timing")
+
+
+def test_the_controller_switches_parameters_at_the_given_time_and_keeps_the_velocity():
+    robot = load_robot("bolt")
+    x0 = np.concatenate([robot.q_reference, robot.v_reference])
+    adaptive = default_sequencer_params()
+    config = WalkingControllerConfig(n_nodes=10, max_iterations=1, velocity_command=(0.2, 0.0),
+                                     sequencer_params_from=(0.02, fixed_timing(adaptive)))
+    controller = WalkingController(config)
+    controller.reset(robot, x0, 0.0)
+    standing = Measurement(0.0, x0, np.array([True, True]))
+    for t in (0.0, 0.01):
+        controller.replan(t, dataclasses.replace(standing, t=t))
+        assert controller.sequencer_params.t_min < controller.sequencer_params.t_max
+    v_x_before = controller.sequencer_params.v_x
+    controller.replan(0.02, dataclasses.replace(standing, t=0.02))
+    params = controller.sequencer_params
+    assert params.t_min == params.t_max == adaptive.t_nom
+    assert params.v_x == pytest.approx(v_x_before, abs=0.02)  # command + integral correction carry over
+    assert controller.plan.steps[0].touchdown_time - controller.plan.t0 <= adaptive.t_nom + 1e-9
+
+
+def test_a_switch_to_another_com_height_is_refused_before_the_run():
+    robot = load_robot("bolt")
+    other = dataclasses.replace(default_sequencer_params(), z_c=0.25)
+    controller = WalkingController(WalkingControllerConfig(n_nodes=10, sequencer_params_from=(1.0, other)))
+    with pytest.raises(ParameterError, match=r"sequencer_params_from z_c=0.25 m must equal"):
+        controller.reset(robot, np.concatenate([robot.q_reference, robot.v_reference]), 0.0)
+
+
+def test_campaign_step_timing_from_starts_adaptive_with_the_controller_defaults():
+    arguments = resolve_arguments("push", "walking", 6.0, {"force_y": 4.0, "phase": 0.5, "push_after": 3.0,
+                                                           "step_timing": "fixed", "step_timing_from": 2.0})
+    start, (t_switch, later) = arguments["sequencer_params"], arguments["sequencer_params_from"]
+    assert start == default_sequencer_params() and start.w_right_max == MAX_STEP_WIDTH
+    assert t_switch == 2.0 and later == fixed_timing(start)
+    # without step_timing_from the variant applies from the start, over the same defaults
+    arguments = resolve_arguments("push", "walking", 6.0, {"force_y": 4.0, "phase": 0.5, "push_after": 3.0,
+                                                           "step_timing": "fixed"})
+    assert arguments["sequencer_params"] == fixed_timing(default_sequencer_params())
+    assert "sequencer_params_from" not in arguments
+    with pytest.raises(ParameterError, match="step_timing_from needs a step_timing"):
+        resolve_arguments("push", "walking", 6.0, {"force_y": 4.0, "phase": 0.5, "step_timing_from": 2.0})
