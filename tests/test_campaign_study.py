@@ -17,7 +17,7 @@ from sequencer import SequencerParams
 def test_timing_study_runs_both_variants_with_the_walking_controller(tmp_path):
     spec = builtin_campaign(
         "push-map", compare_timing="fixed", steps_x=1, steps_y=1, force_max_x=2.0, force_max_y=2.0, phases=(0.0,),
-        push_after=0.05, duration=0.25,
+        push_after=0.05, duration=0.25, timing_from=0.0,  # fixed timing from the start (tiny run)
     )
     run = run_campaign(spec, tmp_path, backend="inline", progress=False)
     assert (run.n_run, run.n_error) == (2, 0)

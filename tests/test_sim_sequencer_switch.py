@@ -57,3 +57,14 @@ def test_campaign_step_timing_from_starts_adaptive_with_the_controller_defaults(
     assert "sequencer_params_from" not in arguments
     with pytest.raises(ParameterError, match="step_timing_from needs a step_timing"):
         resolve_arguments("push", "walking", 6.0, {"force_y": 4.0, "phase": 0.5, "step_timing_from": 2.0})
+
+
+def test_push_map_timing_study_switches_the_compared_timing_after_the_start():
+    from sim.campaigns.spec import builtin_campaign
+
+    spec = builtin_campaign("push-map", compare_timing="fixed", steps_x=1, steps_y=1, phases=(0.0,))
+    assert spec.variants["fixed"] == {"step_timing": "fixed", "step_timing_from": 2.0}
+    from_start = builtin_campaign("push-map", compare_timing="fixed", timing_from=0.0, steps_x=1, steps_y=1)
+    assert from_start.variants["fixed"] == {"step_timing": "fixed"}
+    with pytest.raises(ParameterError, match=r"timing_from=5.0 s must be in \[0, push_after=3.0 s\)"):
+        builtin_campaign("push-map", compare_timing="fixed", timing_from=5.0)

@@ -28,6 +28,7 @@ def register(subparsers) -> None:
         PUSH_PHASES,
         TERRAIN_DURATION,
         TERRAIN_SEEDS,
+        TIMING_FROM,
     )
     from sim.campaigns.trial import STEP_TIMINGS
     from sim.cli import _parse_assignment
@@ -66,6 +67,10 @@ def register(subparsers) -> None:
         "--compare-timing", nargs="?", const="fixed", choices=STEP_TIMINGS[1:], default=None,
         help="also run fixed step timing ('fixed': T_min = T_max = T_nom, the default; 'stiff': huge alpha_2)",
     )
+    push.add_argument(
+        "--timing-from", type=float, default=TIMING_FROM,
+        help=f"with --compare-timing: time [s] from which the compared timing applies (default {TIMING_FROM}; 0: from the start)",
+    )
     add_trial_options(push, None)
     add_run_options(push)
     push.set_defaults(func=_run_builtin, campaign="push-map")
@@ -103,6 +108,7 @@ def _spec_from_args(args: argparse.Namespace):
             phases=tuple(args.phases),
             seeds=tuple(range(_count("--seeds", args.seeds))),
             compare_timing=args.compare_timing,
+            timing_from=args.timing_from,
             controller=args.controller,
             push_after=args.push_after,
             duration=args.duration,

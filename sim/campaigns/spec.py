@@ -64,6 +64,7 @@ PUSH_FORCE_MAX = 12.0  # [N]
 PUSH_FORCE_STEPS_X = 7  # -12, -8, ..., 12 N
 PUSH_FORCE_STEPS_Y = 4  # 0, 4, 8, 12 N
 PUSH_PHASES = (0.0, 0.2, 0.4, 0.6, 0.8)  # 5 pushes per force, spread over the step (as the paper's 5 repeats)
+TIMING_FROM = 2.0  # [s], start of the compared step timing in the timing study (after the start from standing)
 PUSH_AFTER = 3.0  # [s], ten nominal steps of 0.3 s: walking is steady by then
 PUSH_RECOVERY_TIME = 2.5  # [s] of walking after the latest push ends, to count as recovered
 TERRAIN_SEEDS = 10
@@ -246,6 +247,7 @@ def push_map(
     phases: tuple[float, ...] = PUSH_PHASES,
     seeds: tuple[int, ...] = (0,),
     compare_timing: str | None = None,
+    timing_from: float = TIMING_FROM,
     controller: str = "walking",
     push_after: float = PUSH_AFTER,
     duration: float | None = None,
@@ -266,6 +268,9 @@ def push_map(
         seeds: run seeds (matter only with measurement noise: pushes on flat ground are deterministic).
         compare_timing: None (adaptive step timing only), "fixed" (T_min = T_max = T_nom) or
             "stiff" (timing weight alpha_2 made very large): runs both variants on the same grid.
+        timing_from: time [s] from which the compared variant's step timing applies (before it
+            both variants walk with adaptive timing: a start from standing with fixed timing falls);
+            0 applies it from the start.
         controller: "walking" or "pd".
         push_after: time before the pushes [s] (walking reaches steady state).
         duration: simulated time per trial [s]; None = latest push end + ``PUSH_RECOVERY_TIME``.
@@ -284,7 +289,12 @@ def push_map(
 
         if compare_timing not in STEP_TIMINGS[1:]:
             raise ParameterError(f"compare_timing={compare_timing!r} must be one of {STEP_TIMINGS[1:]}")
-        variants = {"adaptive": {"step_timing": "adaptive"}, compare_timing: {"step_timing": compare_timing}}
+        if not (math.isfinite(timing_from) and 0.0 <= timing_from < push_after):
+            raise ParameterError(f"timing_from={timing_from} s must be in [0, push_after={push_after} s)")
+        compared: dict[str, Any] = {"step_timing": compare_timing}
+        if timing_from > 0:
+            compared["step_timing_from"] = float(timing_from)
+        variants = {"adaptive": {"step_timing": "adaptive"}, compare_timing: compared}
     if duration is None:
         from sequencer import SequencerParams
 
