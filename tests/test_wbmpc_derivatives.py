@@ -45,6 +45,22 @@ def _control_fd(f, u, eps=EPS):
     return J
 
 
+def _dynamics_fd(model, state: StateMultibody, x, u, xnext):
+    """Finite-difference (Fx, Fu) of a node's next state at (x, u), as tangents at ``xnext``."""
+
+    def xnext_of_x(xx):
+        d = model.createData()
+        model.calc(d, xx, u)
+        return state.diff(xnext, d.xnext)
+
+    def xnext_of_u(uu):
+        d = model.createData()
+        model.calc(d, x, uu)
+        return state.diff(xnext, d.xnext)
+
+    return _tangent_fd(state, xnext_of_x, x), _control_fd(xnext_of_u, u)
+
+
 def _assert_close(actual, expected, name, rtol=1e-4):
     scale = max(1.0, float(np.max(np.abs(expected))))
     err = float(np.max(np.abs(actual - expected)))
@@ -87,16 +103,6 @@ def test_integrated_node_derivatives_match_finite_differences(bolt, walking_node
     model.calc(data, x, u)
     model.calcDiff(data, x, u)
 
-    def xnext_of_x(xx):
-        d = model.createData()
-        model.calc(d, xx, u)
-        return state.diff(data.xnext, d.xnext)
-
-    def xnext_of_u(uu):
-        d = model.createData()
-        model.calc(d, x, uu)
-        return state.diff(data.xnext, d.xnext)
-
     def cost_of_x(xx):
         d = model.createData()
         model.calc(d, xx, u)
@@ -107,8 +113,9 @@ def test_integrated_node_derivatives_match_finite_differences(bolt, walking_node
         model.calc(d, x, uu)
         return np.array([d.cost])
 
-    _assert_close(data.Fx, _tangent_fd(state, xnext_of_x, x), "Fx")
-    _assert_close(data.Fu, _control_fd(xnext_of_u, u), "Fu")
+    Fx, Fu = _dynamics_fd(model, state, x, u, data.xnext)
+    _assert_close(data.Fx, Fx, "Fx")
+    _assert_close(data.Fu, Fu, "Fu")
     _assert_close(data.Lx, _tangent_fd(state, cost_of_x, x)[0], "Lx", rtol=1e-3)
     _assert_close(data.Lu, _control_fd(cost_of_u, u)[0], "Lu", rtol=1e-3)
 
@@ -248,18 +255,9 @@ def test_flat_foot_contact_dynamics_match_finite_differences(backend):
     model.calc(data, x, u)
     model.calcDiff(data, x, u)
 
-    def xnext_of_x(xx):
-        d = model.createData()
-        model.calc(d, xx, u)
-        return state.diff(data.xnext, d.xnext)
-
-    def xnext_of_u(uu):
-        d = model.createData()
-        model.calc(d, x, uu)
-        return state.diff(data.xnext, d.xnext)
-
-    _assert_close(data.Fx, _tangent_fd(state, xnext_of_x, x), "G1 Fx", rtol=1e-3)
-    _assert_close(data.Fu, _control_fd(xnext_of_u, u), "G1 Fu", rtol=1e-3)
+    Fx, Fu = _dynamics_fd(model, state, x, u, data.xnext)
+    _assert_close(data.Fx, Fx, "G1 Fx", rtol=1e-3)
+    _assert_close(data.Fu, Fu, "G1 Fu", rtol=1e-3)
 
 
 def test_compiled_state_difference_matches_pinocchio(bolt):
@@ -295,15 +293,6 @@ def test_flight_node_after_stance_matches_finite_differences(bolt, backend):
     model.calcDiff(data, x, u)
     state = ocp.state
 
-    def xnext_of_x(xx):
-        d = model.createData()
-        model.calc(d, xx, u)
-        return state.diff(data.xnext, d.xnext)
-
-    def xnext_of_u(uu):
-        d = model.createData()
-        model.calc(d, x, uu)
-        return state.diff(data.xnext, d.xnext)
-
-    _assert_close(data.Fx, _tangent_fd(state, xnext_of_x, x), "flight Fx")
-    _assert_close(data.Fu, _control_fd(xnext_of_u, u), "flight Fu")
+    Fx, Fu = _dynamics_fd(model, state, x, u, data.xnext)
+    _assert_close(data.Fx, Fx, "flight Fx")
+    _assert_close(data.Fu, Fu, "flight Fu")
