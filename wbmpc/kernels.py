@@ -267,6 +267,15 @@ def free_flyer_state_difference(x0, x1, nq, out):
 
 
 @njit(cache=True)
+def free_flyer_state_differences(X0, X1, nq, out):
+    """out[k] = X1[k] ⊖ X0[k] for every row; returns the first row needing Pinocchio (half turn), or −1."""
+    for k in range(out.shape[0]):
+        if not free_flyer_state_difference(X0[k], X1[k], nq, out[k]):
+            return k
+    return -1
+
+
+@njit(cache=True)
 def free_flyer_feedback_control(x_ref, x, u, k, K, alpha, nq, dx, out):
     """dx = x ⊖ x_ref (free-flyer models) and out = u − α k − K dx (Crocoddyl's sign) in one call.
 

@@ -5,9 +5,16 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from wbmpc.errors import ParameterError
+from wbmpc.kernels import feedback_control, free_flyer_feedback_control
+
+
+class RolloutError(ArithmeticError):
+    """A forward rollout produced a non-finite control, state or cost."""
 
 
 class ShootingProblem:
@@ -36,15 +43,16 @@ class ShootingProblem:
     def _stack_derivatives(self) -> None:
         """Make every node's derivative buffers views of stacked arrays.
 
-        ``Fx`` (N, ndx, ndx), ``Fu`` (N, ndx, nu), ``Lx`` (N + 1, ndx), ``Lu`` (N, nu),
-        ``Lxx`` (N + 1, ndx, ndx), ``Lxu`` (N, ndx, nu), ``Luu`` (N, nu, nu): the solver's
-        Riccati pass reads them without gathering (row N is the terminal node).
+        ``xnext`` (N, nx) next states f(x_k, u_k), ``Fx`` (N, ndx, ndx), ``Fu`` (N, ndx, nu),
+        ``Lx`` (N + 1, ndx), ``Lu`` (N, nu), ``Lxx`` (N + 1, ndx, ndx), ``Lxu`` (N, ndx, nu),
+        ``Luu`` (N, nu, nu): the solver reads them without gathering (row N is the terminal node).
         """
         N, ndx = self.T, self.ndx
         nu = self.running_models[0].nu
         if any(m.nu != nu for m in self.running_models):
             raise ParameterError("every running node must have the same control dimension nu")
         self.nu = nu
+        self.xnext = np.zeros((N, self.nx))
         self.Fx = np.zeros((N, ndx, ndx))
         self.Fu = np.zeros((N, ndx, nu))
         self.Lx = np.zeros((N + 1, ndx))
@@ -53,6 +61,8 @@ class ShootingProblem:
         self.Lxu = np.zeros((N, ndx, nu))
         self.Luu = np.zeros((N, nu, nu))
         for k, d in enumerate(self.running_datas):
+            self.xnext[k] = d.xnext
+            d.xnext = self.xnext[k]
             d.Fx, d.Fu, d.Lx, d.Lu = self.Fx[k], self.Fu[k], self.Lx[k], self.Lu[k]
             d.Lxx, d.Lxu, d.Luu = self.Lxx[k], self.Lxu[k], self.Luu[k]
         self.terminal_data.Lx = self.Lx[N]
@@ -109,6 +119,58 @@ class ShootingProblem:
             m.calc(d, xs[-1], u)
             xs.append(d.xnext.copy())
         return xs
+
+    def forward_rollout(self, xs, us, k, K, fs, alpha: float, xs_try, us_try, dx) -> float:
+        """FDDP rollout along the step α; returns its total cost.
+
+        From x0, node by node: x_try[t] = f(x_try[t−1], u_try[t−1]) ⊕ (α − 1) fs[t] (gaps
+        closed by 1 − α; plain rollout when α = 1 or ``fs`` is None) and
+        u_try[t] = us[t] − α k[t] − K[t] (x_try[t] ⊖ xs[t]) (Crocoddyl's sign of k, K).
+
+        Args:
+            xs (N + 1, nx), us (N, nu): current trajectory; k (N, nu), K (N, nu, ndx): Riccati
+            terms; fs (N + 1, ndx) gaps or None; outputs xs_try, us_try, dx (N, ndx) = x_try ⊖ xs.
+
+        Raises:
+            RolloutError: a control, state or the cost is not finite.
+        """
+        state = self.state
+        N = self.T
+        closing = not (alpha == 1.0 or fs is None)
+        cost = 0.0
+        xnext = self.x0
+        for t, (m, d) in enumerate(zip(self.running_models, self.running_datas)):
+            x_try = xs_try[t]
+            if closing:
+                state.integrate(xnext, fs[t] * (alpha - 1.0), out=x_try)
+            else:
+                x_try[:] = xnext
+            self._feedback(t, xs, us, k, K, alpha, x_try, dx, us_try)
+            m.calc(d, x_try, us_try[t])
+            xnext = d.xnext
+            cost += d.cost
+            if not (math.isfinite(cost) and math.isfinite(xnext.sum())):
+                raise RolloutError(f"rollout diverged at node {t}")
+        if closing:
+            state.integrate(xnext, fs[N] * (alpha - 1.0), out=xs_try[N])
+        else:
+            xs_try[N] = xnext
+        self.terminal_model.calc(self.terminal_data, xs_try[N])
+        cost += self.terminal_data.cost
+        if not math.isfinite(cost):
+            raise RolloutError("terminal cost not finite")
+        return cost
+
+    def _feedback(self, t: int, xs, us, k, K, alpha: float, x_try, dx, us_try) -> None:
+        """us_try[t] = us[t] − α k[t] − K[t] (x_try ⊖ xs[t]), dx[t] = x_try ⊖ xs[t]."""
+        state = self.state
+        code = free_flyer_feedback_control(xs[t], x_try, us[t], k[t], K[t], alpha, state.nq, dx[t], us_try[t]) \
+            if state._compiled_difference else 1
+        if code == 1:  # not a free flyer, or a relative half turn: Pinocchio's difference
+            state.diff(xs[t], x_try, out=dx[t])
+            code = 0 if feedback_control(us[t], k[t], K[t], dx[t], alpha, us_try[t]) else 2
+        if code == 2:
+            raise RolloutError(f"control not finite at node {t}")
 
     def term_costs(self) -> dict[str, float]:
         """Total cost of each named term over the horizon (after calc), running terms scaled by dt."""

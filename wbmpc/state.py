@@ -14,7 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
-from wbmpc.kernels import free_flyer_state_difference
+from wbmpc.kernels import free_flyer_state_difference, free_flyer_state_differences
 
 
 class StateMultibody:
@@ -63,6 +63,17 @@ class StateMultibody:
             return out
         out[:nv] = pin.difference(self.pinocchio, x0[:nq], x1[:nq])
         np.subtract(x1[nq:], x0[nq:], out=out[nv:])
+        return out
+
+    def diff_many(self, X0: np.ndarray, X1: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """Row-wise X1[k] ⊖ X0[k] of (T, nx) arrays into out (T, ndx) (one compiled call)."""
+        start = 0
+        if self._compiled_difference:
+            start = free_flyer_state_differences(X0, X1, self.nq, out)
+            if start < 0:
+                return out
+        for k in range(start, out.shape[0]):
+            self.diff(X0[k], X1[k], out=out[k])
         return out
 
     def integrate(self, x: np.ndarray, dx: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:

@@ -37,6 +37,7 @@ import pinocchio as pin
 
 from wbmpc.activations import ActivationQuadraticBarrier, ActivationWeightedQuad
 from wbmpc.actuation import ActuationFloatingBase
+from wbmpc.batched_problem import BatchedShootingProblem, batched_evaluation_support
 from wbmpc.contacts import ContactModel3D, ContactModel6D
 from wbmpc.costs import CostModelResidual, CostModelSum
 from wbmpc.dynamics import DifferentialActionModelContactFwdDynamics
@@ -113,6 +114,10 @@ class WalkingOCPConfig:
         baumgarte_gains: (Kp [1/s²], Kd [1/s]) of the contact constraints.
         dynamics_backend: "pinocchio" (constraintDynamics and its derivatives, fast) or "kkt"
             (Crocoddyl's formulas written out); same results (see :mod:`wbmpc.dynamics`).
+        evaluation: how the horizon is evaluated, same results: "batched" (the Pinocchio calls
+            node by node, everything else in one compiled pass, see :mod:`wbmpc.batched_problem`),
+            "nodes" (every node model's calc/calcDiff, the reference pipeline), or "auto"
+            (default: batched when the problem's terms allow it, else nodes).
         max_line_search_trials: FDDP line-search steps tried (1, ½, …).
         reg_min, reg_max: FDDP regularisation bounds.
         th_stop: FDDP stopping threshold.
@@ -134,6 +139,7 @@ class WalkingOCPConfig:
     friction_coefficient: float = 0.7
     baumgarte_gains: tuple[float, float] = (0.0, 50.0)
     dynamics_backend: str = "pinocchio"
+    evaluation: str = "auto"
     max_line_search_trials: int = 10
     reg_min: float = 1e-9
     reg_max: float = 1e9
@@ -157,6 +163,8 @@ class WalkingOCPConfig:
             raise ParameterError(f"max_line_search_trials={self.max_line_search_trials} must be an integer >= 1")
         if self.dynamics_backend not in ("pinocchio", "kkt"):
             raise ParameterError(f"dynamics_backend={self.dynamics_backend!r} must be 'pinocchio' or 'kkt'")
+        if self.evaluation not in ("auto", "batched", "nodes"):
+            raise ParameterError(f"evaluation={self.evaluation!r} must be 'auto', 'batched' or 'nodes'")
         if not (0 < self.reg_min <= self.reg_max):
             raise ParameterError(f"need 0 < reg_min={self.reg_min} <= reg_max={self.reg_max}")
 
@@ -213,6 +221,17 @@ class WalkingOCP:
         running = [self._node(terminal=False) for _ in range(self.n_nodes)]
         terminal = self._node(terminal=True)
         self.problem = ShootingProblem(self.x_reference, running, terminal)
+        #: "batched" or "nodes" (see WalkingOCPConfig.evaluation); evaluation_note says why nodes
+        self.evaluation, self.evaluation_note = "nodes", ""
+        if config.evaluation != "nodes":
+            reason = batched_evaluation_support(self.problem)
+            if reason is None:
+                self.problem = BatchedShootingProblem(self.x_reference, running, terminal)
+                self.evaluation = "batched"
+            elif config.evaluation == "batched":
+                raise ParameterError(f"evaluation='batched' is not possible for this problem: {reason}")
+            else:
+                self.evaluation_note = f"node-wise evaluation: {reason}"
 
     # ------------------------------------------------------------------ construction
     def _contact(self, foot: str):
@@ -338,6 +357,8 @@ class WalkingOCP:
                 if name in dam.costs.costs:
                     dam.costs.costs[name].active = not swing
         models[-1].differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
+        if self.evaluation == "batched":
+            self.problem.sync()
 
 
 def quasi_static_controls(ocp: WalkingOCP, x: np.ndarray) -> np.ndarray:

@@ -25,8 +25,7 @@ import numpy as np
 
 from wbmpc.blas import limit_blas_threads
 from wbmpc.errors import ParameterError
-from wbmpc.problem import ShootingProblem
-from wbmpc.kernels import feedback_control, free_flyer_feedback_control
+from wbmpc.problem import RolloutError, ShootingProblem
 from wbmpc.solvers.riccati import riccati_backward
 
 
@@ -50,7 +49,7 @@ class BackwardPassError(ArithmeticError):
 
 
 class ForwardPassError(ArithmeticError):
-    """NaN in the rollout."""
+    """NaN in the rollout (raised by the problem's rollout as RolloutError)."""
 
 
 class SolverFDDP:
@@ -243,8 +242,7 @@ class SolverFDDP:
         problem = self.problem
         state = problem.state
         state.diff(self.xs[0], problem.x0, out=self.fs[0])
-        for t, d in enumerate(problem.running_datas):
-            state.diff(self.xs[t + 1], d.xnext, out=self.fs[t + 1])
+        state.diff_many(self.xs[1:], problem.xnext, out=self.fs[1:])
         self.ffeas = float(np.max(np.abs(self.fs)))
 
     def _backward_pass(self) -> None:
@@ -276,8 +274,7 @@ class SolverFDDP:
             N = self.problem.T
             dx_T = state.diff(self.xs_try[N], self.xs[N])
             dv -= float(self.fs[N] @ (self.Vxx[N] @ dx_T))
-            for t in range(N):
-                state.diff(self.xs_try[t], self.xs[t], out=self.dx[t])
+            state.diff_many(self.xs_try[:N], self.xs[:N], out=self.dx)
             dv -= float(np.einsum("ti,tij,tj->", self.fs[:N], self.Vxx[:N], self.dx))
         self.dv = dv
         self.d[0] = self.dg + dv
@@ -288,42 +285,12 @@ class SolverFDDP:
         return self.cost - self.cost_try
 
     def _forward_pass(self, alpha: float) -> None:
-        problem = self.problem
-        state = problem.state
-        N = problem.T
-        cost = 0.0
-        xnext = problem.x0
-        closing = not (self.is_feasible or alpha == 1.0)
-        compiled = state._compiled_difference
-        nq = state.nq
-        xs, xs_try, us, us_try, k, K, dx = self.xs, self.xs_try, self.us, self.us_try, self._k, self._K, self.dx
-        for t, (m, d) in enumerate(zip(problem.running_models, problem.running_datas)):
-            x_try = xs_try[t]
-            if closing:
-                state.integrate(xnext, self.fs[t] * (alpha - 1.0), out=x_try)
-            else:
-                x_try[:] = xnext
-            code = free_flyer_feedback_control(xs[t], x_try, us[t], k[t], K[t], alpha, nq, dx[t], us_try[t]) \
-                if compiled else 1
-            if code == 1:
-                state.diff(xs[t], x_try, out=dx[t])
-                code = 0 if feedback_control(us[t], k[t], K[t], dx[t], alpha, us_try[t]) else 2
-            if code == 2:
-                raise ForwardPassError(f"control not finite at node {t}")
-            m.calc(d, x_try, us_try[t])
-            xnext = d.xnext
-            cost += d.cost
-            if not (math.isfinite(cost) and math.isfinite(xnext.sum())):
-                raise ForwardPassError(f"rollout diverged at node {t}")
-        if closing:
-            state.integrate(xnext, self.fs[N] * (alpha - 1.0), out=self.xs_try[N])
-        else:
-            self.xs_try[N] = xnext
-        problem.terminal_model.calc(problem.terminal_data, self.xs_try[N])
-        cost += problem.terminal_data.cost
-        if not math.isfinite(cost):
-            raise ForwardPassError("terminal cost not finite")
-        self.cost_try = cost
+        try:
+            self.cost_try = self.problem.forward_rollout(
+                self.xs, self.us, self._k, self._K, None if self.is_feasible else self.fs, alpha,
+                self.xs_try, self.us_try, self.dx)
+        except RolloutError as err:
+            raise ForwardPassError(str(err)) from err
 
     def _accept(self, alpha: float) -> None:
         self.was_feasible = self.is_feasible

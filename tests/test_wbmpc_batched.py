@@ -1,0 +1,150 @@
+"""The horizon-batched problem evaluates the same function as the node-wise pipeline."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from robots import load_robot
+from wbmpc.batched_problem import BatchedShootingProblem, batched_evaluation_support
+from wbmpc.errors import ParameterError
+from wbmpc.problem import ShootingProblem
+from wbmpc.solvers import SolverFDDP
+from wbmpc.walking import WalkingOCP, WalkingOCPConfig
+from wbmpc_fixtures import alternating_schedule, random_state, standing_state
+
+# every term the batched pass supports, a Baumgarte position gain (moving contact references)
+BATCHED_TERMS = WalkingOCPConfig(foothold_weight=100.0, touchdown_height_weight=1e5, baumgarte_gains=(20.0, 40.0))
+STACKED = ("xnext", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu")
+
+
+@pytest.fixture(scope="module")
+def bolt():
+    return load_robot("bolt")
+
+
+def _twin_problems(ocp: WalkingOCP) -> tuple[ShootingProblem, BatchedShootingProblem]:
+    """A node-wise and a batched problem over the same node models."""
+    p = ocp.problem
+    return (ShootingProblem(p.x0, p.running_models, p.terminal_model),
+            BatchedShootingProblem(p.x0, p.running_models, p.terminal_model))
+
+
+def _random_trajectory(robot, n_nodes: int, nu: int, seed: int):
+    rng = np.random.default_rng(seed)
+    xs = np.array([random_state(robot, rng) for _ in range(n_nodes + 1)])
+    us = 2.0 * rng.standard_normal((n_nodes, nu))  # some beyond Bolt's 2.7 N·m: the bound barrier acts
+    return xs, us
+
+
+def _assert_same(nodes: ShootingProblem, batched: BatchedShootingProblem, names=STACKED) -> None:
+    for name in names:
+        expected, actual = getattr(nodes, name), getattr(batched, name)
+        scale = max(1.0, float(np.max(np.abs(expected))))
+        assert np.max(np.abs(actual - expected)) <= 1e-12 * scale, name
+
+
+def test_walking_ocp_uses_the_batched_problem_when_it_can(bolt):
+    assert WalkingOCP(bolt, WalkingOCPConfig(), 5, 0.01).evaluation == "batched"
+    nodes = WalkingOCP(bolt, WalkingOCPConfig(evaluation="nodes"), 5, 0.01)
+    assert nodes.evaluation == "nodes" and type(nodes.problem) is ShootingProblem
+    fallback = WalkingOCP(bolt, WalkingOCPConfig(contact_force_weight=1e-2), 5, 0.01)
+    assert fallback.evaluation == "nodes"
+    assert "ResidualContactForce" in fallback.evaluation_note
+    with pytest.raises(ParameterError, match="evaluation='batched'.*ResidualContactForce"):
+        WalkingOCP(bolt, WalkingOCPConfig(contact_force_weight=1e-2, evaluation="batched"), 5, 0.01)
+    with pytest.raises(ParameterError, match="evaluation='fast'"):
+        WalkingOCPConfig(evaluation="fast")
+    assert batched_evaluation_support(fallback.problem) is not None
+
+
+@pytest.mark.parametrize("t0", [0.0, 0.27])
+def test_values_and_derivatives_match_the_node_pipeline(bolt, t0):
+    """Costs, next states and every derivative at random states, to rounding (1e-12)."""
+    ocp = WalkingOCP(bolt, BATCHED_TERMS, n_nodes=40, dt=0.01)
+    ocp.update(standing_state(bolt), alternating_schedule(t0, 0.01, 40), np.array([0.1, 0.0, 0.3]))
+    nodes, batched = _twin_problems(ocp)
+    xs, us = _random_trajectory(bolt, 40, ocp.nu, seed=3)
+    cost = nodes.calc(xs, us)
+    nodes.calcDiff(xs, us)
+    assert batched.calc(xs, us) == pytest.approx(cost, rel=1e-13)
+    _assert_same(nodes, batched, names=("xnext",))
+    assert batched.calcDiff(xs, us) == pytest.approx(cost, rel=1e-13)
+    _assert_same(nodes, batched)
+    assert batched.term_costs() == pytest.approx(nodes.term_costs(), rel=1e-12, abs=1e-14)
+    running = [d.cost for d in nodes.running_datas]
+    np.testing.assert_allclose(batched.node_costs(), running, rtol=1e-12, atol=1e-15)
+    active = {name for name, value in batched.term_costs().items() if value > 0}
+    assert {"control_bounds", "state_regularization", "terminal_com_position"} <= active
+    assert any(name.endswith("_foothold") for name in active)
+    assert any(name.endswith("_touchdown_height") for name in active)
+
+
+def test_a_node_without_contacts_uses_aba(bolt):
+    ocp = WalkingOCP(bolt, BATCHED_TERMS, n_nodes=6, dt=0.01)
+    ocp.update(standing_state(bolt), alternating_schedule(0.0, 0.01, 6), np.array([0.1, 0.0, 0.3]))
+    ocp.problem.running_models[2].differential.set_active_contacts([])  # a flight node
+    for foot in ocp.feet:
+        ocp.problem.running_models[2].differential.costs.costs[f"{foot}_height"].active = True
+    nodes, batched = _twin_problems(ocp)
+    xs, us = _random_trajectory(bolt, 6, ocp.nu, seed=4)
+    assert batched.calcDiff(xs, us) == pytest.approx(nodes.calc_and_diff(xs, us), rel=1e-13)
+    _assert_same(nodes, batched)
+
+
+def test_g1_flat_feet_match_the_node_pipeline():
+    g1 = load_robot("g1")
+    config = WalkingOCPConfig(swing_apex_height=0.08, baumgarte_gains=(10.0, 30.0), foothold_weight=10.0)
+    ocp = WalkingOCP(g1, config, n_nodes=10, dt=0.02)
+    ocp.update(standing_state(g1), alternating_schedule(0.0, 0.02, 10, step_duration=0.4, foot_y=(0.12, -0.12)),
+               np.array([0.05, 0.0, 0.7]))
+    assert ocp.evaluation == "batched"
+    nodes, batched = _twin_problems(ocp)
+    rng = np.random.default_rng(2)
+    xs = np.array([random_state(g1, rng, 0.05, 0.2) for _ in range(11)])
+    us = rng.standard_normal((10, ocp.nu))
+    assert batched.calcDiff(xs, us) == pytest.approx(nodes.calc_and_diff(xs, us), rel=1e-13)
+    _assert_same(nodes, batched)
+
+
+@pytest.mark.parametrize("alpha", [1.0, 0.25])
+def test_forward_rollout_matches_the_node_pipeline(bolt, alpha):
+    """The FDDP rollout with feedback, closing the gaps by 1 − α."""
+    ocp = WalkingOCP(bolt, BATCHED_TERMS, n_nodes=30, dt=0.01)
+    ocp.update(standing_state(bolt), alternating_schedule(0.1, 0.01, 30), np.array([0.1, 0.0, 0.3]))
+    nodes, batched = _twin_problems(ocp)
+    solver = SolverFDDP(nodes)
+    xs, us = _random_trajectory(bolt, 30, ocp.nu, seed=5)
+    solver._set_candidate(xs, us, False)
+    solver._calc_diff()
+    solver._backward_pass()
+    outputs = []
+    for problem in (nodes, batched):
+        xs_try, us_try, dx = np.zeros_like(xs), np.zeros_like(us), np.zeros((30, problem.ndx))
+        cost = problem.forward_rollout(solver.xs, solver.us, solver._k, solver._K, solver.fs, alpha, xs_try, us_try,
+                                       dx)
+        outputs.append((cost, xs_try, us_try, dx))
+    (c0, x0, u0, d0), (c1, x1, u1, d1) = outputs
+    assert c1 == pytest.approx(c0, rel=1e-12)
+    for a, b in ((x0, x1), (u0, u1), (d0, d1)):
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-12 * max(1.0, np.max(np.abs(a))))
+
+
+def test_solves_take_the_same_iterates(bolt):
+    """A 20-iteration solve from the same guess: same iterations, cost and trajectory."""
+    results = []
+    for evaluation in ("nodes", "batched"):
+        ocp = WalkingOCP(bolt, dataclasses.replace(BATCHED_TERMS, evaluation=evaluation), n_nodes=30, dt=0.01)
+        x0 = standing_state(bolt)
+        ocp.update(x0, alternating_schedule(0.0, 0.01, 30), np.array([0.1, 0.0, 0.3]))
+        solver = SolverFDDP(ocp.problem)
+        converged = solver.solve([x0] * 31, [np.zeros(ocp.nu)] * 30, maxiter=20)
+        results.append((converged, solver.iter, solver.cost, solver.xs.copy(), solver.us.copy(), solver.K.copy()))
+    (c0, i0, cost0, xs0, us0, K0), (c1, i1, cost1, xs1, us1, K1) = results
+    assert (c1, i1) == (c0, i0)
+    assert cost1 == pytest.approx(cost0, rel=1e-10)
+    np.testing.assert_allclose(xs1, xs0, atol=1e-8)
+    np.testing.assert_allclose(us1, us0, atol=1e-8)
+    np.testing.assert_allclose(K1, K0, atol=1e-6 * np.max(np.abs(K0)))

@@ -1,0 +1,423 @@
+"""A shooting problem evaluated over the whole horizon at once: the same function as
+:class:`~wbmpc.problem.ShootingProblem`, with the per-node Python work cut to the Pinocchio calls.
+
+The node-by-node pipeline (action model -> differential model -> cost sum -> residuals) makes
+about 25 Python calls per node and keeps one Pinocchio data per node; over a 100-node horizon that
+glue, and the cache misses of 100 data objects, cost twice Pinocchio's own work. This problem
+reads the same node models (contacts, cost terms, weights, references) and evaluates them as:
+
+- a Python loop over the nodes doing only what needs Pinocchio: contact-constrained dynamics
+  (``constraintDynamics`` with the node's contact set, or ABA without contacts) and, in
+  :meth:`calcDiff`, its derivatives, the Lie-group Jacobians of the Euler step and the frame
+  kinematics of the active frame terms; one Pinocchio data per contact set, so it stays in cache;
+- one compiled pass over all nodes for everything else: residual rows, activations, cost values
+  and Gauss-Newton derivatives, Euler transition Jacobians, the dt scaling.
+
+Supported nodes: :class:`~wbmpc.integrator.IntegratedActionModelEuler` over
+:class:`~wbmpc.dynamics.DifferentialActionModelContactFwdDynamics` (Pinocchio backend) on a
+free-flyer robot with 1-dof joints, every running node with the same cost terms (switched on
+and off per node), each term one of: state (:class:`~wbmpc.residuals.ResidualState`), control
+(:class:`~wbmpc.residuals.ResidualControl`), frame height and frame translation. The terminal
+node, any model, is evaluated node-wise. :func:`batched_evaluation_support` says whether a
+problem qualifies and why not; :class:`~wbmpc.walking.WalkingOCP` uses this problem when it does.
+
+After :meth:`calc` / :meth:`calcDiff` the stacked arrays (``xnext``, ``Fx``, ``Fu``, ``Lx``, ...,
+which the node datas view) and :meth:`node_costs` / :meth:`term_costs` hold the results; the
+node datas' other buffers (accelerations, forces, residuals) are not filled.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+from numba import njit
+
+from wbmpc.dynamics import DifferentialActionModelContactFwdDynamics
+from wbmpc.errors import ParameterError
+from wbmpc.integrator import IntegratedActionModelEuler
+from wbmpc.kernels import (
+    cost_rows_derivatives,
+    cost_rows_value,
+    euler_step_tangent,
+    euler_transition_jacobians,
+    free_flyer_state_difference,
+    scale_cost_derivatives,
+)
+from wbmpc.problem import RolloutError, ShootingProblem
+from wbmpc.residuals import ResidualControl, ResidualFrameHeight, ResidualFrameTranslation, ResidualState
+
+# residual kinds of the compiled pass
+STATE, CONTROL, FRAME_HEIGHT, FRAME_TRANSLATION = 0, 1, 2, 3
+_KINDS = {ResidualState: STATE, ResidualControl: CONTROL, ResidualFrameHeight: FRAME_HEIGHT,
+          ResidualFrameTranslation: FRAME_TRANSLATION}
+
+
+def batched_evaluation_support(problem: ShootingProblem) -> str | None:
+    """None if ``problem`` can be evaluated by :class:`BatchedShootingProblem`, else the reason."""
+    state = problem.state
+    if not state._compiled_difference:
+        return "the robot is not a free-flyer root followed by 1-dof joints"
+    names = None
+    for k, model in enumerate(problem.running_models):
+        if type(model) is not IntegratedActionModelEuler:
+            return f"running node {k} is a {type(model).__name__}, not an IntegratedActionModelEuler"
+        dam = model.differential
+        if type(dam) is not DifferentialActionModelContactFwdDynamics or dam.backend != "pinocchio":
+            return f"running node {k} is not contact forward dynamics with the Pinocchio backend"
+        items = dam.costs.costs
+        if names is None:
+            names = list(items)
+        elif list(items) != names:
+            return f"running node {k} has the cost terms {list(items)}, node 0 has {names}"
+        for name, item in items.items():
+            residual_type = type(item.cost.residual)
+            if residual_type not in _KINDS:
+                return f"cost {name!r} has a {residual_type.__name__} residual (batched: {[t.__name__ for t in _KINDS]})"
+    return None
+
+
+class BatchedShootingProblem(ShootingProblem):
+    """Drop-in :class:`~wbmpc.problem.ShootingProblem` with horizon-batched evaluation.
+
+    Same constructor; raises :class:`~wbmpc.errors.ParameterError` when the nodes are not
+    supported (see :func:`batched_evaluation_support`). Call :meth:`sync` after changing the node
+    models (contact sets, cost activity, weights, references) and before the next evaluation;
+    :meth:`~wbmpc.walking.WalkingOCP.update` does it.
+    """
+
+    def __init__(self, x0: np.ndarray, running_models: list, terminal_model):
+        super().__init__(x0, running_models, terminal_model)
+        reason = batched_evaluation_support(self)
+        if reason is not None:
+            raise ParameterError(f"running_models cannot be evaluated batched: {reason}")
+        state = self.state
+        N, nq, nv, nx, ndx, nu = self.T, state.nq, state.nv, state.nx, state.ndx, self.nu
+        self._pin_model = state.pinocchio
+        first = self.running_models[0].differential.costs
+        first_data = self.running_datas[0].differential.costs
+        self._term_names = list(first.costs)
+        n_terms = len(self._term_names)
+        nr = first_data.r.size
+        # term layout (identical at every running node): kind, first row, frame slot
+        self._term_kind = np.zeros(n_terms, dtype=np.int64)
+        self._term_row = np.zeros(n_terms, dtype=np.int64)
+        self._term_slot = np.full(n_terms, -1, dtype=np.int64)
+        frame_ids: list[int] = []
+        for j, (name, item) in enumerate(first.costs.items()):
+            residual = item.cost.residual
+            self._term_kind[j] = _KINDS[type(residual)]
+            self._term_row[j] = first_data.rows[name].start
+            if self._term_kind[j] in (FRAME_HEIGHT, FRAME_TRANSLATION):
+                if residual.frame_id not in frame_ids:
+                    frame_ids.append(residual.frame_id)
+                self._term_slot[j] = frame_ids.index(residual.frame_id)
+        self._frame_ids = frame_ids
+        self._state_terms = [j for j in range(n_terms) if self._term_kind[j] == STATE]
+        self._row_term = first_data.row_term.copy()
+        self._w = np.stack([d.differential.costs.w for d in self.running_datas])
+        self._lb = np.stack([d.differential.costs.lb for d in self.running_datas])
+        self._ub = np.stack([d.differential.costs.ub for d in self.running_datas])
+        self._nr = nr
+        self._dt = np.array([m.dt for m in self.running_models])
+        # per-node configuration, refreshed by sync()
+        self._term_scale = np.zeros((N, n_terms))
+        self._reference = np.zeros((N, n_terms, max(nx, nu, 3)))
+        self._node_frames: list[tuple[tuple[int, int], ...]] = [()] * N  # (slot, frame id) used
+        self._node_state_terms: list[tuple[int, ...]] = [()] * N  # active state terms
+        self._node_dynamics: list = [None] * N  # (constraint models, pinocchio data, constraint datas)
+        self._contact_sets: dict = {}
+        # evaluation buffers
+        self._tau = np.zeros(nv)
+        self._acceleration = np.zeros((N, nv))
+        self._euler_dx = np.zeros((N, ndx))
+        self._da_dx = np.zeros((N, nv, ndx))
+        self._da_du = np.zeros((N, nv, nu))
+        self._J_q = np.zeros((N, nv, nv))
+        self._J_dq = np.zeros((N, nv, nv))
+        self._state_residual = np.zeros((N, n_terms, ndx))
+        self._state_jacobian = np.zeros((N, n_terms, nv, nv))
+        self._frame_position = np.zeros((N, max(len(frame_ids), 1), 3))
+        self._frame_jacobian = np.zeros((N, max(len(frame_ids), 1), 3, nv))
+        self._node_cost = np.zeros(N)
+        self._term_cost = np.zeros((N, n_terms))
+        self._scratch_r = np.zeros(nr)
+        self._scratch_R = np.zeros((nr, ndx + nu))
+        self._scratch_gradient = np.zeros(ndx + nu)
+        self._scratch_hessian = np.zeros((ndx + nu, ndx + nu))
+        self._difference_ok = np.ones(N, dtype=np.bool_)
+        self.sync()
+
+    # ----------------------------------------------------------------- configuration
+    def sync(self) -> None:
+        """Read the node models' contact sets, cost activity, weights and references."""
+        names = self._term_names
+        kinds = self._term_kind
+        nx, nu = self.nx, self.nu
+        scale, reference = self._term_scale, self._reference
+        for k, model in enumerate(self.running_models):
+            dam = model.differential
+            items = dam.costs.costs
+            frames = []
+            for j, name in enumerate(names):
+                item = items[name]
+                if not item.active or item.weight == 0.0:
+                    scale[k, j] = 0.0
+                    continue
+                scale[k, j] = item.weight
+                residual = item.cost.residual
+                kind = kinds[j]
+                if kind == STATE:
+                    reference[k, j, :nx] = residual.reference
+                elif kind == CONTROL:
+                    reference[k, j, :nu] = residual.reference
+                elif kind == FRAME_HEIGHT:
+                    reference[k, j, 0] = residual.reference
+                    frames.append((int(self._term_slot[j]), residual.frame_id))
+                else:
+                    reference[k, j, :3] = residual.reference
+                    frames.append((int(self._term_slot[j]), residual.frame_id))
+            self._node_frames[k] = tuple(sorted(set(frames)))
+            self._node_state_terms[k] = tuple(j for j in self._state_terms if scale[k, j] != 0.0)
+            self._node_dynamics[k] = self._dynamics_of(dam)
+
+    def _dynamics_of(self, dam) -> tuple:
+        """(constraint models, Pinocchio data, constraint datas) of a node's contact set; the
+        data is shared by every node with that set (one per set keeps it in cache)."""
+        for name in dam._moving_references:  # Baumgarte position reference (Kp > 0) may have moved
+            dam.constraint_models[name].joint2_placement = dam.contacts[name].reference_placement()
+        key = dam.active_key
+        entry = self._contact_sets.get(key)
+        if entry is None:
+            pdata = self._pin_model.createData()
+            constraint_datas = pin.StdVec_RigidConstraintData()
+            for constraint in dam.active_constraints:
+                constraint_datas.append(constraint.createData())
+            if dam.nc:
+                pin.initConstraintDynamics(self._pin_model, pdata, dam.active_constraints, constraint_datas)
+            entry = self._contact_sets[key] = (pdata, constraint_datas, dam.proximal_settings)
+        return (dam.active_constraints if dam.nc else None,) + entry
+
+    # ----------------------------------------------------------------- evaluation
+    def _node_dynamics_calc(self, k: int, x: np.ndarray, u: np.ndarray, derivatives: bool) -> None:
+        """Accelerations of node k (and their derivatives, the state-residual and frame
+        Jacobians when ``derivatives``), then x⁺ by the Euler step."""
+        model, nq, nv = self._pin_model, self.state.nq, self.state.nv
+        constraints, pdata, constraint_datas, settings = self._node_dynamics[k]
+        q, v = x[:nq], x[nq:]
+        tau = self._tau
+        tau[6:] = u
+        if constraints is not None:
+            a = pin.constraintDynamics(model, pdata, q, v, tau, constraints, constraint_datas, settings)
+        else:
+            a = pin.aba(model, pdata, q, v, tau, pin.Convention.WORLD)  # WORLD: also fills oMi
+        self._acceleration[k] = a
+        dx = self._euler_dx[k]
+        xnext = self.xnext[k]
+        euler_step_tangent(v, a, self._dt[k], dx, xnext[nq:])
+        xnext[:nq] = pin.integrate(model, q, dx[:nv])
+        for slot, frame_id in self._node_frames[k]:
+            self._frame_position[k, slot] = pin.updateFramePlacement(model, pdata, frame_id).translation
+        if not derivatives:
+            return
+        if constraints is not None:
+            da_dq, da_dv, da_dtau = pin.computeConstraintDynamicsDerivatives(
+                model, pdata, constraints, constraint_datas, settings)[:3]
+        else:
+            da_dq, da_dv, da_dtau = pin.computeABADerivatives(model, pdata, q, v, tau)
+            pin.computeJointJacobians(model, pdata, q)
+        da_dx = self._da_dx[k]
+        da_dx[:, :nv] = da_dq
+        da_dx[:, nv:] = da_dv
+        self._da_du[k] = da_dtau[:, 6:]
+        self._J_q[k] = pin.dIntegrate(model, q, dx[:nv], pin.ARG0)
+        self._J_dq[k] = pin.dIntegrate(model, q, dx[:nv], pin.ARG1)
+        for slot, frame_id in self._node_frames[k]:
+            self._frame_jacobian[k, slot] = pin.getFrameJacobian(model, pdata, frame_id, pin.LOCAL_WORLD_ALIGNED)[:3]
+        for j in self._node_state_terms[k]:
+            self._state_jacobian[k, j] = pin.dDifference(model, self._reference[k, j, :nq], q, pin.ARG1)
+
+    def _state_residuals(self, xs: np.ndarray) -> None:
+        """x ⊖ x_ref of every active state term (compiled; Pinocchio near a half turn)."""
+        nq, nv = self.state.nq, self.state.nv
+        for j in self._state_terms:
+            ok = state_residuals(self._reference[:, j, :self.nx], xs, nq, self._term_scale[:, j],
+                                 self._state_residual[:, j], self._difference_ok)
+            if not ok:
+                for k in np.flatnonzero(~self._difference_ok):
+                    ref, x = self._reference[k, j, :self.nx], xs[k]
+                    self._state_residual[k, j, :nv] = pin.difference(self._pin_model, ref[:nq], x[:nq])
+                    self._state_residual[k, j, nv:] = x[nq:] - ref[nq:]
+
+    def _running_cost(self, xs, us) -> float:
+        self._state_residuals(xs)
+        return batched_cost_values(xs, us, self._dt, self._term_kind, self._term_row, self._term_slot,
+                                   self._term_scale, self._reference, self._row_term, self._w, self._lb, self._ub,
+                                   self._state_residual, self._frame_position, self._scratch_r,
+                                   self._node_cost, self._term_cost)
+
+    def calc(self, xs, us) -> float:
+        """Next states (``xnext``) and costs of every node; returns the total cost."""
+        xs, us = np.asarray(xs, dtype=float), np.asarray(us, dtype=float)
+        for k in range(self.T):
+            self._node_dynamics_calc(k, xs[k], us[k], derivatives=False)
+        cost = self._running_cost(xs, us)
+        self.terminal_model.calc(self.terminal_data, xs[-1])
+        self.cost = cost + self.terminal_data.cost
+        return self.cost
+
+    def calcDiff(self, xs, us) -> float:
+        """Derivatives of every node (values too: calc is not needed first); returns the total cost."""
+        xs, us = np.asarray(xs, dtype=float), np.asarray(us, dtype=float)
+        for k in range(self.T):
+            self._node_dynamics_calc(k, xs[k], us[k], derivatives=True)
+        self._state_residuals(xs)
+        cost = batched_cost_derivatives(
+            xs, us, self._dt, self._term_kind, self._term_row, self._term_slot, self._term_scale, self._reference,
+            self._row_term, self._w, self._lb, self._ub, self._state_residual, self._state_jacobian,
+            self._frame_position, self._frame_jacobian, self._da_dx, self._da_du, self._J_q, self._J_dq,
+            self._scratch_r, self._scratch_R, self._scratch_gradient, self._scratch_hessian, self._node_cost,
+            self._term_cost, self.Fx, self.Fu, self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu)
+        self.terminal_model.calc(self.terminal_data, xs[-1])
+        self.terminal_model.calcDiff(self.terminal_data, xs[-1])
+        self.cost = cost + self.terminal_data.cost
+        return self.cost
+
+    def calc_and_diff(self, xs, us) -> float:
+        return self.calcDiff(xs, us)
+
+    def forward_rollout(self, xs, us, k, K, fs, alpha, xs_try, us_try, dx) -> float:
+        """The FDDP rollout of :meth:`ShootingProblem.forward_rollout`, node costs batched."""
+        state = self.state
+        N = self.T
+        closing = not (alpha == 1.0 or fs is None)
+        xnext = self.x0
+        for t in range(N):
+            x_try = xs_try[t]
+            if closing:
+                state.integrate(xnext, fs[t] * (alpha - 1.0), out=x_try)
+            else:
+                x_try[:] = xnext
+            self._feedback(t, xs, us, k, K, alpha, x_try, dx, us_try)
+            self._node_dynamics_calc(t, x_try, us_try[t], derivatives=False)
+            xnext = self.xnext[t]
+        if closing:
+            state.integrate(xnext, fs[N] * (alpha - 1.0), out=xs_try[N])
+        else:
+            xs_try[N] = xnext
+        if not np.isfinite(xs_try).all():
+            raise RolloutError("rollout diverged (state not finite)")
+        cost = self._running_cost(xs_try, us_try)
+        self.terminal_model.calc(self.terminal_data, xs_try[N])
+        cost += self.terminal_data.cost
+        if not np.isfinite(cost):
+            raise RolloutError("rollout cost not finite")
+        return cost
+
+    def node_costs(self) -> np.ndarray:
+        """Integrated cost of each running node (N,) after the last evaluation."""
+        return self._node_cost.copy()
+
+    def term_costs(self) -> dict[str, float]:
+        """Total cost of each named term over the horizon (running terms scaled by dt)."""
+        totals = {name: float(self._dt @ self._term_cost[:, j]) for j, name in enumerate(self._term_names)}
+        terminal = self.terminal_model.differential.costs
+        for name, cost in terminal.term_costs(self.terminal_data.differential.costs).items():
+            totals[f"terminal_{name}"] = totals.get(f"terminal_{name}", 0.0) + cost
+        return totals
+
+
+@njit(cache=True)
+def state_residuals(references, xs, nq, scale, out, ok):
+    """out[k] = xs[k] ⊖ references[k] (compiled free-flyer difference) where scale[k] != 0;
+    ok[k] False where Pinocchio must take over (half-turn); returns True if none did."""
+    all_ok = True
+    for k in range(out.shape[0]):
+        ok[k] = True
+        if scale[k] == 0.0:
+            continue
+        if not free_flyer_state_difference(references[k], xs[k], nq, out[k]):
+            ok[k] = False
+            all_ok = False
+    return all_ok
+
+
+@njit(cache=True)
+def _fill_residual_rows(k, x, u, term_kind, term_row, term_slot, term_scale, reference, state_residual,
+                        frame_position, r):
+    nq = x.size - state_residual.shape[2] // 2
+    for j in range(term_kind.size):
+        if term_scale[k, j] == 0.0:
+            continue
+        row = term_row[j]
+        kind = term_kind[j]
+        if kind == 0:  # state
+            ndx = state_residual.shape[2]
+            for i in range(ndx):
+                r[row + i] = state_residual[k, j, i]
+        elif kind == 1:  # control
+            for i in range(u.size):
+                r[row + i] = u[i] - reference[k, j, i]
+        elif kind == 2:  # frame height
+            r[row] = frame_position[k, term_slot[j], 2] - reference[k, j, 0]
+        else:  # frame translation
+            for i in range(3):
+                r[row + i] = frame_position[k, term_slot[j], i] - reference[k, j, i]
+    return nq
+
+
+@njit(cache=True)
+def batched_cost_values(xs, us, dt, term_kind, term_row, term_slot, term_scale, reference, row_term, w, lb, ub,
+                        state_residual, frame_position, r, node_cost, term_cost):
+    """Cost of every running node (dt-scaled, node_cost (N,)) and of its terms (unscaled,
+    term_cost (N, n_terms)); returns the total running cost."""
+    total = 0.0
+    for k in range(dt.size):
+        _fill_residual_rows(k, xs[k], us[k], term_kind, term_row, term_slot, term_scale, reference,
+                            state_residual, frame_position, r)
+        value = cost_rows_value(r, row_term, term_scale[k], w[k], lb[k], ub[k], term_cost[k])
+        node_cost[k] = dt[k] * value
+        total += node_cost[k]
+    return total
+
+
+@njit(cache=True)
+def batched_cost_derivatives(xs, us, dt, term_kind, term_row, term_slot, term_scale, reference, row_term, w, lb, ub,
+                             state_residual, state_jacobian, frame_position, frame_jacobian, da_dx, da_du, J_q, J_dq,
+                             r, R, gradient, hessian, node_cost, term_cost, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu):
+    """Values and derivatives of every running node: Euler transition Jacobians Fx (N, ndx, ndx),
+    Fu (N, ndx, nu), Gauss-Newton cost derivatives (dt-scaled); returns the total running cost."""
+    ndx = state_residual.shape[2]
+    nv = ndx // 2
+    nu = us.shape[1]
+    total = 0.0
+    R[:, :] = 0.0
+    for k in range(dt.size):
+        euler_transition_jacobians(da_dx[k], da_du[k], J_q[k], J_dq[k], dt[k], Fx[k], Fu[k])
+        _fill_residual_rows(k, xs[k], us[k], term_kind, term_row, term_slot, term_scale, reference,
+                            state_residual, frame_position, r)
+        for j in range(term_kind.size):
+            if term_scale[k, j] == 0.0:
+                continue
+            row = term_row[j]
+            kind = term_kind[j]
+            if kind == 0:  # state: [∂(x ⊖ x_ref)/∂q, 0; 0, I]
+                for a in range(nv):
+                    for b in range(nv):
+                        R[row + a, b] = state_jacobian[k, j, a, b]
+                    R[row + nv + a, nv + a] = 1.0
+            elif kind == 1:  # control: Ru = I
+                for a in range(nu):
+                    R[row + a, ndx + a] = 1.0
+            elif kind == 2:  # frame height: z row of the world-aligned linear Jacobian
+                for b in range(nv):
+                    R[row, b] = frame_jacobian[k, term_slot[j], 2, b]
+            else:
+                for a in range(3):
+                    for b in range(nv):
+                        R[row + a, b] = frame_jacobian[k, term_slot[j], a, b]
+        value = cost_rows_value(r, row_term, term_scale[k], w[k], lb[k], ub[k], term_cost[k])
+        node_cost[k] = dt[k] * value
+        total += node_cost[k]
+        cost_rows_derivatives(r, R, row_term, term_scale[k], w[k], lb[k], ub[k], gradient, hessian)
+        scale_cost_derivatives(dt[k], gradient, hessian, ndx, Lx[k], Lu[k], Lxx[k], Lxu[k], Luu[k])
+    return total
