@@ -126,6 +126,7 @@ class BatchedShootingProblem(ShootingProblem):
         self._node_state_terms: list[tuple[int, ...]] = [()] * N  # active state terms
         self._node_dynamics: list = [None] * N  # (constraint models, pinocchio data, constraint datas)
         self._contact_sets: dict = {}
+        self._node_terms = None
         # evaluation buffers
         self._tau = np.zeros(nv)
         self._acceleration = np.zeros((N, nv))
@@ -150,35 +151,37 @@ class BatchedShootingProblem(ShootingProblem):
     # ----------------------------------------------------------------- configuration
     def sync(self) -> None:
         """Read the node models' contact sets, cost activity, weights and references."""
-        names = self._term_names
-        kinds = self._term_kind
         nx, nu = self.nx, self.nu
         scale, reference = self._term_scale, self._reference
+        if self._node_terms is None:  # (j, kind, slot, item) per node, in term order
+            self._node_terms = [
+                [(j, int(self._term_kind[j]), int(self._term_slot[j]), m.differential.costs.costs[name])
+                 for j, name in enumerate(self._term_names)] for m in self.running_models]
         for k, model in enumerate(self.running_models):
-            dam = model.differential
-            items = dam.costs.costs
             frames = []
-            for j, name in enumerate(names):
-                item = items[name]
+            state_terms = []
+            row_scale = scale[k]
+            row_reference = reference[k]
+            for j, kind, slot, item in self._node_terms[k]:
                 if not item.active or item.weight == 0.0:
-                    scale[k, j] = 0.0
+                    row_scale[j] = 0.0
                     continue
-                scale[k, j] = item.weight
+                row_scale[j] = item.weight
                 residual = item.cost.residual
-                kind = kinds[j]
-                if kind == STATE:
-                    reference[k, j, :nx] = residual.reference
-                elif kind == CONTROL:
-                    reference[k, j, :nu] = residual.reference
-                elif kind == FRAME_HEIGHT:
-                    reference[k, j, 0] = residual.reference
-                    frames.append((int(self._term_slot[j]), residual.frame_id))
+                if kind == FRAME_HEIGHT:
+                    row_reference[j, 0] = residual.reference
+                    frames.append((slot, residual.frame_id))
+                elif kind == FRAME_TRANSLATION:
+                    row_reference[j, :3] = residual.reference
+                    frames.append((slot, residual.frame_id))
+                elif kind == STATE:
+                    row_reference[j, :nx] = residual.reference
+                    state_terms.append(j)
                 else:
-                    reference[k, j, :3] = residual.reference
-                    frames.append((int(self._term_slot[j]), residual.frame_id))
-            self._node_frames[k] = tuple(sorted(set(frames)))
-            self._node_state_terms[k] = tuple(j for j in self._state_terms if scale[k, j] != 0.0)
-            self._node_dynamics[k] = self._dynamics_of(dam)
+                    row_reference[j, :nu] = residual.reference
+            self._node_frames[k] = tuple(sorted(set(frames))) if len(frames) > 1 else tuple(frames)
+            self._node_state_terms[k] = tuple(state_terms)
+            self._node_dynamics[k] = self._dynamics_of(model.differential)
 
     def _dynamics_of(self, dam) -> tuple:
         """(constraint models, Pinocchio data, constraint datas) of a node's contact set; the
@@ -187,6 +190,8 @@ class BatchedShootingProblem(ShootingProblem):
             dam.constraint_models[name].joint2_placement = dam.contacts[name].reference_placement()
         key = dam.active_key
         entry = self._contact_sets.get(key)
+        if entry is not None and not dam.nc:
+            return (None,) + entry
         if entry is None:
             pdata = self._pin_model.createData()
             constraint_datas = pin.StdVec_RigidConstraintData()
@@ -195,7 +200,7 @@ class BatchedShootingProblem(ShootingProblem):
             if dam.nc:
                 pin.initConstraintDynamics(self._pin_model, pdata, dam.active_constraints, constraint_datas)
             entry = self._contact_sets[key] = (pdata, constraint_datas, dam.proximal_settings)
-        return (dam.active_constraints if dam.nc else None,) + entry
+        return (dam.active_constraints if dam.nc else None, *entry)
 
     # ----------------------------------------------------------------- evaluation
     def _node_dynamics_calc(self, k: int, x: np.ndarray, u: np.ndarray, derivatives: bool) -> None:
