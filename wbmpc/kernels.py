@@ -267,6 +267,23 @@ def free_flyer_state_difference(x0, x1, nq, out):
 
 
 @njit(cache=True)
+def sum_quadratic_forms(a, M, b):
+    """Σ_t a[t]ᵀ M[t] b[t] for a, b (T, n) and M (T, n, n)."""
+    total = 0.0
+    T, n = a.shape
+    for t in range(T):
+        for i in range(n):
+            ai = a[t, i]
+            if ai == 0.0:
+                continue
+            s = 0.0
+            for j in range(n):
+                s += M[t, i, j] * b[t, j]
+            total += ai * s
+    return total
+
+
+@njit(cache=True)
 def free_flyer_state_differences(X0, X1, nq, out):
     """out[k] = X1[k] ⊖ X0[k] for every row; returns the first row needing Pinocchio (half turn), or −1."""
     for k in range(out.shape[0]):

@@ -25,6 +25,7 @@ import numpy as np
 
 from wbmpc.blas import limit_blas_threads
 from wbmpc.errors import ParameterError
+from wbmpc.kernels import sum_quadratic_forms
 from wbmpc.problem import RolloutError, ShootingProblem
 from wbmpc.solvers.riccati import riccati_backward
 
@@ -264,7 +265,7 @@ class SolverFDDP:
         if not self.is_feasible:
             N = self.problem.T
             dg -= float(np.einsum("ti,ti->", self.Vx[:N], self.fs[:N]))
-            dq += float(np.einsum("ti,tij,tj->", self.fs[:N], self.Vxx[:N], self.fs[:N]))
+            dq += sum_quadratic_forms(self.fs[:N], self.Vxx[:N], self.fs[:N])
         self.dg, self.dq = dg, dq
 
     def _expected_improvement(self) -> None:
@@ -275,7 +276,7 @@ class SolverFDDP:
             dx_T = state.diff(self.xs_try[N], self.xs[N])
             dv -= float(self.fs[N] @ (self.Vxx[N] @ dx_T))
             state.diff_many(self.xs_try[:N], self.xs[:N], out=self.dx)
-            dv -= float(np.einsum("ti,tij,tj->", self.fs[:N], self.Vxx[:N], self.dx))
+            dv -= sum_quadratic_forms(self.fs[:N], self.Vxx[:N], self.dx)
         self.dv = dv
         self.d[0] = self.dg + dv
         self.d[1] = self.dq - 2.0 * dv

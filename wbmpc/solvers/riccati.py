@@ -1,8 +1,9 @@
 """Riccati backward pass of FDDP, compiled with numba over the stacked node derivatives.
 
 Crocoddyl's sign inside (δu = −k − K δx); :class:`wbmpc.solvers.fddp.SolverFDDP` exposes the
-library sign. The Cholesky factorisation of Quu and its solves are written out (nu is small);
-the products go to BLAS through ``np.dot``.
+library sign. The Cholesky factor L of Quu is written out (nu is small) and inverted, so the gains
+come from one product [K | k] = L⁻ᵀ L⁻¹ [Qxuᵀ | Qu]; every product goes to BLAS through
+``np.dot`` into preallocated buffers.
 """
 
 from __future__ import annotations
@@ -32,20 +33,17 @@ def _cholesky_in_place(A):
 
 
 @njit(cache=True)
-def _cholesky_solve(L, B):
-    """Solve (L Lᵀ) X = B in place for B (n, m)."""
-    n, m = B.shape
-    for c in range(m):
-        for i in range(n):
-            s = B[i, c]
-            for p in range(i):
-                s -= L[i, p] * B[p, c]
-            B[i, c] = s / L[i, i]
-        for i in range(n - 1, -1, -1):
-            s = B[i, c]
-            for p in range(i + 1, n):
-                s -= L[p, i] * B[p, c]
-            B[i, c] = s / L[i, i]
+def _lower_triangular_inverse(L, Linv):
+    """Linv = L⁻¹ for a lower-triangular L (n, n) with a positive diagonal (lower triangle only)."""
+    n = L.shape[0]
+    Linv[:, :] = 0.0
+    for j in range(n):
+        Linv[j, j] = 1.0 / L[j, j]
+        for i in range(j + 1, n):
+            s = 0.0
+            for p in range(j, i):
+                s -= L[i, p] * Linv[p, j]
+            Linv[i, j] = s / L[i, i]
 
 
 @njit(cache=True)
@@ -65,37 +63,51 @@ def riccati_backward(Fx, Fu, Lx, Lu, Lxx, Lxu, Luu, fs, preg, is_feasible, Vx, V
     if not is_feasible:
         Vx[N] += np.dot(Vxx[N], fs[N])
     L = np.empty((nu, nu))
-    rhs = np.empty((nu, ndx + 1))
+    Linv = np.empty((nu, nu))
+    rhs = np.empty((nu, ndx + 1))  # [Qxuᵀ | Qu]
+    FxT = np.empty((ndx, ndx))
+    FuT = np.empty((nu, ndx))
+    FxTVxx = np.empty((ndx, ndx))
+    FuTVxx = np.empty((nu, ndx))
+    Qxx = np.empty((ndx, ndx))
+    Qxu = np.empty((ndx, nu))
+    Qx = np.empty(ndx)
+    QuuInv = np.empty((nu, nu))
+    Kk = np.empty((nu, ndx + 1))
+    QxuK = np.empty((ndx, ndx))
     for t in range(N - 1, -1, -1):
-        FxT = np.ascontiguousarray(Fx[t].T)
-        FuT = np.ascontiguousarray(Fu[t].T)
-        FxTVxx = np.dot(FxT, Vxx[t + 1])
-        Qx = Lx[t] + np.dot(FxT, Vx[t + 1])
-        Qxx = Lxx[t] + np.dot(FxTVxx, Fx[t])
+        FxT[:, :] = Fx[t].T
+        FuT[:, :] = Fu[t].T
+        np.dot(FxT, Vxx[t + 1], FxTVxx)
+        np.dot(FuT, Vxx[t + 1], FuTVxx)
+        Qx[:] = Lx[t] + np.dot(FxT, Vx[t + 1])
+        np.dot(FxTVxx, Fx[t], Qxx)
+        Qxx += Lxx[t]
         Qu[t] = Lu[t] + np.dot(FuT, Vx[t + 1])
-        Quu[t] = Luu[t] + np.dot(np.dot(FuT, Vxx[t + 1]), Fu[t])
-        Qxu = Lxu[t] + np.dot(FxTVxx, Fu[t])
+        np.dot(FuTVxx, Fu[t], Quu[t])
+        Quu[t] += Luu[t]
+        np.dot(FxTVxx, Fu[t], Qxu)
+        Qxu += Lxu[t]
         for i in range(nu):
             Quu[t, i, i] += preg
         L[:, :] = Quu[t]
         if not _cholesky_in_place(L):
             return t
-        for i in range(nu):
-            for j in range(ndx):
-                rhs[i, j] = Qxu[j, i]
-            rhs[i, ndx] = Qu[t, i]
-        _cholesky_solve(L, rhs)
-        for i in range(nu):
-            for j in range(ndx):
-                K[t, i, j] = rhs[i, j]
-            k[t, i] = rhs[i, ndx]
+        # Quu⁻¹ = L⁻ᵀ L⁻¹, then [K | k] = Quu⁻¹ [Qxuᵀ | Qu] in one BLAS product
+        _lower_triangular_inverse(L, Linv)
+        np.dot(Linv.T, Linv, QuuInv)
+        rhs[:, :ndx] = Qxu.T
+        rhs[:, ndx] = Qu[t]
+        np.dot(QuuInv, rhs, Kk)
+        K[t] = Kk[:, :ndx]
+        k[t] = Kk[:, ndx]
         Quuk[t] = np.dot(Quu[t], k[t])
         Kt = K[t]
-        Vx_t = Qx - np.dot(np.ascontiguousarray(Kt.T), Qu[t])
-        Vxx_t = Qxx - np.dot(Qxu, Kt)
+        Vx_t = Qx - np.dot(Kt.T, Qu[t])
+        np.dot(Qxu, Kt, QxuK)
         for i in range(ndx):
             for j in range(i, ndx):
-                s = 0.5 * (Vxx_t[i, j] + Vxx_t[j, i])
+                s = 0.5 * (Qxx[i, j] - QxuK[i, j] + Qxx[j, i] - QxuK[j, i])
                 Vxx[t, i, j] = s
                 Vxx[t, j, i] = s
             Vxx[t, i, i] += preg
