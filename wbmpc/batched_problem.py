@@ -7,11 +7,17 @@ glue, and the cache misses of 100 data objects, cost twice Pinocchio's own work.
 reads the same node models (contacts, cost terms, weights, references) and evaluates them as:
 
 - a Python loop over the nodes doing only what needs Pinocchio: contact-constrained dynamics
-  (``constraintDynamics`` with the node's contact set, or ABA without contacts) and, in
-  :meth:`calcDiff`, its derivatives, the Lie-group Jacobians of the Euler step and the frame
-  kinematics of the active frame terms; one Pinocchio data per contact set, so it stays in cache;
+  (``constraintDynamics`` with the node's contact set, or ABA without contacts), in
+  :meth:`calcDiff` its derivatives, and the frame kinematics of the active frame terms; one
+  Pinocchio data per contact set, so it stays in cache; the Euler step is compiled
+  (:mod:`wbmpc.lie_kernels`);
 - one compiled pass over all nodes for everything else: residual rows, activations, cost values
-  and Gauss-Newton derivatives, Euler transition Jacobians, the dt scaling.
+  and Gauss-Newton derivatives, the Lie-group Jacobians of the Euler step and of the state
+  residual, Euler transition Jacobians, the dt scaling.
+
+The compiled Jacobian of exp6 is exact where Pinocchio's ``Jexp6`` loses up to ~6e-8 (base
+rotations of 1e-5..1e-2 rad per node, see :mod:`wbmpc.lie_kernels`), so the two evaluations agree
+to rounding except there, by that much.
 
 Supported nodes: :class:`~wbmpc.integrator.IntegratedActionModelEuler` over
 :class:`~wbmpc.dynamics.DifferentialActionModelContactFwdDynamics` (Pinocchio backend) on a
@@ -38,11 +44,11 @@ from wbmpc.integrator import IntegratedActionModelEuler
 from wbmpc.kernels import (
     cost_rows_derivatives,
     cost_rows_value,
-    euler_step_tangent,
     euler_transition_jacobians,
     free_flyer_state_difference,
     scale_cost_derivatives,
 )
+from wbmpc.lie_kernels import free_flyer_dintegrate, free_flyer_euler_step, free_flyer_state_jacobians
 from wbmpc.problem import RolloutError, ShootingProblem
 from wbmpc.residuals import ResidualControl, ResidualFrameHeight, ResidualFrameTranslation, ResidualState
 
@@ -133,8 +139,8 @@ class BatchedShootingProblem(ShootingProblem):
         self._euler_dx = np.zeros((N, ndx))
         self._da_dx = np.zeros((N, nv, ndx))
         self._da_du = np.zeros((N, nv, nu))
-        self._J_q = np.zeros((N, nv, nv))
-        self._J_dq = np.zeros((N, nv, nv))
+        self._J_q = np.zeros((nv, nv))  # scratch of the compiled pass
+        self._J_dq = np.zeros((nv, nv))
         self._state_residual = np.zeros((N, n_terms, ndx))
         self._state_jacobian = np.zeros((N, n_terms, nv, nv))
         self._frame_position = np.zeros((N, max(len(frame_ids), 1), 3))
@@ -218,8 +224,7 @@ class BatchedShootingProblem(ShootingProblem):
         self._acceleration[k] = a
         dx = self._euler_dx[k]
         xnext = self.xnext[k]
-        euler_step_tangent(v, a, self._dt[k], dx, xnext[nq:])
-        xnext[:nq] = pin.integrate(model, q, dx[:nv])
+        free_flyer_euler_step(x, a, self._dt[k], dx, xnext)
         for slot, frame_id in self._node_frames[k]:
             self._frame_position[k, slot] = pin.updateFramePlacement(model, pdata, frame_id).translation
         if not derivatives:
@@ -234,12 +239,8 @@ class BatchedShootingProblem(ShootingProblem):
         da_dx[:, :nv] = da_dq
         da_dx[:, nv:] = da_dv
         self._da_du[k] = da_dtau[:, 6:]
-        self._J_q[k] = pin.dIntegrate(model, q, dx[:nv], pin.ARG0)
-        self._J_dq[k] = pin.dIntegrate(model, q, dx[:nv], pin.ARG1)
         for slot, frame_id in self._node_frames[k]:
             self._frame_jacobian[k, slot] = pin.getFrameJacobian(model, pdata, frame_id, pin.LOCAL_WORLD_ALIGNED)[:3]
-        for j in self._node_state_terms[k]:
-            self._state_jacobian[k, j] = pin.dDifference(model, self._reference[k, j, :nq], q, pin.ARG1)
 
     def _state_residuals(self, xs: np.ndarray) -> None:
         """x ⊖ x_ref of every active state term (compiled; Pinocchio near a half turn)."""
@@ -252,6 +253,17 @@ class BatchedShootingProblem(ShootingProblem):
                     ref, x = self._reference[k, j, :self.nx], xs[k]
                     self._state_residual[k, j, :nv] = pin.difference(self._pin_model, ref[:nq], x[:nq])
                     self._state_residual[k, j, nv:] = x[nq:] - ref[nq:]
+
+    def _state_jacobians(self, xs: np.ndarray) -> None:
+        """∂(x ⊖ x_ref)/∂q of every active state term (compiled; Pinocchio near a half turn)."""
+        nq = self.state.nq
+        for j in self._state_terms:
+            ok = free_flyer_state_jacobians(self._reference[:, j, :self.nx], xs, self._term_scale[:, j],
+                                            self._state_jacobian[:, j], self._difference_ok)
+            if not ok:
+                for k in np.flatnonzero(~self._difference_ok):
+                    self._state_jacobian[k, j] = pin.dDifference(self._pin_model, self._reference[k, j, :nq],
+                                                                 xs[k, :nq], pin.ARG1)
 
     def _running_cost(self, xs, us) -> float:
         self._state_residuals(xs)
@@ -276,10 +288,11 @@ class BatchedShootingProblem(ShootingProblem):
         for k in range(self.T):
             self._node_dynamics_calc(k, xs[k], us[k], derivatives=True)
         self._state_residuals(xs)
+        self._state_jacobians(xs)
         cost = batched_cost_derivatives(
             xs, us, self._dt, self._term_kind, self._term_row, self._term_slot, self._term_scale, self._reference,
             self._row_term, self._w, self._lb, self._ub, self._state_residual, self._state_jacobian,
-            self._frame_position, self._frame_jacobian, self._da_dx, self._da_du, self._J_q, self._J_dq,
+            self._frame_position, self._frame_jacobian, self._da_dx, self._da_du, self._euler_dx, self._J_q, self._J_dq,
             self._scratch_r, self._scratch_R, self._scratch_gradient, self._scratch_hessian, self._node_cost,
             self._term_cost, self.Fx, self.Fu, self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu)
         self.terminal_model.calc(self.terminal_data, xs[-1])
@@ -387,8 +400,8 @@ def batched_cost_values(xs, us, dt, term_kind, term_row, term_slot, term_scale, 
 
 @njit(cache=True)
 def batched_cost_derivatives(xs, us, dt, term_kind, term_row, term_slot, term_scale, reference, row_term, w, lb, ub,
-                             state_residual, state_jacobian, frame_position, frame_jacobian, da_dx, da_du, J_q, J_dq,
-                             r, R, gradient, hessian, node_cost, term_cost, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu):
+                             state_residual, state_jacobian, frame_position, frame_jacobian, da_dx, da_du, euler_dx,
+                             J_q, J_dq, r, R, gradient, hessian, node_cost, term_cost, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu):
     """Values and derivatives of every running node: Euler transition Jacobians Fx (N, ndx, ndx),
     Fu (N, ndx, nu), Gauss-Newton cost derivatives (dt-scaled); returns the total running cost."""
     ndx = state_residual.shape[2]
@@ -396,8 +409,10 @@ def batched_cost_derivatives(xs, us, dt, term_kind, term_row, term_slot, term_sc
     nu = us.shape[1]
     total = 0.0
     R[:, :] = 0.0
+    nq = xs.shape[1] - nv
     for k in range(dt.size):
-        euler_transition_jacobians(da_dx[k], da_du[k], J_q[k], J_dq[k], dt[k], Fx[k], Fu[k])
+        free_flyer_dintegrate(xs[k, :nq], euler_dx[k, :nv], J_q, J_dq)
+        euler_transition_jacobians(da_dx[k], da_du[k], J_q, J_dq, dt[k], Fx[k], Fu[k])
         _fill_residual_rows(k, xs[k], us[k], term_kind, term_row, term_slot, term_scale, reference,
                             state_residual, frame_position, r)
         for j in range(term_kind.size):

@@ -1,0 +1,237 @@
+"""Compiled Lie-group operations of a free-flyer root followed by 1-dof joints (nq = nv + 1).
+
+Pinocchio conventions: q = [p (3) world, quaternion (x, y, z, w), joint angles], tangent
+dq = [v (3), ω (3) in the base frame, joint increments]; q ⊕ dq = M(q) exp6(v, ω) on the base.
+These replace ``pin.integrate``, ``pin.dIntegrate`` and ``pin.dDifference`` in the batched
+evaluation (:mod:`wbmpc.batched_problem`), where a binding call per node costs more than the
+arithmetic. They agree with Pinocchio to rounding (see tests/test_wbmpc_lie_kernels.py).
+
+The SE(3) Jacobians follow Barfoot's closed forms (State Estimation for Robotics, sec. 7.1.5):
+exp6's right Jacobian J_r(ξ) = J_l(−ξ) = [[J3, Q], [0, J3]] with the SO(3) right Jacobian J3 and
+the coupling block Q; dDifference is its inverse at ξ = log6(M0⁻¹ M1).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from wbmpc.kernels import _quaternion_matrix, free_flyer_difference, skew3
+
+# [rad] below it the coefficients come from their Taylor series (terms up to θ¹²): the closed
+# forms of the higher ones cancel catastrophically (c3's numerator is ~θ⁵/60).
+SERIES_ANGLE = 0.5
+
+
+@njit(cache=True)
+def _series(t2, offset, weight_step):
+    """Σ_{n=0..6} (−1)ⁿ (1 + weight_step·n) θ²ⁿ / (2n + offset)!."""
+    total = 0.0
+    power = 1.0
+    for n in range(7):
+        factorial = 1.0
+        for i in range(2, 2 * n + offset + 1):
+            factorial *= i
+        total += (-1.0) ** n * (1.0 + weight_step * n) * power / factorial
+        power *= t2
+    return total
+
+
+@njit(cache=True)
+def _so3_coefficients(theta):
+    """(sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³)."""
+    t2 = theta * theta
+    if theta < SERIES_ANGLE:
+        return _series(t2, 1, 0.0), _series(t2, 2, 0.0), _series(t2, 3, 0.0)
+    s, c = np.sin(theta), np.cos(theta)
+    return s / theta, (1.0 - c) / t2, (theta - s) / (t2 * theta)
+
+
+@njit(cache=True)
+def _matrix_quaternion(R, out):
+    """Unit quaternion (x, y, z, w) of a rotation matrix (Eigen's branch on the largest term)."""
+    trace = R[0, 0] + R[1, 1] + R[2, 2]
+    if trace > 0.0:
+        t = np.sqrt(trace + 1.0)
+        out[3] = 0.5 * t
+        t = 0.5 / t
+        out[0] = (R[2, 1] - R[1, 2]) * t
+        out[1] = (R[0, 2] - R[2, 0]) * t
+        out[2] = (R[1, 0] - R[0, 1]) * t
+        return
+    i = 0
+    if R[1, 1] > R[0, 0]:
+        i = 1
+    if R[2, 2] > R[i, i]:
+        i = 2
+    j = (i + 1) % 3
+    k = (j + 1) % 3
+    t = np.sqrt(R[i, i] - R[j, j] - R[k, k] + 1.0)
+    out[i] = 0.5 * t
+    t = 0.5 / t
+    out[3] = (R[k, j] - R[j, k]) * t
+    out[j] = (R[j, i] + R[i, j]) * t
+    out[k] = (R[k, i] + R[i, k]) * t
+
+
+@njit(cache=True)
+def free_flyer_integrate(q, dq, out):
+    """out (nq,) = q ⊕ dq: base M(q) exp6(dq[:6]), joints q + dq (Pinocchio's integrate)."""
+    nq = q.size
+    w = dq[3:6]
+    theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    a, b, c = _so3_coefficients(theta)
+    W = skew3(w)
+    W2 = np.dot(W, W)
+    R_exp = np.eye(3) + a * W + b * W2
+    V = np.eye(3) + b * W + c * W2
+    R0 = np.empty((3, 3))
+    _quaternion_matrix(q[3:7], R0)
+    p_exp = np.dot(V, dq[:3])
+    p1 = np.dot(R0, p_exp)
+    for i in range(3):
+        out[i] = q[i] + p1[i]
+    R1 = np.dot(R0, R_exp)
+    quat = np.empty(4)
+    _matrix_quaternion(R1, quat)
+    dot = quat[0] * q[3] + quat[1] * q[4] + quat[2] * q[5] + quat[3] * q[6]
+    sign = -1.0 if dot < 0.0 else 1.0  # same hemisphere as q's quaternion
+    norm2 = quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]
+    scale = sign * (3.0 - norm2) / 2.0  # first-order renormalisation
+    for i in range(4):
+        out[3 + i] = scale * quat[i]
+    for i in range(7, nq):
+        out[i] = q[i] + dq[i - 1]
+
+
+@njit(cache=True)
+def _so3_right_jacobian(w, J):
+    """J (3, 3) = I − (1 − cos θ)/θ² [ω]× + (θ − sin θ)/θ³ [ω]×², θ = |ω|."""
+    theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    _, b, c = _so3_coefficients(theta)
+    W = skew3(w)
+    J[:, :] = np.eye(3) - b * W + c * np.dot(W, W)
+
+
+@njit(cache=True)
+def _se3_left_coupling(rho, phi, Q):
+    """Barfoot's Q(ρ, φ) (3, 3), the off-diagonal block of SE(3)'s left Jacobian."""
+    theta = np.sqrt(phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2])
+    t2 = theta * theta
+    if theta < SERIES_ANGLE:
+        c1 = _series(t2, 3, 0.0)
+        c2 = _series(t2, 4, 0.0)
+        c3 = _series(t2, 5, 1.0)
+    else:
+        s, c = np.sin(theta), np.cos(theta)
+        c1 = (theta - s) / (t2 * theta)
+        c2 = (t2 + 2.0 * c - 2.0) / (2.0 * t2 * t2)
+        c3 = (2.0 * theta - 3.0 * s + theta * c) / (2.0 * t2 * t2 * theta)
+    P = skew3(phi)
+    Rh = skew3(rho)
+    PR = np.dot(P, Rh)
+    RP = np.dot(Rh, P)
+    PRP = np.dot(PR, P)
+    PP = np.dot(P, P)
+    Q[:, :] = (0.5 * Rh + c1 * (PR + RP + PRP) + c2 * (np.dot(P, PR) + np.dot(RP, P) - 3.0 * PRP)
+               + c3 * (np.dot(PRP, P) + np.dot(P, PRP)))
+
+
+@njit(cache=True)
+def se3_right_jacobian(xi, J):
+    """J (6, 6): Pinocchio's Jexp6 at ξ = (v, ω), the right Jacobian of exp6."""
+    J[:, :] = 0.0
+    J3 = np.empty((3, 3))
+    _so3_right_jacobian(xi[3:6], J3)
+    Q = np.empty((3, 3))
+    _se3_left_coupling(-xi[:3], -xi[3:6], Q)
+    J[:3, :3] = J3
+    J[3:, 3:] = J3
+    J[:3, 3:] = Q
+
+
+@njit(cache=True)
+def free_flyer_dintegrate(q, dq, J_q, J_dq):
+    """Jacobians (nv, nv) of q ⊕ dq with respect to q (J_q) and dq (J_dq) (Pinocchio's
+    dIntegrate ARG0 and ARG1): the base blocks are Ad(exp6(dq)⁻¹) and Jexp6(dq); joints identity."""
+    nv = J_q.shape[0]
+    J_q[:, :] = 0.0
+    J_dq[:, :] = 0.0
+    for i in range(6, nv):
+        J_q[i, i] = 1.0
+        J_dq[i, i] = 1.0
+    w = dq[3:6]
+    theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    a, b, c = _so3_coefficients(theta)
+    W = skew3(w)
+    W2 = np.dot(W, W)
+    R = np.eye(3) + a * W + b * W2
+    p = np.dot(np.eye(3) + b * W + c * W2, dq[:3])
+    RT = np.ascontiguousarray(R.T)
+    J_q[:3, :3] = RT
+    J_q[3:6, 3:6] = RT
+    J_q[:3, 3:6] = -np.dot(RT, skew3(p))
+    J6 = np.empty((6, 6))
+    se3_right_jacobian(dq[:6], J6)
+    J_dq[:6, :6] = J6
+
+
+@njit(cache=True)
+def free_flyer_ddifference_second(q0, q1, J):
+    """J (nv, nv) = ∂(q1 ⊖ q0)/∂q1 (Pinocchio's dDifference ARG1): the base block is Jlog6 of
+    M0⁻¹ M1 (inverse of Jexp6 at the difference), joints identity. False near a half turn (the
+    caller then uses Pinocchio)."""
+    nv = J.shape[0]
+    xi = np.empty(nv)
+    if not free_flyer_difference(q0, q1, q0.size, xi):
+        return False
+    J[:, :] = 0.0
+    for i in range(6, nv):
+        J[i, i] = 1.0
+    w = xi[3:6]
+    theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    W = skew3(w)
+    # inverse of the SO(3) right Jacobian: I + ½[ω]× + (1/θ² − (1 + cos θ)/(2θ sin θ)) [ω]×²
+    if theta < 0.1:  # series of the closed form below (cancellation ~ eps/θ²)
+        t2 = theta * theta
+        d = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0 + t2 * t2 * t2 / 1209600.0
+    else:
+        d = 1.0 / (theta * theta) - (1.0 + np.cos(theta)) / (2.0 * theta * np.sin(theta))
+    A_inv = np.eye(3) + 0.5 * W + d * np.dot(W, W)
+    Q = np.empty((3, 3))
+    _se3_left_coupling(-xi[:3], -xi[3:6], Q)
+    J[:3, :3] = A_inv
+    J[3:6, 3:6] = A_inv
+    J[:3, 3:6] = -np.dot(np.dot(A_inv, Q), A_inv)
+    return True
+
+
+@njit(cache=True)
+def free_flyer_euler_step(x, a, dt, dx, x_next):
+    """Semi-implicit Euler step of a free-flyer state: dx = [v dt + a dt², a dt] (2 nv,) and
+    x⁺ = [q ⊕ dx[:nv], v + a dt] (nx,)."""
+    nv = a.size
+    nq = x.size - nv
+    dt2 = dt * dt
+    for i in range(nv):
+        v = x[nq + i]
+        dx[i] = v * dt + a[i] * dt2
+        dx[nv + i] = a[i] * dt
+        x_next[nq + i] = v + a[i] * dt
+    free_flyer_integrate(x[:nq], dx[:nv], x_next[:nq])
+
+
+@njit(cache=True)
+def free_flyer_state_jacobians(references, xs, scale, out, ok):
+    """out[k] = ∂(xs[k] ⊖ references[k])/∂q (nv, nv) where scale[k] != 0; ok[k] False where
+    Pinocchio must take over (half turn); returns True if none did."""
+    all_ok = True
+    nq = xs.shape[1] - out.shape[1]
+    for k in range(out.shape[0]):
+        ok[k] = True
+        if scale[k] == 0.0:
+            continue
+        if not free_flyer_ddifference_second(references[k, :nq], xs[k, :nq], out[k]):
+            ok[k] = False
+            all_ok = False
+    return all_ok
