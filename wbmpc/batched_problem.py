@@ -48,7 +48,12 @@ from wbmpc.kernels import (
     free_flyer_state_difference,
     scale_cost_derivatives,
 )
-from wbmpc.lie_kernels import free_flyer_dintegrate, free_flyer_euler_step, free_flyer_state_jacobians
+from wbmpc.lie_kernels import (
+    free_flyer_dintegrate,
+    free_flyer_euler_step,
+    free_flyer_state_jacobians,
+    rollout_node_start,
+)
 from wbmpc.problem import RolloutError, ShootingProblem
 from wbmpc.residuals import ResidualControl, ResidualFrameHeight, ResidualFrameTranslation, ResidualState
 
@@ -152,6 +157,7 @@ class BatchedShootingProblem(ShootingProblem):
         self._scratch_gradient = np.zeros(ndx + nu)
         self._scratch_hessian = np.zeros((ndx + nu, ndx + nu))
         self._difference_ok = np.ones(N, dtype=np.bool_)
+        self._no_gaps = np.zeros((N + 1, ndx))
         self.sync()
 
     # ----------------------------------------------------------------- configuration
@@ -305,21 +311,21 @@ class BatchedShootingProblem(ShootingProblem):
 
     def forward_rollout(self, xs, us, k, K, fs, alpha, xs_try, us_try, dx) -> float:
         """The FDDP rollout of :meth:`ShootingProblem.forward_rollout`, node costs batched."""
-        state = self.state
         N = self.T
         closing = not (alpha == 1.0 or fs is None)
+        gaps = self._no_gaps if fs is None else fs
         xnext = self.x0
         for t in range(N):
             x_try = xs_try[t]
-            if closing:
-                state.integrate(xnext, fs[t] * (alpha - 1.0), out=x_try)
-            else:
-                x_try[:] = xnext
-            self._feedback(t, xs, us, k, K, alpha, x_try, dx, us_try)
+            code = rollout_node_start(t, xnext, gaps, alpha, closing, xs, us, k, K, x_try, dx, us_try)
+            if code == 1:  # relative half turn: Pinocchio's difference
+                self._feedback(t, xs, us, k, K, alpha, x_try, dx, us_try)
+            elif code == 2:
+                raise RolloutError(f"control not finite at node {t}")
             self._node_dynamics_calc(t, x_try, us_try[t], derivatives=False)
             xnext = self.xnext[t]
         if closing:
-            state.integrate(xnext, fs[N] * (alpha - 1.0), out=xs_try[N])
+            self.state.integrate(xnext, fs[N] * (alpha - 1.0), out=xs_try[N])
         else:
             xs_try[N] = xnext
         if not np.isfinite(xs_try).all():

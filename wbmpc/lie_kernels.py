@@ -16,7 +16,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from wbmpc.kernels import _quaternion_matrix, free_flyer_difference, skew3
+from wbmpc.kernels import (
+    _quaternion_matrix,
+    feedback_control,
+    free_flyer_difference,
+    free_flyer_state_difference,
+    skew3,
+)
 
 # [rad] below it the coefficients come from their Taylor series (terms up to θ¹²): the closed
 # forms of the higher ones cancel catastrophically (c3's numerator is ~θ⁵/60).
@@ -235,3 +241,23 @@ def free_flyer_state_jacobians(references, xs, scale, out, ok):
             ok[k] = False
             all_ok = False
     return all_ok
+
+
+@njit(cache=True)
+def rollout_node_start(t, x_prev, fs, alpha, closing, xs, us, k, K, x_try, dx, u_try):
+    """One node of the FDDP rollout before its dynamics: x_try = x_prev ⊕ (α − 1) fs[t] when
+    closing gaps (else x_prev), dx[t] = x_try ⊖ xs[t], u_try[t] = us[t] − α k[t] − K[t] dx[t]
+    (Crocoddyl's sign). Returns 0 on success, 1 when the difference needs Pinocchio (half turn;
+    x_try is written, not dx and u_try), 2 when the control is not finite."""
+    nv = dx.shape[1] // 2
+    nq = x_try.size - nv
+    if closing:
+        step = (alpha - 1.0) * fs[t]
+        free_flyer_integrate(x_prev[:nq], step[:nv], x_try[:nq])
+        for i in range(nv):
+            x_try[nq + i] = x_prev[nq + i] + step[nv + i]
+    else:
+        x_try[:] = x_prev
+    if not free_flyer_state_difference(xs[t], x_try, nq, dx[t]):
+        return 1
+    return 0 if feedback_control(us[t], k[t], K[t], dx[t], alpha, u_try[t]) else 2
