@@ -72,12 +72,15 @@ class DifferentialActionModelContactFwdDynamics:
 
     def set_active_contacts(self, names) -> None:
         """Enforce exactly the contacts in ``names`` (between solves; never during one)."""
+        names = tuple(names)
+        if names == getattr(self, "active_key", None):
+            return  # unchanged: keep the cached constraint set (datas compare it by identity)
         unknown = set(names) - set(self.contacts)
         if unknown:
             raise ParameterError(f"unknown contact(s) {sorted(unknown)}; known contacts: {list(self.contacts)}")
         active = [name for name in self.contacts if name in set(names)]
         if getattr(self, "active_key", None) == tuple(active):
-            return  # unchanged: keep the cached constraint set (datas compare it by identity)
+            return
         self.active_contacts = active
         self.active_key = tuple(self.active_contacts)
         self.nc = sum(self.contacts[name].nc for name in self.active_contacts)

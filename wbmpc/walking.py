@@ -220,6 +220,15 @@ class WalkingOCP:
         self._reference_placements = {foot: pin.SE3(pdata.oMf[fid]) for foot, fid in self.foot_frame_ids.items()}
         running = [self._node(terminal=False) for _ in range(self.n_nodes)]
         terminal = self._node(terminal=True)
+        # per node: (differential model, per foot (height, touchdown height, touchdown velocity,
+        # foothold, contact force, friction cone) cost items, None where the term is absent)
+        self._node_terms = []
+        for model in running + [terminal]:
+            items = model.differential.costs.costs
+            self._node_terms.append((model.differential, [
+                tuple(items.get(f"{foot}_{term}") for term in (
+                    "height", "touchdown_height", "touchdown_velocity", "foothold", "contact_force", "friction_cone"))
+                for foot in self.feet]))
         self.problem = ShootingProblem(self.x_reference, running, terminal)
         #: "batched" or "nodes" (see WalkingOCPConfig.evaluation); evaluation_note says why nodes
         self.evaluation, self.evaluation_note = "nodes", ""
@@ -321,42 +330,40 @@ class WalkingOCP:
         touchdown = np.asarray(schedule.touchdown_position, dtype=float)[:, columns]
         heights = self.ground_height + swing_height_reference(np.nan_to_num(phase), cfg.swing_apex_height)
         n_stance = np.maximum(in_contact.sum(axis=1), 1)
-        models = self.problem.running_models + [self.problem.terminal_model]
-        for k, model in enumerate(models):
-            dam = model.differential
+        last_swing = np.zeros_like(in_contact)
+        last_swing[:-1] = ~in_contact[:-1] & in_contact[1:]
+        first_stance = np.zeros_like(in_contact)
+        first_stance[1:] = in_contact[1:] & ~in_contact[:-1]
+        stance_names = [tuple(foot for j, foot in enumerate(self.feet) if row[j]) for row in in_contact.tolist()]
+        swing_rows, last_rows, first_rows = (~in_contact).tolist(), last_swing.tolist(), first_stance.tolist()
+        heights_rows = heights.tolist()
+        force_reference = (self.mass * GRAVITY / n_stance).tolist()
+        for k, (dam, feet_terms) in enumerate(self._node_terms):
             terminal = k == self.n_nodes
             if not terminal:
-                dam.set_active_contacts([foot for j, foot in enumerate(self.feet) if in_contact[k, j]])
-            for j, foot in enumerate(self.feet):
-                swing = not in_contact[k, j]
-                item = dam.costs.costs[f"{foot}_height"]
-                item.active = swing
+                dam.set_active_contacts(stance_names[k])
+            for j, (height, touchdown_height, touchdown_velocity, foothold, force, cone) in enumerate(feet_terms):
+                swing = swing_rows[k][j]
+                height.active = swing
                 if swing:
-                    item.cost.residual.reference = float(heights[k, j])
+                    height.cost.residual.reference = heights_rows[k][j]
                 if terminal:
                     continue
-                last_swing = bool(swing and in_contact[k + 1, j])
-                first_stance = bool(k > 0 and not swing and not in_contact[k - 1, j])
-                name = f"{foot}_touchdown_height"
-                if name in dam.costs.costs:
-                    dam.costs.costs[name].active = last_swing
-                name = f"{foot}_touchdown_velocity"
-                if name in dam.costs.costs:
-                    dam.costs.costs[name].active = first_stance
-                name = f"{foot}_foothold"
-                if name in dam.costs.costs:
-                    dam.costs.costs[name].active = bool(last_swing)
-                    if last_swing:
-                        dam.costs.costs[name].cost.residual.reference[:] = (
-                            touchdown[k, j, 0], touchdown[k, j, 1], self.ground_height)
-                name = f"{foot}_contact_force"
-                if name in dam.costs.costs:
-                    dam.costs.costs[name].active = not swing
-                    dam.costs.costs[name].cost.residual.reference[2] = self.mass * GRAVITY / n_stance[k]
-                name = f"{foot}_friction_cone"
-                if name in dam.costs.costs:
-                    dam.costs.costs[name].active = not swing
-        models[-1].differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
+                if touchdown_height is not None:
+                    touchdown_height.active = last_rows[k][j]
+                if touchdown_velocity is not None:
+                    touchdown_velocity.active = first_rows[k][j]
+                if foothold is not None:
+                    foothold.active = last_rows[k][j]
+                    if last_rows[k][j]:
+                        foothold.cost.residual.reference[:] = (touchdown[k, j, 0], touchdown[k, j, 1],
+                                                                self.ground_height)
+                if force is not None:
+                    force.active = not swing
+                    force.cost.residual.reference[2] = force_reference[k]
+                if cone is not None:
+                    cone.active = not swing
+        self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
         if self.evaluation == "batched":
             self.problem.sync()
 
