@@ -15,6 +15,9 @@ import numpy as np
 from wbmpc.errors import ParameterError
 
 
+SCHEDULE_ROUNDINGS = ("next", "nearest")
+
+
 @dataclass(frozen=True)
 class ContactSchedule:
     """Which feet touch the ground at each OCP node, and where each swing ends.
@@ -66,7 +69,7 @@ class ContactSchedule:
         return self.t0 + self.dt * np.arange(self.n_nodes + 1)
 
 
-def contact_schedule(plan, t0: float, dt: float, n_nodes: int) -> ContactSchedule:
+def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "next") -> ContactSchedule:
     """Sample a :class:`sequencer.horizon.FootstepPlan` on the OCP grid ``t0 + k dt``, k = 0..n_nodes.
 
     Point feet, no double support: between two touchdowns exactly one foot is in stance and the
@@ -74,12 +77,20 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int) -> ContactSchedul
     next touchdown. At a node exactly on a touchdown time the landing foot is in contact and the
     other foot starts its swing (phase 0).
 
+    ``rounding`` says which node a touchdown between two nodes falls on: ``"next"`` (default) the
+    first node at or after it, so the sampled contact starts up to one node (on average half a
+    node) after the planned time; ``"nearest"`` the node nearest to it (half a node earlier or
+    later at most, no bias on average). The closed loop uses "nearest": with "next" Bolt's feet
+    landed ~4 ms after the planned touchdowns, when the DCM runs at ~0.9 m/s relative to the
+    foot, and the sequencer answered the offset with longer steps (docs/closed_loop.md).
+
     Args:
         plan: FootstepPlan (feet ``"left"``/``"right"``).
         t0: time of node 0 [s], >= plan.t_stance_start.
         dt: node spacing [s], > 0.
         n_nodes: number of running nodes, >= 1; the grid must end before the last planned
             touchdown (the swing in progress there would have no planned end).
+        rounding: ``"next"`` or ``"nearest"`` (see above).
 
     Returns:
         ContactSchedule with ``feet == ("left", "right")``.
@@ -91,6 +102,8 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int) -> ContactSchedul
     if isinstance(n_nodes, bool) or int(n_nodes) != n_nodes or n_nodes < 1:
         raise ParameterError(f"n_nodes={n_nodes!r} must be an integer >= 1")
     n_nodes = int(n_nodes)
+    if rounding not in SCHEDULE_ROUNDINGS:
+        raise ParameterError(f"rounding={rounding!r} must be one of {SCHEDULE_ROUNDINGS}")
     if not np.isfinite(t0) or t0 < plan.t_stance_start:
         raise ParameterError(
             f"t0={t0} s must be finite and >= the plan's current stance start {plan.t_stance_start} s"
@@ -104,7 +117,8 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int) -> ContactSchedul
             f"{touchdowns[-1]:.4g} s: plan with a longer horizon or use fewer nodes"
         )
     # index of the stance interval of each node: 0 = current stance, k = after the k-th touchdown
-    interval = np.searchsorted(touchdowns, times, side="right")
+    shift = 0.5 * dt if rounding == "nearest" else 0.0
+    interval = np.searchsorted(touchdowns, times + shift, side="right")
     stance_starts = np.concatenate([[plan.t_stance_start], touchdowns])
     stance_index = np.array([feet.index(plan.stance_foot)] + [feet.index(step.foot) for step in plan.steps])
     rows = np.arange(n_nodes + 1)

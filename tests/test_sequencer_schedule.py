@@ -54,3 +54,22 @@ def test_schedule_input_errors(plan):
         contact_schedule(plan, plan.t0, 0.01, 400)
     with pytest.raises(ParameterError, match=r"t0=-1.0 s must be finite and >= the plan's current stance start"):
         contact_schedule(plan, -1.0, 0.01, 10)
+
+
+def test_nearest_rounding_puts_each_touchdown_on_the_nearest_node(plan):
+    first = plan.steps[0]
+    dt = 0.01
+    # a grid whose node k lies 3 ms before the first touchdown and node k + 1 7 ms after it
+    t0 = first.touchdown_time - 0.003 - 5 * dt
+    late = contact_schedule(plan, t0, dt, 20)
+    nearest = contact_schedule(plan, t0, dt, 20, rounding="nearest")
+    assert late.in_contact[5].tolist() == [True, False] and late.in_contact[6].tolist() == [False, True]
+    assert nearest.in_contact[5].tolist() == [False, True] and nearest.in_contact[4].tolist() == [True, False]
+    assert nearest.swing_phase[5, 0] == 0.0  # the next swing starts there
+    assert 0.0 < nearest.swing_phase[4, 1] < 1.0
+    # a touchdown 3 ms after a node stays on the next node
+    t0 = first.touchdown_time - 0.007 - 5 * dt
+    nearest = contact_schedule(plan, t0, dt, 20, rounding="nearest")
+    assert nearest.in_contact[5].tolist() == [True, False] and nearest.in_contact[6].tolist() == [False, True]
+    with pytest.raises(ParameterError, match=r"rounding='up' must be one of \('next', 'nearest'\)"):
+        contact_schedule(plan, plan.t0, dt, 10, rounding="up")
