@@ -16,6 +16,11 @@ and the mirror ``- l_p / (1 + E) - v_y T / (1 - E)`` from a RIGHT stance. At tou
 right foot, the DCM is still to the LEFT of the right foot (b_y > 0): it is travelling from the
 left foot towards the right one. (Flipping the sign of the l_p term, as one widely copied public
 implementation does, makes the nominal gait non-periodic.) Sagittally: ``b_x = L / (E - 1)``.
+
+Swing drift (an extension, off by default): on a robot whose legs carry a large share of its mass
+the DCM gains, over each stance, ``kappa * L`` more than the LIPM predicts (the swing leg's
+angular momentum; Bolt: kappa ~ 0.2, docs/closed_loop.md). The sagittal step relation becomes
+``(1 - kappa) L + b_next = b E`` and the periodic offset ``b_x = (1 - kappa) L / (E - 1)``.
 """
 
 from __future__ import annotations
@@ -51,7 +56,8 @@ def nominal_step_width(pelvis_width: float, v_y: float, t_nom: float, stance_foo
 
 
 def nominal_dcm_offset(
-    omega: float, step_length: float, pelvis_width: float, v_y: float, t_nom: float, stance_foot: str
+    omega: float, step_length: float, pelvis_width: float, v_y: float, t_nom: float, stance_foot: str,
+    swing_drift: float = 0.0,
 ) -> tuple[float, float]:
     """Nominal DCM offset at touchdown ``(b_x, b_y)`` [m], relative to the landing foot.
 
@@ -62,10 +68,14 @@ def nominal_dcm_offset(
         v_y: commanded lateral velocity [m/s] (y to the left).
         t_nom: nominal step duration [s], > 0.
         stance_foot: ``"left"`` or ``"right"``, the foot in stance during the planned step.
+        swing_drift: kappa in [0, 1), forward DCM gain per unit of step length beyond the LIPM
+            (0: the pure LIPM, the paper's sequencer).
     """
     if not (omega > 0 and t_nom > 0):
         raise ParameterError(f"omega={omega} 1/s and t_nom={t_nom} s must both be > 0")
+    if not (0.0 <= swing_drift < 1.0):
+        raise ParameterError(f"swing_drift={swing_drift} must be in [0, 1)")
     growth = math.exp(omega * t_nom)
-    b_x = step_length / (growth - 1.0)
+    b_x = (1.0 - swing_drift) * step_length / (growth - 1.0)
     b_y = stance_sign(stance_foot) * pelvis_width / (1.0 + growth) - v_y * t_nom / (1.0 - growth)
     return b_x, b_y

@@ -43,6 +43,15 @@ class SequencerParams:
         t_min, t_nom, t_max: step duration (time from the start of a stance to the next
             touchdown) bounds and nominal value [s], 0 < t_min <= t_nom <= t_max.
         horizon: H_u, Algorithm 1 plans until a touchdown is at or after t0 + horizon [s], > 0.
+        swing_drift: kappa in [0, 0.9], forward DCM gain per unit of step length over a stance
+            beyond the LIPM [-] (0 = the pure LIPM of the paper, the default). The nominal offset
+            becomes ``b_x = (1 - kappa) l_nom / (E - 1)``, the periodic gait of
+            ``(1 - kappa) L + b_next = b E`` (see ``sequencer.nominal``). The step QP's dynamics
+            stay the LIPM's: the closed loop re-plans every 10 ms from the measured DCM, which
+            takes up the drift of the step in progress.
+        dcm_offset_bias: how far ahead of the planned offset b_T,x the DCM is, on average, when the
+            foot has landed [m], |.| <= 0.05 (0 = none, the paper). The nominal offset aimed at is
+            b_x - dcm_offset_bias, so that the offset the next stance starts from is b_x.
         name: label of the parameter set (for reports only).
     """
 
@@ -64,6 +73,8 @@ class SequencerParams:
     t_nom: float = 0.3
     t_max: float = 1.0
     horizon: float = 3.0
+    swing_drift: float = 0.0
+    dcm_offset_bias: float = 0.0
     name: str = "custom"
 
     # ------------------------------------------------------------------ validation
@@ -90,6 +101,10 @@ class SequencerParams:
                 raise ParameterError(
                     f"{low}={getattr(self, low)} {unit} must be <= {high}={getattr(self, high)} {unit}"
                 )
+        if not 0.0 <= self.swing_drift <= 0.9:
+            raise ParameterError(f"swing_drift={self.swing_drift} must be in [0, 0.9]")
+        if not abs(self.dcm_offset_bias) <= 0.05:
+            raise ParameterError(f"dcm_offset_bias={self.dcm_offset_bias} m must be in [-0.05, 0.05] m")
         if not self.t_min > 0:
             raise ParameterError(f"t_min={self.t_min} s must be > 0")
         if not self.t_min <= self.t_nom <= self.t_max:
@@ -134,8 +149,12 @@ class SequencerParams:
         return self.w_right_min, self.w_right_max
 
     def b_nom(self, stance_foot: str) -> tuple[float, float]:
-        """Nominal DCM offset (b_x, b_y) at touchdown [m], relative to the landing foot."""
-        return nominal_dcm_offset(self.omega, self.l_nom, self.pelvis_width, self.v_y, self.t_nom, stance_foot)
+        """Nominal DCM offset (b_x, b_y) at touchdown [m], relative to the landing foot (the aim: minus
+        ``dcm_offset_bias`` in x)."""
+        b_x, b_y = nominal_dcm_offset(
+            self.omega, self.l_nom, self.pelvis_width, self.v_y, self.t_nom, stance_foot, self.swing_drift
+        )
+        return b_x - self.dcm_offset_bias, b_y
 
     # ------------------------------------------------------------------ presets and I/O
     @classmethod

@@ -1,5 +1,6 @@
 """Nominal DCM offsets (Khadiv et al. 2020, App. A): the sign of b_y checked on a periodic LIPM gait."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -7,6 +8,7 @@ import pytest
 
 from sequencer import FootstepSequencer, SequencerParams, StepProblem, nominal_dcm_offset
 from sequencer.nominal import nominal_step_width
+from wbmpc.errors import ParameterError
 
 OMEGA = math.sqrt(9.81 / 0.31)
 
@@ -66,3 +68,30 @@ def test_qp_on_the_periodic_orbit_reproduces_the_nominal_step_with_zero_cost():
     assert ExactBackend().solve(problem).objective == pytest.approx(0.0, abs=1e-18)
     for step in plan.steps:  # stays on the orbit
         assert step.duration == pytest.approx(params.t_nom, abs=1e-9)
+
+
+@pytest.mark.parametrize("kappa", [0.0, 0.2, 0.5])
+def test_swing_drift_offset_makes_the_drifting_sagittal_gait_periodic(kappa):
+    """With a DCM gain of kappa L per stance, (1 - kappa) L + b_next = b E keeps b periodic."""
+    length, t_step = 0.1, 0.3
+    b = nominal_dcm_offset(OMEGA, length, 0.25, 0.0, t_step, "left", swing_drift=kappa)[0]
+    assert b == pytest.approx((1.0 - kappa) * length / (math.exp(OMEGA * t_step) - 1.0))
+    offset = b
+    for _ in range(6):  # DCM at touchdown relative to the stance foot: LIPM growth + drift
+        offset = offset * math.exp(OMEGA * t_step) + kappa * length - length
+        assert offset == pytest.approx(b, abs=1e-9)
+
+
+def test_swing_drift_and_offset_bias_in_the_sequencer_parameters():
+    params = SequencerParams.bolt_walking()
+    drifting = dataclasses.replace(params, swing_drift=0.25, dcm_offset_bias=0.003)
+    b_x, b_y = params.b_nom("left")
+    assert drifting.b_nom("left") == pytest.approx((0.75 * b_x - 0.003, b_y))
+    # the lateral offset and the step QP's nominal step are unchanged
+    assert drifting.w_nom("right") == params.w_nom("right") and drifting.l_nom == params.l_nom
+    with pytest.raises(ParameterError, match=r"swing_drift=0.95 must be in \[0, 0.9\]"):
+        dataclasses.replace(params, swing_drift=0.95)
+    with pytest.raises(ParameterError, match=r"dcm_offset_bias=0.1 m must be in \[-0.05, 0.05\] m"):
+        dataclasses.replace(params, dcm_offset_bias=0.1)
+    with pytest.raises(ParameterError, match=r"swing_drift=1.0 must be in \[0, 1\)"):
+        nominal_dcm_offset(OMEGA, 0.1, 0.25, 0.0, 0.3, "left", swing_drift=1.0)
