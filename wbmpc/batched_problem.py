@@ -42,11 +42,8 @@ from wbmpc.dynamics import DifferentialActionModelContactFwdDynamics
 from wbmpc.errors import ParameterError
 from wbmpc.integrator import IntegratedActionModelEuler
 from wbmpc.kernels import (
-    cost_rows_derivatives,
     cost_rows_value,
-    euler_transition_jacobians,
     free_flyer_state_difference,
-    scale_cost_derivatives,
 )
 from wbmpc.lie_kernels import (
     free_flyer_dintegrate,
@@ -153,9 +150,6 @@ class BatchedShootingProblem(ShootingProblem):
         self._node_cost = np.zeros(N)
         self._term_cost = np.zeros((N, n_terms))
         self._scratch_r = np.zeros(nr)
-        self._scratch_R = np.zeros((nr, ndx + nu))
-        self._scratch_gradient = np.zeros(ndx + nu)
-        self._scratch_hessian = np.zeros((ndx + nu, ndx + nu))
         self._difference_ok = np.ones(N, dtype=np.bool_)
         self._no_gaps = np.zeros((N + 1, ndx))
         self.sync()
@@ -299,8 +293,7 @@ class BatchedShootingProblem(ShootingProblem):
             xs, us, self._dt, self._term_kind, self._term_row, self._term_slot, self._term_scale, self._reference,
             self._row_term, self._w, self._lb, self._ub, self._state_residual, self._state_jacobian,
             self._frame_position, self._frame_jacobian, self._da_dx, self._da_du, self._euler_dx, self._J_q, self._J_dq,
-            self._scratch_r, self._scratch_R, self._scratch_gradient, self._scratch_hessian, self._node_cost,
-            self._term_cost, self.Fx, self.Fu, self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu)
+            self._scratch_r, self._node_cost, self._term_cost, self.Fx, self.Fu, self.Lx, self.Lu, self.Lxx, self.Luu)
         self.terminal_model.calc(self.terminal_data, xs[-1])
         self.terminal_model.calcDiff(self.terminal_data, xs[-1])
         self.cost = cost + self.terminal_data.cost
@@ -405,45 +398,139 @@ def batched_cost_values(xs, us, dt, term_kind, term_row, term_slot, term_scale, 
 
 
 @njit(cache=True)
+def _free_flyer_euler_jacobians(da_dx, da_du, J_q, J_dq, dt, Fx, Fu):
+    """Fx (ndx, ndx), Fu (ndx, nu) of q⁺ = q ⊕ (v dt + a dt²), v⁺ = v + a dt (the products of
+    ``kernels.euler_transition_jacobians``) for free-flyer J_q, J_dq: identity outside their 6×6
+    base blocks, so only the base rows need the products."""
+    nv = da_dx.shape[0]
+    ndx = 2 * nv
+    nu = da_du.shape[1]
+    dt2 = dt * dt
+    for i in range(6):
+        for c in range(ndx):
+            s = 0.0
+            for m in range(6):
+                s += J_dq[i, m] * da_dx[m, c]
+            Fx[i, c] = s * dt2
+        for c in range(nu):
+            s = 0.0
+            for m in range(6):
+                s += J_dq[i, m] * da_du[m, c]
+            Fu[i, c] = s * dt2
+        for m in range(6):
+            Fx[i, nv + m] += J_dq[i, m] * dt
+            Fx[i, m] += J_q[i, m]
+    for i in range(6, nv):
+        for c in range(ndx):
+            Fx[i, c] = da_dx[i, c] * dt2
+        for c in range(nu):
+            Fu[i, c] = da_du[i, c] * dt2
+        Fx[i, nv + i] += dt
+        Fx[i, i] += 1.0
+    for i in range(nv):
+        for c in range(ndx):
+            Fx[nv + i, c] = da_dx[i, c] * dt
+        for c in range(nu):
+            Fu[nv + i, c] = da_du[i, c] * dt
+        Fx[nv + i, nv + i] += 1.0
+
+
+@njit(cache=True)
+def _row_coefficients(r, w, lb, ub, scale):
+    """Gradient and Hessian coefficients (c, h) of one residual row under the dead-zone activation."""
+    below = r - lb
+    above = r - ub
+    e = min(below, 0.0) + max(above, 0.0)
+    h = scale * w if (below <= 0.0 or above >= 0.0) else 0.0
+    return scale * w * e, h
+
+
+@njit(cache=True)
+def _add_frame_rows(J, rows, first_row, r, w, lb, ub, scale, Lx, Lxx):
+    """Rows ``rows`` of a frame Jacobian J (3, nv) with residual rows r[first_row:]: Jᵀ c, Jᵀ diag(h) J."""
+    nv = J.shape[1]
+    for a in range(rows.size):
+        i = first_row + a
+        c, h = _row_coefficients(r[i], w[i], lb[i], ub[i], scale)
+        Jrow = J[rows[a]]
+        for b in range(nv):
+            Lx[b] += c * Jrow[b]
+            if h != 0.0 and Jrow[b] != 0.0:
+                hb = h * Jrow[b]
+                for d in range(nv):
+                    Lxx[b, d] += hb * Jrow[d]
+
+
+@njit(cache=True)
+def _node_cost_derivatives(k, dt, term_kind, term_row, term_slot, term_scale, w, lb, ub, r, state_jacobian,
+                           frame_jacobian, Lx, Lu, Lxx, Luu):
+    """dt-scaled Gauss-Newton gradient and Hessian of node k from its residual rows r, term by
+    term with the residuals' structure (the state residual's configuration Jacobian is identity
+    outside its 6×6 base block; controls enter only Lu, Luu; frames only the configuration block).
+    Lxu stays zero: no supported residual couples x and u."""
+    nv = Lxx.shape[0] // 2
+    nu = Lu.size
+    Lx[:] = 0.0
+    Lu[:] = 0.0
+    Lxx[:, :] = 0.0
+    Luu[:, :] = 0.0
+    z_row = np.array([2])
+    xyz_rows = np.array([0, 1, 2])
+    for j in range(term_kind.size):
+        scale = dt * term_scale[k, j]
+        if scale == 0.0:
+            continue
+        row = term_row[j]
+        kind = term_kind[j]
+        if kind == 0:  # state: r = x ⊖ x_ref, Rx = [[B, 0, 0], [0, I, 0], [0, 0, I]]
+            B = state_jacobian[k, j]
+            c = np.empty(6)
+            h = np.empty(6)
+            for i in range(6):
+                c[i], h[i] = _row_coefficients(r[row + i], w[k, row + i], lb[k, row + i], ub[k, row + i], scale)
+            for a in range(6):
+                g = 0.0
+                for m in range(6):
+                    g += B[m, a] * c[m]
+                Lx[a] += g
+                for b in range(6):
+                    s = 0.0
+                    for m in range(6):
+                        s += B[m, a] * h[m] * B[m, b]
+                    Lxx[a, b] += s
+            for i in range(6, 2 * nv):
+                ci, hi = _row_coefficients(r[row + i], w[k, row + i], lb[k, row + i], ub[k, row + i], scale)
+                Lx[i] += ci
+                Lxx[i, i] += hi
+        elif kind == 1:  # control: Ru = I
+            for i in range(nu):
+                ci, hi = _row_coefficients(r[row + i], w[k, row + i], lb[k, row + i], ub[k, row + i], scale)
+                Lu[i] += ci
+                Luu[i, i] += hi
+        elif kind == 2:  # frame height: z row of the world-aligned linear Jacobian
+            _add_frame_rows(frame_jacobian[k, term_slot[j]], z_row, row, r, w[k], lb[k], ub[k], scale, Lx, Lxx)
+        else:  # frame translation
+            _add_frame_rows(frame_jacobian[k, term_slot[j]], xyz_rows, row, r, w[k], lb[k], ub[k], scale, Lx, Lxx)
+
+
+@njit(cache=True)
 def batched_cost_derivatives(xs, us, dt, term_kind, term_row, term_slot, term_scale, reference, row_term, w, lb, ub,
                              state_residual, state_jacobian, frame_position, frame_jacobian, da_dx, da_du, euler_dx,
-                             J_q, J_dq, r, R, gradient, hessian, node_cost, term_cost, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu):
+                             J_q, J_dq, r, node_cost, term_cost, Fx, Fu, Lx, Lu, Lxx, Luu):
     """Values and derivatives of every running node: Euler transition Jacobians Fx (N, ndx, ndx),
     Fu (N, ndx, nu), Gauss-Newton cost derivatives (dt-scaled); returns the total running cost."""
     ndx = state_residual.shape[2]
     nv = ndx // 2
-    nu = us.shape[1]
     total = 0.0
-    R[:, :] = 0.0
     nq = xs.shape[1] - nv
     for k in range(dt.size):
         free_flyer_dintegrate(xs[k, :nq], euler_dx[k, :nv], J_q, J_dq)
-        euler_transition_jacobians(da_dx[k], da_du[k], J_q, J_dq, dt[k], Fx[k], Fu[k])
+        _free_flyer_euler_jacobians(da_dx[k], da_du[k], J_q, J_dq, dt[k], Fx[k], Fu[k])
         _fill_residual_rows(k, xs[k], us[k], term_kind, term_row, term_slot, term_scale, reference,
                             state_residual, frame_position, r)
-        for j in range(term_kind.size):
-            if term_scale[k, j] == 0.0:
-                continue
-            row = term_row[j]
-            kind = term_kind[j]
-            if kind == 0:  # state: [∂(x ⊖ x_ref)/∂q, 0; 0, I]
-                for a in range(nv):
-                    for b in range(nv):
-                        R[row + a, b] = state_jacobian[k, j, a, b]
-                    R[row + nv + a, nv + a] = 1.0
-            elif kind == 1:  # control: Ru = I
-                for a in range(nu):
-                    R[row + a, ndx + a] = 1.0
-            elif kind == 2:  # frame height: z row of the world-aligned linear Jacobian
-                for b in range(nv):
-                    R[row, b] = frame_jacobian[k, term_slot[j], 2, b]
-            else:
-                for a in range(3):
-                    for b in range(nv):
-                        R[row + a, b] = frame_jacobian[k, term_slot[j], a, b]
         value = cost_rows_value(r, row_term, term_scale[k], w[k], lb[k], ub[k], term_cost[k])
         node_cost[k] = dt[k] * value
         total += node_cost[k]
-        cost_rows_derivatives(r, R, row_term, term_scale[k], w[k], lb[k], ub[k], gradient, hessian)
-        scale_cost_derivatives(dt[k], gradient, hessian, ndx, Lx[k], Lu[k], Lxx[k], Lxu[k], Luu[k])
+        _node_cost_derivatives(k, dt[k], term_kind, term_row, term_slot, term_scale, w, lb, ub, r, state_jacobian,
+                               frame_jacobian, Lx[k], Lu[k], Lxx[k], Luu[k])
     return total
