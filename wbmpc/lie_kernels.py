@@ -81,19 +81,24 @@ def _matrix_quaternion(R, out):
 
 
 @njit(cache=True)
-def free_flyer_integrate(q, dq, out):
-    """out (nq,) = q ⊕ dq: base M(q) exp6(dq[:6]), joints q + dq (Pinocchio's integrate)."""
-    nq = q.size
-    w = dq[3:6]
+def se3_exp(xi):
+    """exp6 of ξ = (v, ω): rotation R = I + (sin θ/θ)[ω]× + ((1 − cos θ)/θ²)[ω]×² and
+    translation p = (I + ((1 − cos θ)/θ²)[ω]× + ((θ − sin θ)/θ³)[ω]×²) v."""
+    w = xi[3:6]
     theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
     a, b, c = _so3_coefficients(theta)
     W = skew3(w)
     W2 = np.dot(W, W)
-    R_exp = np.eye(3) + a * W + b * W2
-    V = np.eye(3) + b * W + c * W2
+    return np.eye(3) + a * W + b * W2, np.dot(np.eye(3) + b * W + c * W2, xi[:3])
+
+
+@njit(cache=True)
+def free_flyer_integrate(q, dq, out):
+    """out (nq,) = q ⊕ dq: base M(q) exp6(dq[:6]), joints q + dq (Pinocchio's integrate)."""
+    nq = q.size
+    R_exp, p_exp = se3_exp(dq[:6])
     R0 = np.empty((3, 3))
     _quaternion_matrix(q[3:7], R0)
-    p_exp = np.dot(V, dq[:3])
     p1 = np.dot(R0, p_exp)
     for i in range(3):
         out[i] = q[i] + p1[i]
@@ -166,13 +171,7 @@ def free_flyer_dintegrate(q, dq, J_q, J_dq):
     for i in range(6, nv):
         J_q[i, i] = 1.0
         J_dq[i, i] = 1.0
-    w = dq[3:6]
-    theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-    a, b, c = _so3_coefficients(theta)
-    W = skew3(w)
-    W2 = np.dot(W, W)
-    R = np.eye(3) + a * W + b * W2
-    p = np.dot(np.eye(3) + b * W + c * W2, dq[:3])
+    R, p = se3_exp(dq[:6])
     RT = np.ascontiguousarray(R.T)
     J_q[:3, :3] = RT
     J_q[3:6, 3:6] = RT
