@@ -40,6 +40,7 @@ from numba import njit
 
 from wbmpc.dynamics import DifferentialActionModelContactFwdDynamics
 from wbmpc.errors import ParameterError
+from wbmpc.frame_kernels import FrameKinematics, frame_kinematics_support
 from wbmpc.integrator import IntegratedActionModelEuler
 from wbmpc.kernels import (
     cost_rows_value,
@@ -65,6 +66,9 @@ def batched_evaluation_support(problem: ShootingProblem) -> str | None:
     state = problem.state
     if not state._compiled_difference:
         return "the robot is not a free-flyer root followed by 1-dof joints"
+    reason = frame_kinematics_support(state.pinocchio)
+    if reason is not None:
+        return reason
     names = None
     for k, model in enumerate(problem.running_models):
         if type(model) is not IntegratedActionModelEuler:
@@ -120,6 +124,7 @@ class BatchedShootingProblem(ShootingProblem):
                     frame_ids.append(residual.frame_id)
                 self._term_slot[j] = frame_ids.index(residual.frame_id)
         self._frame_ids = frame_ids
+        self._kinematics = FrameKinematics(self._pin_model, frame_ids) if frame_ids else None
         self._state_terms = [j for j in range(n_terms) if self._term_kind[j] == STATE]
         self._row_term = first_data.row_term.copy()
         self._w = np.stack([d.differential.costs.w for d in self.running_datas])
@@ -130,14 +135,13 @@ class BatchedShootingProblem(ShootingProblem):
         # per-node configuration, refreshed by sync()
         self._term_scale = np.zeros((N, n_terms))
         self._reference = np.zeros((N, n_terms, max(nx, nu, 3)))
-        self._node_frames: list[tuple[tuple[int, int], ...]] = [()] * N  # (slot, frame id) used
+        self._frame_needed = np.zeros((N, max(len(frame_ids), 1)), dtype=np.bool_)  # frames of active terms
         self._node_state_terms: list[tuple[int, ...]] = [()] * N  # active state terms
         self._node_dynamics: list = [None] * N  # (constraint models, pinocchio data, constraint datas)
         self._contact_sets: dict = {}
         self._node_terms = None
         # evaluation buffers
         self._tau = np.zeros(nv)
-        self._acceleration = np.zeros((N, nv))
         self._euler_dx = np.zeros((N, ndx))
         self._da_dx = np.zeros((N, nv, ndx))
         self._da_du = np.zeros((N, nv, nu))
@@ -163,8 +167,9 @@ class BatchedShootingProblem(ShootingProblem):
             self._node_terms = [
                 [(j, int(self._term_kind[j]), int(self._term_slot[j]), m.differential.costs.costs[name])
                  for j, name in enumerate(self._term_names)] for m in self.running_models]
+        needed = self._frame_needed
+        needed[:] = False
         for k, model in enumerate(self.running_models):
-            frames = []
             state_terms = []
             row_scale = scale[k]
             row_reference = reference[k]
@@ -176,16 +181,15 @@ class BatchedShootingProblem(ShootingProblem):
                 residual = item.cost.residual
                 if kind == FRAME_HEIGHT:
                     row_reference[j, 0] = residual.reference
-                    frames.append((slot, residual.frame_id))
+                    needed[k, slot] = True
                 elif kind == FRAME_TRANSLATION:
                     row_reference[j, :3] = residual.reference
-                    frames.append((slot, residual.frame_id))
+                    needed[k, slot] = True
                 elif kind == STATE:
                     row_reference[j, :nx] = residual.reference
                     state_terms.append(j)
                 else:
                     row_reference[j, :nu] = residual.reference
-            self._node_frames[k] = tuple(sorted(set(frames))) if len(frames) > 1 else tuple(frames)
             self._node_state_terms[k] = tuple(state_terms)
             self._node_dynamics[k] = self._dynamics_of(model.differential)
 
@@ -210,8 +214,9 @@ class BatchedShootingProblem(ShootingProblem):
 
     # ----------------------------------------------------------------- evaluation
     def _node_dynamics_calc(self, k: int, x: np.ndarray, u: np.ndarray, derivatives: bool) -> None:
-        """Accelerations of node k (and their derivatives, the state-residual and frame
-        Jacobians when ``derivatives``), then x⁺ by the Euler step."""
+        """Accelerations of node k by contact-constrained dynamics (and their derivatives when
+        ``derivatives``), then x⁺ by the Euler step. The rollout and :meth:`calcDiff` inline this
+        for speed; it serves the half-turn fallback and documents the per-node work."""
         model, nq, nv = self._pin_model, self.state.nq, self.state.nv
         constraints, pdata, constraint_datas, settings = self._node_dynamics[k]
         q, v = x[:nq], x[nq:]
@@ -220,27 +225,29 @@ class BatchedShootingProblem(ShootingProblem):
         if constraints is not None:
             a = pin.constraintDynamics(model, pdata, q, v, tau, constraints, constraint_datas, settings)
         else:
-            a = pin.aba(model, pdata, q, v, tau, pin.Convention.WORLD)  # WORLD: also fills oMi
-        self._acceleration[k] = a
-        dx = self._euler_dx[k]
-        xnext = self.xnext[k]
-        free_flyer_euler_step(x, a, self._dt[k], dx, xnext)
-        for slot, frame_id in self._node_frames[k]:
-            self._frame_position[k, slot] = pin.updateFramePlacement(model, pdata, frame_id).translation
-        if not derivatives:
-            return
+            a = pin.aba(model, pdata, q, v, tau)
+        free_flyer_euler_step(x, a, self._dt[k], self._euler_dx[k], self.xnext[k])
+        if derivatives:
+            self._store_derivatives(k, q, v, constraints, pdata, constraint_datas, settings)
+
+    def _store_derivatives(self, k, q, v, constraints, pdata, constraint_datas, settings) -> None:
+        """∂a/∂x (nv, ndx) and ∂a/∂u (nv, nu) of node k, right after its dynamics."""
+        nv = self.state.nv
         if constraints is not None:
             da_dq, da_dv, da_dtau = pin.computeConstraintDynamicsDerivatives(
-                model, pdata, constraints, constraint_datas, settings)[:3]
+                self._pin_model, pdata, constraints, constraint_datas, settings)[:3]
         else:
-            da_dq, da_dv, da_dtau = pin.computeABADerivatives(model, pdata, q, v, tau)
-            pin.computeJointJacobians(model, pdata, q)
+            da_dq, da_dv, da_dtau = pin.computeABADerivatives(self._pin_model, pdata, q, v, self._tau)
         da_dx = self._da_dx[k]
         da_dx[:, :nv] = da_dq
         da_dx[:, nv:] = da_dv
         self._da_du[k] = da_dtau[:, 6:]
-        for slot, frame_id in self._node_frames[k]:
-            self._frame_jacobian[k, slot] = pin.getFrameJacobian(model, pdata, frame_id, pin.LOCAL_WORLD_ALIGNED)[:3]
+
+    def _frame_kinematics(self, xs: np.ndarray, jacobians: bool) -> None:
+        """Positions (and LOCAL_WORLD_ALIGNED Jacobians) of the frames of the active frame terms."""
+        if self._kinematics is not None:
+            self._kinematics.evaluate(xs[:self.T, :self.state.nq], self._frame_needed, self._frame_position,
+                                      self._frame_jacobian if jacobians else None)
 
     def _state_residuals(self, xs: np.ndarray) -> None:
         """x ⊖ x_ref of every active state term (compiled; Pinocchio near a half turn)."""
@@ -277,6 +284,7 @@ class BatchedShootingProblem(ShootingProblem):
         xs, us = np.asarray(xs, dtype=float), np.asarray(us, dtype=float)
         for k in range(self.T):
             self._node_dynamics_calc(k, xs[k], us[k], derivatives=False)
+        self._frame_kinematics(xs, jacobians=False)
         cost = self._running_cost(xs, us)
         self.terminal_model.calc(self.terminal_data, xs[-1])
         self.cost = cost + self.terminal_data.cost
@@ -285,8 +293,26 @@ class BatchedShootingProblem(ShootingProblem):
     def calcDiff(self, xs, us) -> float:
         """Derivatives of every node (values too: calc is not needed first); returns the total cost."""
         xs, us = np.asarray(xs, dtype=float), np.asarray(us, dtype=float)
+        model, nq, nv = self._pin_model, self.state.nq, self.state.nv
+        constraint_dynamics, derivatives = pin.constraintDynamics, pin.computeConstraintDynamicsDerivatives
+        dynamics, dts, euler_dx, xnext, da_dx, da_du = (self._node_dynamics, self._dt, self._euler_dx, self.xnext,
+                                                         self._da_dx, self._da_du)
+        tau = self._tau
         for k in range(self.T):
-            self._node_dynamics_calc(k, xs[k], us[k], derivatives=True)
+            x = xs[k]
+            constraints, pdata, constraint_datas, settings = dynamics[k]
+            if constraints is None:  # no contact: ABA and its derivatives
+                self._node_dynamics_calc(k, x, us[k], derivatives=True)
+                continue
+            tau[6:] = us[k]
+            a = constraint_dynamics(model, pdata, x[:nq], x[nq:], tau, constraints, constraint_datas, settings)
+            free_flyer_euler_step(x, a, dts[k], euler_dx[k], xnext[k])
+            da_dq, da_dv, da_dtau = derivatives(model, pdata, constraints, constraint_datas, settings)[:3]
+            node_da_dx = da_dx[k]
+            node_da_dx[:, :nv] = da_dq
+            node_da_dx[:, nv:] = da_dv
+            da_du[k] = da_dtau[:, 6:]
+        self._frame_kinematics(xs, jacobians=True)
         self._state_residuals(xs)
         self._state_jacobians(xs)
         cost = batched_cost_derivatives(
@@ -307,22 +333,33 @@ class BatchedShootingProblem(ShootingProblem):
         N = self.T
         closing = not (alpha == 1.0 or fs is None)
         gaps = self._no_gaps if fs is None else fs
+        model, nq = self._pin_model, self.state.nq
+        constraint_dynamics = pin.constraintDynamics
+        dynamics, dts, euler_dx, xnexts, tau = self._node_dynamics, self._dt, self._euler_dx, self.xnext, self._tau
         xnext = self.x0
         for t in range(N):
             x_try = xs_try[t]
-            code = rollout_node_start(t, xnext, gaps, alpha, closing, xs, us, k, K, x_try, dx, us_try)
+            code = rollout_node_start(t, xnext, gaps, alpha, closing, xs, us, k, K, x_try, dx, us_try, tau)
             if code == 1:  # relative half turn: Pinocchio's difference
                 self._feedback(t, xs, us, k, K, alpha, x_try, dx, us_try)
+                tau[6:] = us_try[t]
             elif code == 2:
                 raise RolloutError(f"control not finite at node {t}")
-            self._node_dynamics_calc(t, x_try, us_try[t], derivatives=False)
-            xnext = self.xnext[t]
+            constraints, pdata, constraint_datas, settings = dynamics[t]
+            if constraints is None:
+                self._node_dynamics_calc(t, x_try, us_try[t], derivatives=False)
+            else:
+                a = constraint_dynamics(model, pdata, x_try[:nq], x_try[nq:], tau, constraints, constraint_datas,
+                                        settings)
+                free_flyer_euler_step(x_try, a, dts[t], euler_dx[t], xnexts[t])
+            xnext = xnexts[t]
         if closing:
             self.state.integrate(xnext, fs[N] * (alpha - 1.0), out=xs_try[N])
         else:
             xs_try[N] = xnext
         if not np.isfinite(xs_try).all():
             raise RolloutError("rollout diverged (state not finite)")
+        self._frame_kinematics(xs_try, jacobians=False)
         cost = self._running_cost(xs_try, us_try)
         self.terminal_model.calc(self.terminal_data, xs_try[N])
         cost += self.terminal_data.cost

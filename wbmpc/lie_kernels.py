@@ -243,11 +243,12 @@ def free_flyer_state_jacobians(references, xs, scale, out, ok):
 
 
 @njit(cache=True)
-def rollout_node_start(t, x_prev, fs, alpha, closing, xs, us, k, K, x_try, dx, u_try):
+def rollout_node_start(t, x_prev, fs, alpha, closing, xs, us, k, K, x_try, dx, u_try, tau):
     """One node of the FDDP rollout before its dynamics: x_try = x_prev ⊕ (α − 1) fs[t] when
     closing gaps (else x_prev), dx[t] = x_try ⊖ xs[t], u_try[t] = us[t] − α k[t] − K[t] dx[t]
-    (Crocoddyl's sign). Returns 0 on success, 1 when the difference needs Pinocchio (half turn;
-    x_try is written, not dx and u_try), 2 when the control is not finite."""
+    (Crocoddyl's sign) and the joint torques tau[6:] = u_try[t]. Returns 0 on success, 1 when the
+    difference needs Pinocchio (half turn; x_try is written, not dx, u_try, tau), 2 when the
+    control is not finite."""
     nv = dx.shape[1] // 2
     nq = x_try.size - nv
     if closing:
@@ -259,4 +260,8 @@ def rollout_node_start(t, x_prev, fs, alpha, closing, xs, us, k, K, x_try, dx, u
         x_try[:] = x_prev
     if not free_flyer_state_difference(xs[t], x_try, nq, dx[t]):
         return 1
-    return 0 if feedback_control(us[t], k[t], K[t], dx[t], alpha, u_try[t]) else 2
+    if not feedback_control(us[t], k[t], K[t], dx[t], alpha, u_try[t]):
+        return 2
+    for i in range(u_try.shape[1]):
+        tau[6 + i] = u_try[t, i]
+    return 0
