@@ -52,6 +52,7 @@ class ContactSensor:
 
     def __init__(self, model, foot_radius: float, margin: float) -> None:
         self.ground_geom = np.asarray(model.geom_bodyid) == 0
+        self.ground_geom_list = self.ground_geom.tolist()
         self.reach = float(foot_radius) + float(margin)
         self.model = model
 
@@ -65,22 +66,31 @@ class ContactSensor:
         Returns:
             (foot_in_contact (n_feet,) bool, description of a non-foot ground contact or None).
         """
-        in_contact = np.zeros(len(feet_position_world), dtype=bool)
+        n_feet = len(feet_position_world)
+        in_contact = np.zeros(n_feet, dtype=bool)
+        if data.ncon == 0:
+            return in_contact, None
+        # plain Python over the few contacts: faster than numpy on arrays this small (1 kHz path)
+        contacts = data.contact
+        ground = self.ground_geom_list
+        feet = feet_position_world.tolist()
+        reach2 = self.reach * self.reach
         other = None
-        for i in range(data.ncon):
-            contact = data.contact[i]
-            g1, g2 = contact.geom1, contact.geom2
-            ground1, ground2 = self.ground_geom[g1], self.ground_geom[g2]
+        for g1, g2, point in zip(contacts.geom1.tolist(), contacts.geom2.tolist(), contacts.pos.tolist()):
+            ground1, ground2 = ground[g1], ground[g2]
             if ground1 == ground2:
                 continue
-            distances = np.linalg.norm(feet_position_world - contact.pos, axis=1)
-            nearest = int(np.argmin(distances))
-            if distances[nearest] <= self.reach:
+            nearest, nearest_d2 = 0, float("inf")
+            for f, foot in enumerate(feet):
+                d2 = (point[0] - foot[0]) ** 2 + (point[1] - foot[1]) ** 2 + (point[2] - foot[2]) ** 2
+                if d2 < nearest_d2:
+                    nearest, nearest_d2 = f, d2
+            if nearest_d2 <= reach2:
                 in_contact[nearest] = True
             elif other is None:
                 robot_geom = g2 if ground1 else g1
                 body = self.model.body(self.model.geom_bodyid[robot_geom]).name
-                other = f"ground contact of body {body!r} at {np.round(contact.pos, 3).tolist()} m"
+                other = f"ground contact of body {body!r} at {np.round(point, 3).tolist()} m"
         return in_contact, other
 
 
