@@ -112,14 +112,31 @@ class WalkingControllerConfig:
         first_stance_foot: stance foot at t0 (both feet are on the ground at start; the other one
             takes the first step).
         velocity_command: initial (v_x, v_y) command [m/s] (world frame); None keeps the preset's.
-        velocity_integral_gain: integral action on the forward speed [1/s] (0 = off, the paper's
-            pipeline): the sequencer is given v*_x + k ∫ (v*_x − v̄_x) dt, v̄ the CoM velocity
-            low-passed over ``velocity_filter_time``, the correction bounded by
-            ``velocity_correction_max`` (and the integral clamped accordingly: anti-windup).
-            Default 1.0: without it Bolt settles in a gait at 0.6 m/s for a 0.33 m/s command when
-            it starts from standing (steps of 0.185 m, near l_max), see docs/closed_loop.md.
+        velocity_integral_gain: integral action on the forward speed [1/s] (0 = off, the default and
+            the paper's pipeline): the sequencer is given v*_x + k ∫ (v*_x − v̄_x) dt, v̄ the CoM
+            velocity low-passed over ``velocity_filter_time``, the correction bounded by
+            ``velocity_correction_max`` (and the integral clamped accordingly: anti-windup). It was
+            on (k = 1) while Bolt settled at 0.6 m/s for 0.33 m/s; that bias came from hovering
+            touchdowns and the LIPM's missing swing drift (fixed, see ``default_ocp_config`` and
+            ``lipm_correction_gain``), and with k = 1 the 20 s walk now overshoots to 0.48 m/s
+            during the ramp and ends with a larger mean error (8.5 against 6.7 mm/s).
         velocity_correction_max: bound of that correction [m/s].
         velocity_filter_time: time constant of the low-pass filter on the measured speed [s].
+        lipm_correction_gain: per-step gain in [0, 1] of two corrections of the sequencer's LIPM,
+            identified after every step from the measured DCM (0 = off: the paper's pure LIPM and
+            the parameters' own ``swing_drift``, ``dcm_offset_bias``). (1) Swing drift
+            (``SequencerParams.swing_drift``): the DCM's gain over the LIPM during the stance that
+            just ended, d = zeta_T - p - (zeta_0 - p) exp(omega T) (zeta_0, zeta_T measured at its
+            touchdown and at the next one, p the stance foot), per unit of the step taken,
+            kappa_k = d / L (steps of at least ``LIPM_CORRECTION_MIN_STEP``). (2) Touchdown offset
+            bias (``SequencerParams.dcm_offset_bias``): measured DCM offset at the touchdown minus
+            the offset the plan aimed at. Each estimate moves by this fraction towards the step's
+            value. On Bolt the swing leg (the legs are half of the robot's mass) makes the DCM
+            outrun the LIPM by ~0.22 L per step and the touchdowns end ~2.5 mm ahead of the plan:
+            uncorrected, the sequencer answers with long, quick steps (0.12 m/s too fast with the
+            touchdown fixes, docs/closed_loop.md).
+        swing_drift_max: bound of each step's kappa_k and of the estimate, in [0, 0.9].
+        dcm_offset_bias_max: bound of each step's touchdown offset bias and of the estimate [m].
         mpc_failure_times: injected failures [s]: the MPC update at the first replan at or after
             each time is discarded as if the solver had failed (the last good solution is kept).
         sequencer_params: ``sequencer.SequencerParams``; None = :func:`default_sequencer_params`.
@@ -144,9 +161,12 @@ class WalkingControllerConfig:
     touchdown_detection: str = "contact"
     first_stance_foot: str = "left"
     velocity_command: tuple[float, float] | None = None
-    velocity_integral_gain: float = 1.0
+    velocity_integral_gain: float = 0.0
     velocity_correction_max: float = 0.3
     velocity_filter_time: float = 1.0
+    lipm_correction_gain: float = 0.2
+    swing_drift_max: float = 0.5
+    dcm_offset_bias_max: float = 0.01
     mpc_failure_times: tuple[float, ...] = ()
     sequencer_params: Any = None
     sequencer_params_from: tuple[float, Any] | None = None
@@ -166,6 +186,12 @@ class WalkingControllerConfig:
             raise ParameterError(f"velocity_integral_gain={self.velocity_integral_gain} 1/s must be >= 0")
         if not (np.isfinite(self.velocity_filter_time) and self.velocity_filter_time > 0):
             raise ParameterError(f"velocity_filter_time={self.velocity_filter_time} s must be > 0")
+        if not (np.isfinite(self.lipm_correction_gain) and 0.0 <= self.lipm_correction_gain <= 1.0):
+            raise ParameterError(f"lipm_correction_gain={self.lipm_correction_gain} must be in [0, 1]")
+        if not (np.isfinite(self.dcm_offset_bias_max) and 0.0 <= self.dcm_offset_bias_max <= 0.05):
+            raise ParameterError(f"dcm_offset_bias_max={self.dcm_offset_bias_max} m must be in [0, 0.05] m")
+        if not (np.isfinite(self.swing_drift_max) and 0.0 <= self.swing_drift_max <= 0.9):
+            raise ParameterError(f"swing_drift_max={self.swing_drift_max} must be in [0, 0.9]")
         if not (np.isfinite(self.velocity_correction_max) and self.velocity_correction_max >= 0):
             raise ParameterError(f"velocity_correction_max={self.velocity_correction_max} m/s must be >= 0")
         if self.delay_nodes not in (0, 1):
@@ -262,6 +288,9 @@ class WalkingController:
         self.timers = _Timers()
         self._pending_failures = sorted(float(t) for t in cfg.mpc_failure_times)
         self._x_ref = np.zeros(self.nq + self.nv)
+        # (touchdown time [s], swing drift kappa of the stance that ended, touchdown offset error [m])
+        self.lipm_correction_steps: list[tuple[float, float, float]] = []
+        self._stance_record: tuple[float, np.ndarray, np.ndarray, bool] | None = None  # (t, DCM, foot, steady)
 
     def set_velocity_command(self, v_x: float, v_y: float = 0.0) -> None:
         """Change the walking velocity command [m/s] (takes effect at the next replan)."""
@@ -285,7 +314,11 @@ class WalkingController:
         from sequencer import FootstepSequencer
 
         velocity = (self.sequencer_params.v_x, getattr(self.sequencer_params, "v_y", 0.0))
-        self.sequencer_params = _with_velocity(params, velocity)
+        params = _with_velocity(params, velocity)
+        if self.config.lipm_correction_gain > 0.0:  # the identified corrections carry over
+            params = dataclasses.replace(params, swing_drift=self.sequencer_params.swing_drift,
+                                         dcm_offset_bias=self.sequencer_params.dcm_offset_bias)
+        self.sequencer_params = params
         self.sequencer = FootstepSequencer(self.sequencer_params, backend=self.config.sequencer_backend)
         self._params_switch = None
 
@@ -300,6 +333,44 @@ class WalkingController:
         bound = self.config.velocity_correction_max / self.config.velocity_integral_gain  # anti-windup
         np.clip(self._velocity_integral, -bound, bound, out=self._velocity_integral)
         self._apply_sequencer_velocity(self.command + self._velocity_correction())
+
+    def _update_lipm_corrections(self, t: float, dcm: np.ndarray, switched: bool, plan: Any) -> None:
+        """At a touchdown: identify the swing drift and the touchdown offset bias (see the config).
+
+        Only undisturbed steps count: a step is used when the DCM at both of its touchdowns was
+        within ``LIPM_CORRECTION_MAX_ERROR`` of where the plan had put it (a push, a slip or a
+        stumble is not a model error).
+        """
+        if not switched:
+            return
+        previous = self._stance_record
+        foot = np.array(self.stance.state.position, dtype=float)
+        landed = plan is not None and len(plan.steps) and plan.steps[0].foot == self.stance.state.foot
+        error = (dcm - foot) - plan.steps[0].dcm_offset if landed else np.full(2, np.inf)
+        steady = bool(np.all(np.abs(error) <= LIPM_CORRECTION_MAX_ERROR))
+        self._stance_record = (t, dcm.copy(), foot, steady)
+        gain = self.config.lipm_correction_gain
+        # the first stance includes the start from standing
+        if previous is None or gain <= 0.0 or not (steady and previous[3]):
+            return
+        t0, dcm0, stance, _ = previous
+        step = foot[0] - stance[0]
+        if abs(step) < LIPM_CORRECTION_MIN_STEP:
+            return
+        params = self.sequencer_params
+        growth = float(np.exp(self.omega * (t - t0)))
+        excess = (dcm[0] - stance[0]) - (dcm0[0] - stance[0]) * growth  # DCM gained over the LIPM [m]
+        kappa_max, bias_max = self.config.swing_drift_max, self.config.dcm_offset_bias_max
+        kappa = float(np.clip(excess / step, 0.0, kappa_max))
+        drift = float(np.clip(params.swing_drift + gain * (kappa - params.swing_drift), 0.0, kappa_max))
+        offset_error = float(np.clip(error[0], -bias_max, bias_max))
+        bias = float(np.clip(params.dcm_offset_bias + gain * (offset_error - params.dcm_offset_bias), -bias_max, bias_max))
+        self.lipm_correction_steps.append((t, kappa, offset_error))
+        if abs(drift - params.swing_drift) > 1e-4 or abs(bias - params.dcm_offset_bias) > 1e-5:
+            from sequencer import FootstepSequencer
+
+            self.sequencer_params = dataclasses.replace(params, swing_drift=drift, dcm_offset_bias=bias)
+            self.sequencer = FootstepSequencer(self.sequencer_params, backend=self.config.sequencer_backend)
 
     # ------------------------------------------------------------------ helpers
     def _feet_position(self, q: np.ndarray) -> np.ndarray:
@@ -334,6 +405,7 @@ class WalkingController:
             feet_world,
             measurement.foot_in_contact,
         )
+        self._update_lipm_corrections(t, dcm, switched, self.plan)
 
         record: dict[str, float] = {
             "stance_foot": float(self.feet.index(self.stance.state.foot)),
@@ -345,6 +417,8 @@ class WalkingController:
             "dcm_y": dcm[1],
             "sequencer_ok": 1.0,
             "sequencer_v_x": float(self.sequencer_params.v_x),
+            "swing_drift": float(self.sequencer_params.swing_drift),
+            "dcm_offset_bias": float(self.sequencer_params.dcm_offset_bias),
         }
 
         tic = time.perf_counter()
@@ -375,7 +449,7 @@ class WalkingController:
             plan_for_mpc, record["touchdown_wait"] = _wait_for_touchdown(
                 self.plan, t, measurement.foot_in_contact[self.feet.index(step.foot)], cfg.node_dt
             )
-        schedule = contact_schedule(plan_for_mpc, t, cfg.node_dt, cfg.n_nodes)
+        schedule = contact_schedule(plan_for_mpc, t, cfg.node_dt, cfg.n_nodes, rounding="nearest")
         com_terminal = _terminal_com(self.plan, t + cfg.n_nodes * cfg.node_dt, com, self.com_height)
         injected = bool(self._pending_failures) and t >= self._pending_failures[0] - 1e-9
         if injected:
@@ -463,8 +537,11 @@ def default_sequencer_params():
     )
 
 
-FOOTHOLD_WEIGHT = 1e4
+FOOTHOLD_WEIGHT = 1e5
 """Weight of the planned-foothold tracking in the closed loop's default OCP (see default_ocp_config)."""
+
+TOUCHDOWN_HEIGHT_WEIGHT = 1e5
+"""Weight of the ground height at the last swing node in the closed loop's default OCP."""
 
 
 def default_ocp_config():
@@ -474,11 +551,19 @@ def default_ocp_config():
     with one FDDP iteration per update that lets the swing foot land up to 18 cm short of the
     sequencer's foothold once the steps lengthen, the DCM then outruns the feet and Bolt falls
     within 1.5 s; tracking the planned foothold at the last swing node (weight
-    ``FOOTHOLD_WEIGHT``) keeps the executed steps on the plan (docs/closed_loop.md).
+    ``FOOTHOLD_WEIGHT``) keeps the executed steps on the plan (docs/closed_loop.md). With 1e4 the
+    feet still landed ~7 mm short of it, each time a little more DCM offset for the next step
+    (Bolt walked faster); with 1e5, 1-2 mm.
+
+    The touchdown height term (``TOUCHDOWN_HEIGHT_WEIGHT``) puts the foot on the ground at the end
+    of its planned swing. Without it the OCP's own plan ended the swing 7 mm above the ground
+    (the eq. (19) height cost weighs a few millimetres at 1e4 x dt = 100), the foot hovered, no
+    touchdown was ever measured, every stance switched on the 50 ms timeout of the stance tracker,
+    and in those 50 ms the DCM ran on: Bolt settled at 0.62 m/s for 0.33 m/s (docs/closed_loop.md).
     """
     from wbmpc import WalkingOCPConfig
 
-    return WalkingOCPConfig(foothold_weight=FOOTHOLD_WEIGHT)
+    return WalkingOCPConfig(foothold_weight=FOOTHOLD_WEIGHT, touchdown_height_weight=TOUCHDOWN_HEIGHT_WEIGHT)
 
 
 MPC_STATUS_CODES = {"converged": 0, "max_iter": 1, "failed": 2, "injected_failure": 3}
@@ -511,6 +596,15 @@ def _with_velocity(params: Any, command: tuple[float, float]) -> Any:
     elif v_y != 0.0:
         raise ParameterError(f"velocity_command v_y={v_y} m/s: the sequencer only takes a forward speed")
     return dataclasses.replace(params, **changes)
+
+
+LIPM_CORRECTION_MIN_STEP = 0.03
+"""Shortest step [m] from which the LIPM corrections are identified (stepping in place: little
+swing drift and too little signal)."""
+
+LIPM_CORRECTION_MAX_ERROR = 0.015
+"""Largest difference [m] (x and y) between the measured and the planned DCM offset at a touchdown
+for the step to count in the LIPM corrections (steady walking: 2-5 mm; after the paper's push: cm)."""
 
 
 TOUCHDOWN_WAIT_NODES = 2
