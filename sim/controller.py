@@ -140,10 +140,13 @@ class WalkingControllerConfig:
         mpc_failure_times: injected failures [s]: the MPC update at the first replan at or after
             each time is discarded as if the solver had failed (the last good solution is kept).
         sequencer_params: ``sequencer.SequencerParams``; None = :func:`default_sequencer_params`.
-        sequencer_params_from: None, or (t_switch [s], ``SequencerParams``): from t_switch on the
-            sequencer uses these parameters instead (the current velocity command, integral
-            correction included, carries over). Used to compare gaits after a common start, e.g.
-            fixed step timing from t_switch (a start from standing with fixed timing falls).
+        sequencer_params_from: None, or (t_switch [s], ``SequencerParams``): from the first
+            touchdown at or after t_switch on, the sequencer uses these parameters instead (the
+            current velocity command, integral correction included, and the identified LIPM
+            corrections carry over). At a touchdown, not in the middle of a step: switching to
+            fixed timing mid-step moved the current touchdown by up to T_nom - T (58 ms were seen)
+            at once. Used to compare gaits after a common start, e.g. fixed step timing from
+            t_switch (a start from standing with fixed timing falls).
         sequencer_backend: QP backend of the sequencer: "exact" (closed-form solution of the same QP,
             verified against OSQP in the sequencer tests, fastest), "osqp" (the paper's) or "proxqp".
         ocp: ``wbmpc.WalkingOCPConfig``; None = :func:`default_ocp_config` (the OCP's defaults with
@@ -259,7 +262,7 @@ class WalkingController:
             params = _with_velocity(params, cfg.velocity_command)
         self.sequencer_params = params
         self.sequencer = FootstepSequencer(params, backend=cfg.sequencer_backend)
-        self._params_switch = cfg.sequencer_params_from  # applied once, at the first replan at or after its time
+        self._params_switch = cfg.sequencer_params_from  # applied once, at the first touchdown at or after its time
         if self._params_switch is not None and self._params_switch[1].z_c != params.z_c:
             raise ParameterError(
                 f"sequencer_params_from z_c={self._params_switch[1].z_c} m must equal the initial "
@@ -391,8 +394,6 @@ class WalkingController:
         q, v = x[: self.nq], x[self.nq :]
         com, dcm = self._dcm(q, v)
         self._update_velocity_integral(np.array(self.data.vcom[0][:2]))
-        if self._params_switch is not None and t >= self._params_switch[0]:
-            self._switch_sequencer_params(self._params_switch[1])
         feet_world = self._feet_position(q)
 
         # Stance switch from the previous plan (touchdown time reached, or early contact).
@@ -406,6 +407,8 @@ class WalkingController:
             measurement.foot_in_contact,
         )
         self._update_lipm_corrections(t, dcm, switched, self.plan)
+        if switched and self._params_switch is not None and t >= self._params_switch[0] - 1e-9:
+            self._switch_sequencer_params(self._params_switch[1])
 
         record: dict[str, float] = {
             "stance_foot": float(self.feet.index(self.stance.state.foot)),

@@ -16,7 +16,7 @@ def fixed_timing(params):
     return dataclasses.replace(params, t_min=params.t_nom, t_max=params.t_nom, name=f"{params.name}+fixed_timing")
 
 
-def test_the_controller_switches_parameters_at_the_given_time_and_keeps_the_velocity():
+def test_the_controller_switches_parameters_at_the_first_touchdown_after_the_time_and_keeps_the_velocity():
     robot = load_robot("bolt")
     x0 = np.concatenate([robot.q_reference, robot.v_reference])
     adaptive = default_sequencer_params()
@@ -24,16 +24,21 @@ def test_the_controller_switches_parameters_at_the_given_time_and_keeps_the_velo
                                      sequencer_params_from=(0.02, fixed_timing(adaptive)))
     controller = WalkingController(config)
     controller.reset(robot, x0, 0.0)
-    standing = Measurement(0.0, x0, np.array([True, True]))
-    for t in (0.0, 0.01):
+    standing = Measurement(0.0, x0, np.array([True, True]))  # both feet on the ground throughout
+    for t in (0.0, 0.01, 0.02, 0.03):  # past t_switch, but in the middle of the first step
         controller.replan(t, dataclasses.replace(standing, t=t))
         assert controller.sequencer_params.t_min < controller.sequencer_params.t_max
     v_x_before = controller.sequencer_params.v_x
-    controller.replan(0.02, dataclasses.replace(standing, t=0.02))
+    # the swing foot, on the ground, counts as landed past half of its swing: the stance switches there
+    t = 0.03
+    while controller.stance.n_switches == 0:
+        t = round(t + 0.01, 2)
+        assert t < 1.0
+        controller.replan(t, dataclasses.replace(standing, t=t))
     params = controller.sequencer_params
     assert params.t_min == params.t_max == adaptive.t_nom
     assert params.v_x == pytest.approx(v_x_before, abs=0.02)  # command + integral correction carry over
-    assert controller.plan.steps[0].touchdown_time - controller.plan.t0 <= adaptive.t_nom + 1e-9
+    assert controller.plan.steps[0].touchdown_time - controller.plan.t0 == pytest.approx(adaptive.t_nom)
 
 
 def test_a_switch_to_another_com_height_is_refused_before_the_run():
