@@ -7,13 +7,13 @@ glue, and the cache misses of 100 data objects, cost twice Pinocchio's own work.
 reads the same node models (contacts, cost terms, weights, references) and evaluates them as:
 
 - a Python loop over the nodes doing only what needs Pinocchio: contact-constrained dynamics
-  (``constraintDynamics`` with the node's contact set, or ABA without contacts), in
-  :meth:`calcDiff` its derivatives, and the frame kinematics of the active frame terms; one
-  Pinocchio data per contact set, so it stays in cache; the Euler step is compiled
-  (:mod:`wbmpc.lie_kernels`);
-- one compiled pass over all nodes for everything else: residual rows, activations, cost values
-  and Gauss-Newton derivatives, the Lie-group Jacobians of the Euler step and of the state
-  residual, Euler transition Jacobians, the dt scaling.
+  (``constraintDynamics`` with the node's contact set, or ABA without contacts) and, in
+  :meth:`calcDiff`, its derivatives; one Pinocchio data per contact set, so it stays in cache;
+  the Euler step (and, in the rollout, the feedback update) are compiled (:mod:`wbmpc.lie_kernels`);
+- compiled passes over all nodes for everything else: the frame kinematics of the active frame
+  terms (:mod:`wbmpc.frame_kernels`), residual rows, activations, cost values and Gauss-Newton
+  derivatives (assembled per residual kind), the Lie-group Jacobians of the Euler step and of the
+  state residual, Euler transition Jacobians, the dt scaling.
 
 The compiled Jacobian of exp6 is exact where Pinocchio's ``Jexp6`` loses up to ~6e-8 (base
 rotations of 1e-5..1e-2 rad per node, see :mod:`wbmpc.lie_kernels`), so the two evaluations agree
@@ -42,10 +42,7 @@ from wbmpc.dynamics import DifferentialActionModelContactFwdDynamics
 from wbmpc.errors import ParameterError
 from wbmpc.frame_kernels import FrameKinematics, frame_kinematics_support
 from wbmpc.integrator import IntegratedActionModelEuler
-from wbmpc.kernels import (
-    cost_rows_value,
-    free_flyer_state_difference,
-)
+from wbmpc.kernels import cost_rows_value, free_flyer_state_difference
 from wbmpc.lie_kernels import (
     free_flyer_dintegrate,
     free_flyer_euler_step,
@@ -130,14 +127,13 @@ class BatchedShootingProblem(ShootingProblem):
         self._w = np.stack([d.differential.costs.w for d in self.running_datas])
         self._lb = np.stack([d.differential.costs.lb for d in self.running_datas])
         self._ub = np.stack([d.differential.costs.ub for d in self.running_datas])
-        self._nr = nr
         self._dt = np.array([m.dt for m in self.running_models])
         # per-node configuration, refreshed by sync()
         self._term_scale = np.zeros((N, n_terms))
         self._reference = np.zeros((N, n_terms, max(nx, nu, 3)))
         self._frame_needed = np.zeros((N, max(len(frame_ids), 1)), dtype=np.bool_)  # frames of active terms
-        self._node_state_terms: list[tuple[int, ...]] = [()] * N  # active state terms
-        self._node_dynamics: list = [None] * N  # (constraint models, pinocchio data, constraint datas)
+        # per node: (constraint models or None, Pinocchio data, constraint datas, proximal settings)
+        self._node_dynamics: list = [None] * N
         self._contact_sets: dict = {}
         self._node_terms = None
         # evaluation buffers
@@ -170,7 +166,6 @@ class BatchedShootingProblem(ShootingProblem):
         needed = self._frame_needed
         needed[:] = False
         for k, model in enumerate(self.running_models):
-            state_terms = []
             row_scale = scale[k]
             row_reference = reference[k]
             for j, kind, slot, item in self._node_terms[k]:
@@ -187,15 +182,14 @@ class BatchedShootingProblem(ShootingProblem):
                     needed[k, slot] = True
                 elif kind == STATE:
                     row_reference[j, :nx] = residual.reference
-                    state_terms.append(j)
                 else:
                     row_reference[j, :nu] = residual.reference
-            self._node_state_terms[k] = tuple(state_terms)
             self._node_dynamics[k] = self._dynamics_of(model.differential)
 
     def _dynamics_of(self, dam) -> tuple:
-        """(constraint models, Pinocchio data, constraint datas) of a node's contact set; the
-        data is shared by every node with that set (one per set keeps it in cache)."""
+        """(constraint models or None without contacts, Pinocchio data, constraint datas, proximal
+        settings) of a node's contact set; the data is shared by every node with that set (one per
+        set keeps it in cache)."""
         for name in dam._moving_references:  # Baumgarte position reference (Kp > 0) may have moved
             dam.constraint_models[name].joint2_placement = dam.contacts[name].reference_placement()
         key = dam.active_key
