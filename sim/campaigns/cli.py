@@ -69,7 +69,7 @@ def register(subparsers) -> None:
     )
     push.add_argument(
         "--timing-from", type=float, default=TIMING_FROM,
-        help=f"with --compare-timing: time [s] from which the compared timing applies (default {TIMING_FROM}; 0: from the start)",
+        help=f"with --compare-timing: the compared timing applies from the first touchdown after this time [s] (default {TIMING_FROM}; 0: from the start)",
     )
     add_trial_options(push, None)
     add_run_options(push)

@@ -268,9 +268,9 @@ def push_map(
         seeds: run seeds (matter only with measurement noise: pushes on flat ground are deterministic).
         compare_timing: None (adaptive step timing only), "fixed" (T_min = T_max = T_nom) or
             "stiff" (timing weight alpha_2 made very large): runs both variants on the same grid.
-        timing_from: time [s] from which the compared variant's step timing applies (before it
-            both variants walk with adaptive timing: a start from standing with fixed timing falls);
-            0 applies it from the start.
+        timing_from: time [s] from the first touchdown after which the compared variant's step
+            timing applies (before it both variants walk with adaptive timing: a start from
+            standing with fixed timing falls); 0 applies it from the start.
         controller: "walking" or "pd".
         push_after: time before the pushes [s] (walking reaches steady state).
         duration: simulated time per trial [s]; None = latest push end + ``PUSH_RECOVERY_TIME``.

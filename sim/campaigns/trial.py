@@ -15,8 +15,9 @@ Campaign parameters that are not arguments of :func:`sim.run_scenario` (translat
   change) or "stiff" (the timing weight alpha_2 raised to ``STIFF_TIMING_WEIGHT``: timing changes
   cost far more than position changes).
 - ``step_timing_from`` [s] (with ``step_timing``; default 0): the variant's timing applies from
-  this time on, the start being adaptive (``WalkingControllerConfig.sequencer_params_from``), so
-  that variants are compared on the same walking gait rather than on starting from standing.
+  the first touchdown at or after this time, the start being adaptive
+  (``WalkingControllerConfig.sequencer_params_from``), so that variants are compared on the same
+  walking gait rather than on starting from standing.
 
 :func:`run_trial` runs in worker processes (local pool or Ray): it takes a picklable
 :class:`Trial`, never raises for a failing trial (the error text is recorded instead) and
