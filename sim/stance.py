@@ -13,7 +13,9 @@ stance switches. :class:`StanceTracker` switches the stance to the swinging foot
   asks for large torques (a fall after 13 s in the ``transition`` scenario with "plan").
 
 The new stance position is the *measured* foot position, so that slips and terrain show up in the
-next plan.
+next plan. It stays the touchdown point for the whole stance (the metrics measure slides against
+it); the walking controller gives the sequencer the sliding foot's measured position instead once
+it has slid ``WalkingControllerConfig.stance_slide_follow`` away from it.
 """
 
 from __future__ import annotations

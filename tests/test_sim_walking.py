@@ -182,3 +182,57 @@ def test_lipm_corrections_are_identified_from_undisturbed_steps_only(controller_
     assert controller.sequencer_params is params
     with pytest.raises(ParameterError, match=r"lipm_correction_gain=1.5 must be in \[0, 1\]"):
         WalkingControllerConfig(lipm_correction_gain=1.5)
+
+
+def test_a_step_whose_stance_foot_slid_is_not_used_for_the_lipm_corrections(controller_with_known_reference):
+    """The swing drift is measured against the touchdown point: a slid stance foot is excluded."""
+    from types import SimpleNamespace
+
+    from sim.controller import LIPM_CORRECTION_MAX_SLIDE
+
+    make, _, _, _ = controller_with_known_reference
+    stance, landing = np.array([1.0, 0.05]), np.array([1.1, -0.05])
+    plan = SimpleNamespace(steps=(SimpleNamespace(foot="right", dcm_offset=np.array([0.017, 0.01])),))
+    measured = landing + np.array([0.018, 0.01])  # 1 mm from the plan: an undisturbed touchdown otherwise
+    for slide, used in ((2.0 * LIPM_CORRECTION_MAX_SLIDE, False), (0.5 * LIPM_CORRECTION_MAX_SLIDE, True)):
+        controller = make(lipm_correction_gain=0.5)
+        before = controller.sequencer_params
+        controller._stance_record = (0.0, stance + np.array([0.01, 0.0]), stance, True)
+        controller.stance.state = dataclasses.replace(controller.stance.state, foot="right", position=landing)
+        controller._update_lipm_corrections(0.3, measured, True, plan, ended_slide=slide)
+        assert (controller.sequencer_params is not before) == used
+        assert len(controller.lipm_correction_steps) == int(used)
+
+
+def test_the_sequencer_plans_from_a_sliding_stance_foot(controller_with_known_reference):
+    make, _, _, _ = controller_with_known_reference
+    controller = make(stance_slide_follow=0.02)
+    touchdown = controller.stance.state.position.copy()  # left foot in stance since t = 0
+    feet = np.zeros((2, 3))
+    contact = np.array([True, False])
+
+    def at(offset, in_contact=contact, switched=False):
+        feet[0, :2] = touchdown + offset
+        controller._measure_stance_slide(feet)
+        return controller._update_stance_slide(switched, feet, in_contact)
+
+    at([0.005, 0.01])  # rolling: the touchdown point is kept
+    np.testing.assert_array_equal(controller._stance_plan_position, touchdown)
+    at([0.01, 0.05])  # a slide: the sequencer plans from the measured foot
+    np.testing.assert_allclose(controller._stance_plan_position, touchdown + [0.01, 0.05])
+    at([0.01, 0.08], in_contact=np.array([False, False]))  # bouncing off the ground: kept
+    np.testing.assert_allclose(controller._stance_plan_position, touchdown + [0.01, 0.05])
+    assert controller.stance.state.position == pytest.approx(touchdown)  # the touchdown point itself is kept (metrics)
+    # at the next touchdown: the largest slide of the stance that ended, then a fresh stance
+    controller.stance.state = dataclasses.replace(controller.stance.state, foot="right", position=np.array([0.2, -0.1]))
+    feet[1, :2] = [0.2, -0.1]
+    ended = controller._update_stance_slide(True, feet, np.array([True, True]))
+    assert ended == pytest.approx(np.hypot(0.01, 0.08))
+    np.testing.assert_array_equal(controller._stance_plan_position, [0.2, -0.1])
+    assert controller._stance_slide == 0.0
+    # off: the touchdown point for the whole stance
+    controller = make(stance_slide_follow=None)
+    at([0.01, 0.05])
+    np.testing.assert_array_equal(controller._stance_plan_position, touchdown)
+    with pytest.raises(ParameterError, match=r"stance_slide_follow=-0.01 m must be None or > 0"):
+        WalkingControllerConfig(stance_slide_follow=-0.01)
