@@ -25,7 +25,7 @@ class Slip(Scenario):
     default_duration = 12.0
 
     speed: float = 0.33  # [m/s]
-    friction: float = 0.15  # sliding friction coefficient on the patch (0.1: Bolt falls, seed 0)
+    friction: float = 0.15  # sliding friction coefficient on the patch (0.14 and below: Bolt falls, seed 0)
     side: str = "left"  # "left" (y > 0) or "right" (y < 0) foot's track
     x_start: float = 1.0  # [m], world x where the patch begins
     length: float = 0.4  # [m], patch length along x
