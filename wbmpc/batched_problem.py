@@ -120,7 +120,6 @@ class BatchedShootingProblem(ShootingProblem):
                 if residual.frame_id not in frame_ids:
                     frame_ids.append(residual.frame_id)
                 self._term_slot[j] = frame_ids.index(residual.frame_id)
-        self._frame_ids = frame_ids
         self._kinematics = FrameKinematics(self._pin_model, frame_ids) if frame_ids else None
         self._state_terms = [j for j in range(n_terms) if self._term_kind[j] == STATE]
         self._row_term = first_data.row_term.copy()
@@ -245,15 +244,12 @@ class BatchedShootingProblem(ShootingProblem):
 
     def _state_residuals(self, xs: np.ndarray) -> None:
         """x ⊖ x_ref of every active state term (compiled; Pinocchio near a half turn)."""
-        nq, nv = self.state.nq, self.state.nv
         for j in self._state_terms:
-            ok = state_residuals(self._reference[:, j, :self.nx], xs, nq, self._term_scale[:, j],
+            ok = state_residuals(self._reference[:, j, :self.nx], xs, self.state.nq, self._term_scale[:, j],
                                  self._state_residual[:, j], self._difference_ok)
             if not ok:
                 for k in np.flatnonzero(~self._difference_ok):
-                    ref, x = self._reference[k, j, :self.nx], xs[k]
-                    self._state_residual[k, j, :nv] = pin.difference(self._pin_model, ref[:nq], x[:nq])
-                    self._state_residual[k, j, nv:] = x[nq:] - ref[nq:]
+                    self.state.diff(self._reference[k, j, :self.nx], xs[k], out=self._state_residual[k, j])
 
     def _state_jacobians(self, xs: np.ndarray) -> None:
         """∂(x ⊖ x_ref)/∂q of every active state term (compiled; Pinocchio near a half turn)."""
@@ -392,7 +388,7 @@ def state_residuals(references, xs, nq, scale, out, ok):
 @njit(cache=True)
 def _fill_residual_rows(k, x, u, term_kind, term_row, term_slot, term_scale, reference, state_residual,
                         frame_position, r):
-    nq = x.size - state_residual.shape[2] // 2
+    """Residual rows r (nr,) of node k's active terms from the precomputed state residuals and frame positions."""
     for j in range(term_kind.size):
         if term_scale[k, j] == 0.0:
             continue
@@ -410,7 +406,6 @@ def _fill_residual_rows(k, x, u, term_kind, term_row, term_slot, term_scale, ref
         else:  # frame translation
             for i in range(3):
                 r[row + i] = frame_position[k, term_slot[j], i] - reference[k, j, i]
-    return nq
 
 
 @njit(cache=True)

@@ -16,13 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from wbmpc.kernels import (
-    _quaternion_matrix,
-    feedback_control,
-    free_flyer_difference,
-    free_flyer_state_difference,
-    skew3,
-)
+from wbmpc.kernels import _quaternion_matrix, free_flyer_difference, free_flyer_feedback_control, skew3
 
 # [rad] below it the coefficients come from their Taylor series (terms up to θ¹²): the closed
 # forms of the higher ones cancel catastrophically (c3's numerator is ~θ⁵/60).
@@ -258,10 +252,9 @@ def rollout_node_start(t, x_prev, fs, alpha, closing, xs, us, k, K, x_try, dx, u
             x_try[nq + i] = x_prev[nq + i] + step[nv + i]
     else:
         x_try[:] = x_prev
-    if not free_flyer_state_difference(xs[t], x_try, nq, dx[t]):
-        return 1
-    if not feedback_control(us[t], k[t], K[t], dx[t], alpha, u_try[t]):
-        return 2
+    code = free_flyer_feedback_control(xs[t], x_try, us[t], k[t], K[t], alpha, nq, dx[t], u_try[t])
+    if code != 0:
+        return code
     for i in range(u_try.shape[1]):
         tau[6 + i] = u_try[t, i]
     return 0
