@@ -33,7 +33,8 @@ class MPCSolution:
 
     Attributes:
         ok: False when this update failed (then xs, us, K are the last good solution shifted to t).
-        status: "converged", "max_iter" or "failed: <reason>".
+        status: "converged", "max_iter", "deadline" (the time budget stopped the iterations; xs,
+            us, K are a valid iterate and its gains) or "failed: <reason>".
         iterations: FDDP iterations run by this update.
         cost: total cost of the returned trajectory (NaN if there is none).
         solve_time: wall time of the update [s].
@@ -84,14 +85,21 @@ class WalkingMPC:
         dt: node spacing [s].
         max_iterations: FDDP iterations per update (the paper runs 1).
         cold_start_iterations: iterations of the first update (no warm start yet).
+        time_budget: wall time [s] an update may take, counted from its call (a real-time tick's
+            deadline, e.g. 0.009 for a 100 Hz loop with 1 ms to spare), or None (no limit). The
+            solver starts no iteration or line-search trial that would end after it (see
+            ``SolverFDDP.solve``'s ``deadline``); such an update returns status "deadline". The
+            cold start (first update) has no budget.
     """
 
     def __init__(self, robot, config: WalkingOCPConfig | None = None, n_nodes: int = 100, dt: float = 0.01,
-                 max_iterations: int = 1, cold_start_iterations: int = 20):
+                 max_iterations: int = 1, cold_start_iterations: int = 20, time_budget: float | None = None):
         if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or max_iterations < 1:
             raise ParameterError(f"max_iterations={max_iterations!r} must be an integer >= 1")
         if int(cold_start_iterations) != cold_start_iterations or cold_start_iterations < 1:
             raise ParameterError(f"cold_start_iterations={cold_start_iterations!r} must be an integer >= 1")
+        if time_budget is not None and not (isinstance(time_budget, (int, float)) and 0 < time_budget < 1e3):
+            raise ParameterError(f"time_budget={time_budget!r} must be None or a number of seconds in (0, 1000)")
         self.config = WalkingOCPConfig() if config is None else config
         self.ocp = WalkingOCP(robot, self.config, n_nodes, dt)
         self.problem = self.ocp.problem
@@ -102,6 +110,7 @@ class WalkingMPC:
         self.solver.th_stop = self.config.th_stop
         self.max_iterations = int(max_iterations)
         self.cold_start_iterations = int(cold_start_iterations)
+        self.time_budget = None if time_budget is None else float(time_budget)
         self.n_nodes = self.ocp.n_nodes
         self.dt = self.ocp.dt
         self.last_good: MPCSolution | None = None
@@ -130,7 +139,8 @@ class WalkingMPC:
             self.ocp.update(x, schedule, com_terminal_reference)
             xs_init, us_init, cold = self.warm_start(float(t), x)
             iterations = self.cold_start_iterations if cold else self.max_iterations
-            converged = self.solver.solve(xs_init, us_init, maxiter=iterations, is_feasible=False)
+            deadline = None if cold or self.time_budget is None else tic + self.time_budget
+            converged = self.solver.solve(xs_init, us_init, maxiter=iterations, is_feasible=False, deadline=deadline)
             solver = self.solver
             K = solver.K
             finite = (np.isfinite(solver.cost) and np.all(np.isfinite(solver.xs)) and np.all(np.isfinite(solver.us))
@@ -140,7 +150,8 @@ class WalkingMPC:
             if not converged and solver.preg >= solver.reg_max:
                 raise FloatingPointError(f"regularisation reached reg_max={solver.reg_max} (no descent)")
             solution = MPCSolution(
-                ok=True, status="converged" if converged else "max_iter", iterations=len(solver.log),
+                ok=True, status="converged" if converged else "deadline" if solver.deadline_hit else "max_iter",
+                iterations=len(solver.log),
                 cost=float(solver.cost), solve_time=time.perf_counter() - tic, t=float(t),
                 xs=solver.xs.copy(), us=solver.us.copy(), K=K,
             )

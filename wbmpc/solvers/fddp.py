@@ -18,6 +18,7 @@ negative of this one; its feedforward ``k`` likewise (here the search direction 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from typing import Callable
 
@@ -68,7 +69,8 @@ class SolverFDDP:
         K (N, nu, ndx): feedback gains, library sign (u = us[k] + K[k] (x ⊖ xs[k])).
         k (N, nu): feedforward search direction, library sign.
         cost, stop, is_feasible, preg, steplength, log (list of :class:`IterationLog`, one per
-        iteration run), iter (Crocoddyl's meaning: index of the converging iteration, or maxiter).
+        iteration run), iter (Crocoddyl's meaning: index of the converging iteration, or maxiter),
+        deadline_hit (the last solve stopped early to meet its ``deadline``).
 
     Options (attributes): reg_min=1e-9, reg_max=1e9, reg_incfactor=10, reg_decfactor=10,
         th_stop=1e-9, th_grad=1e-12, th_acceptstep=0.1, th_acceptnegstep=2, th_stepdec=0.5,
@@ -118,6 +120,8 @@ class SolverFDDP:
         self.d = np.zeros(2)
         self.dg = self.dq = self.dv = 0.0
         self.dV = self.dVexp = 0.0
+        self.deadline_hit = False
+        self._rollout_seconds = 0.0  # duration of the last rollout (deadline estimates)
 
     # ----------------------------------------------------------------- public API
     @property
@@ -138,7 +142,7 @@ class SolverFDDP:
         self.th_stepinc = max(self.th_stepinc, self.alphas[-1])
 
     def solve(self, init_xs=None, init_us=None, maxiter: int = 100, is_feasible: bool = False,
-              init_reg: float | None = None) -> bool:
+              init_reg: float | None = None, deadline: float | None = None) -> bool:
         """Run at most ``maxiter`` iterations from the guess (init_xs, init_us); True if converged.
 
         Args:
@@ -147,19 +151,36 @@ class SolverFDDP:
             maxiter: iteration cap.
             is_feasible: declare the guess dynamically feasible (xs is the rollout of us).
             init_reg: initial regularisation (default reg_min).
+            deadline: ``time.perf_counter()`` value [s] by which to return (a real-time tick), or
+                None. Work that would end after it is not started: a further iteration when the
+                previous one took longer than the time left, a further line-search trial when the
+                previous rollout did. The first trial of the first iteration always runs, so the
+                gains always come from a backward pass at the returned iterate. A line search cut
+                short keeps the iterate (no step, like a rejected one). ``deadline_hit`` tells.
         """
         problem = self.problem
         N = problem.T
         if int(maxiter) != maxiter or maxiter < 0:
             raise ParameterError(f"maxiter={maxiter} must be an integer >= 0")
+        if deadline is not None and not math.isfinite(deadline):
+            raise ParameterError(f"deadline={deadline} must be a finite time.perf_counter() value or None")
         self.xs_try[0] = problem.x0
         self._set_candidate(init_xs, init_us, is_feasible)
         self.preg = self.reg_min if init_reg is None or math.isnan(init_reg) else float(init_reg)
         self.was_feasible = False
         self.log = []
+        self.deadline_hit = False
         recalc_diff = True
         self.iter = 0
+        iteration_start = time.perf_counter()
+        iteration_seconds = 0.0
         while self.iter < maxiter:
+            if deadline is not None and self.iter > 0:
+                now = time.perf_counter()
+                iteration_seconds, iteration_start = now - iteration_start, now
+                if now + iteration_seconds > deadline:
+                    self.deadline_hit = True
+                    return False
             while True:
                 try:
                     self._compute_direction(recalc_diff)
@@ -173,7 +194,11 @@ class SolverFDDP:
             infeasibility = self.ffeas
             self._update_expected_improvement()
             recalc_diff = False
-            for alpha in self.alphas:
+            for trial, alpha in enumerate(self.alphas):
+                if (deadline is not None and (trial > 0 or self.iter > 0)
+                        and time.perf_counter() + self._rollout_seconds > deadline):
+                    self.deadline_hit = True
+                    break
                 self.steplength = alpha
                 try:
                     self.dV = self._try_step(alpha)
@@ -190,6 +215,14 @@ class SolverFDDP:
                     self._accept(alpha)
                     recalc_diff = True
                     break
+            if self.deadline_hit:  # the line search was cut short: keep the iterate, report, stop
+                self.steplength = 0.0
+                self.stop = abs(self.d[0] + 0.5 * self.d[1])
+                self.log.append(IterationLog(self.iter, self.cost, self.stop, 0.0, self.preg, infeasibility,
+                                             (float(self.d[0]), float(self.d[1])), self.is_feasible))
+                for callback in self.callbacks:
+                    callback(self)
+                return False
             if self.steplength > self.th_stepdec:
                 self._decrease_regularization()
             if self.steplength <= self.th_stepinc:
@@ -282,7 +315,11 @@ class SolverFDDP:
         self.d[1] = self.dq - 2.0 * dv
 
     def _try_step(self, alpha: float) -> float:
-        self._forward_pass(alpha)
+        tic = time.perf_counter()
+        try:
+            self._forward_pass(alpha)
+        finally:
+            self._rollout_seconds = time.perf_counter() - tic
         return self.cost - self.cost_try
 
     def _forward_pass(self, alpha: float) -> None:
