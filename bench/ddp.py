@@ -5,6 +5,10 @@ and the receding-horizon MPC tick (shift, warm start, one iteration), median / p
 each with the ratio ours / Crocoddyl measured in the same run (both single-threaded; the two
 solvers alternate tick by tick so machine noise hits both alike). The problems are built once by
 ``wbmpc.walking`` and mirrored into Crocoddyl by :mod:`bench.crocoddyl_mirror`.
+
+With ``--time-budget`` a third MPC, ours with that budget per tick (``WalkingMPC(time_budget=)``),
+runs in the same loop on the same measured states: its tick times, how many ticks the budget cut
+short, and how far its applied torque u₁ moved from the unbudgeted one.
 """
 
 from __future__ import annotations
@@ -24,6 +28,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--repeats", type=int, default=20, help="repetitions of the per-phase iteration timing")
     parser.add_argument("--g1-nodes", type=int, default=50, help="G1 horizon (dt = 20 ms); 0 skips G1")
     parser.add_argument("--seed", type=int, default=0, help="seed of the state disturbances of the MPC loop")
+    parser.add_argument("--time-budget", type=float, default=None, metavar="S",
+                        help="also time our MPC with this budget per tick [s], e.g. 0.009 (real-time deadline)")
 
 
 def _stats(samples) -> dict:
@@ -57,15 +63,19 @@ def _schedule(t0: float, dt: float, n_nodes: int, step_duration: float, foot_y=(
 
 
 def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot_y, ticks: int, seed: int,
-              speed: float = 0.3) -> dict:
-    """Run both MPCs on the same measured states; returns tick statistics and the control gap."""
+              speed: float = 0.3, time_budget: float | None = None) -> dict:
+    """Run both MPCs (and ours with ``time_budget``) on the same measured states; returns tick
+    statistics and the control gaps."""
     import crocoddyl
 
     from bench.crocoddyl_mirror import CrocoddylMirror
-    from wbmpc.mpc import WalkingMPC, _shift
+    from wbmpc.mpc import WalkingMPC
     from wbmpc.walking import quasi_static_controls
 
     mpc = WalkingMPC(robot, config, n_nodes=n_nodes, dt=dt, max_iterations=1, cold_start_iterations=20)
+    budgeted = None if time_budget is None else WalkingMPC(robot, config, n_nodes=n_nodes, dt=dt, max_iterations=1,
+                                                          cold_start_iterations=20, time_budget=time_budget)
+    budget_times, budget_hits, budget_gap = [], 0, 0.0
     mirror = CrocoddylMirror(mpc.problem)
     twin = crocoddyl.SolverFDDP(mirror.problem)
     nq, nv = mpc.ocp.state.nq, mpc.ocp.state.nv
@@ -82,6 +92,9 @@ def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot
         t = tick * dt
         schedule = _schedule(t, dt, n_nodes, step_duration, foot_y)
         com_ref = com0 + np.array([speed * (t + n_nodes * dt), 0.0, 0.0])
+        if previous_xs is not None:  # the guess our update is about to make, for Crocoddyl (not timed)
+            mpc.ocp.update(x, schedule, com_ref)
+            guess_xs, guess_us, _ = mpc.warm_start(t, x)
         tic = time.perf_counter()
         solution = mpc.update(t, x, schedule, com_ref)
         ours = time.perf_counter() - tic
@@ -92,13 +105,19 @@ def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot
             us0 = [quasi_static_controls(mpc.ocp, x)] * n_nodes
             mirror.problem.x0 = x
             twin.solve(xs0, us0, 20)
-        else:
-            xs0 = list(_shift(previous_xs, 1))
-            us0 = list(_shift(previous_us, 1))
-            xs0[0] = x
+        else:  # the same guess as ours: the shifted plan, the horizon end rolled out
             mirror.problem.x0 = x
-            twin.solve(xs0, us0, 1)
+            twin.solve(list(guess_xs), list(guess_us), 1)
         theirs = time.perf_counter() - tic
+        if budgeted is not None:
+            tic = time.perf_counter()
+            cut = budgeted.update(t, x, schedule, com_ref)
+            if tick > 0:
+                budget_times.append(time.perf_counter() - tic)
+                budget_hits += cut.status == "deadline"
+            if not cut.ok:
+                raise RuntimeError(f"wbmpc MPC with a time budget failed at tick {tick}: {cut.status}")
+            budget_gap = max(budget_gap, float(np.max(np.abs(cut.us[1] - solution.us[1]))))
         previous_xs, previous_us = np.array(twin.xs), np.array(twin.us)
         if tick > 0:  # tick 0 is the cold start
             ours_times.append(ours)
@@ -109,8 +128,12 @@ def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot
         x = solution.xs[1].copy()
         x[nq:] += 0.01 * rng.standard_normal(nv)
     ours_stats, theirs_stats = _stats(ours_times), _stats(theirs_times)
-    return {"ours": ours_stats, "crocoddyl": theirs_stats, "ratio": _ratio(ours_stats, theirs_stats),
-            "max_control_difference_Nm": gap}
+    result = {"ours": ours_stats, "crocoddyl": theirs_stats, "ratio": _ratio(ours_stats, theirs_stats),
+              "max_control_difference_Nm": gap}
+    if budgeted is not None:
+        result["budgeted"] = {"time_budget_s": time_budget, **_stats(budget_times), "deadline_ticks": budget_hits,
+                              "max_control_difference_to_unbudgeted_Nm": budget_gap}
+    return result
 
 
 def _phases(robot, config, n_nodes: int, dt: float, repeats: int) -> dict:
@@ -181,7 +204,8 @@ def run(args: argparse.Namespace) -> dict:
     result = {"robot": "bolt", "dt_s": 0.01, "horizons": {}}
     for n_nodes in args.nodes:
         entry = _phases(bolt, config, n_nodes, 0.01, args.repeats)
-        entry["mpc_tick"] = _mpc_loop(bolt, config, n_nodes, 0.01, 0.3, (0.1, -0.1), args.ticks, args.seed)
+        entry["mpc_tick"] = _mpc_loop(bolt, config, n_nodes, 0.01, 0.3, (0.1, -0.1), args.ticks, args.seed,
+                                      time_budget=args.time_budget)
         result["horizons"][str(n_nodes)] = entry
     if args.g1_nodes:
         g1 = load_robot("g1")
@@ -219,4 +243,10 @@ def _tick_lines(tick: dict) -> list[str]:
     lines.append(f"    crocoddyl  {c['median_ms']:7.2f} {c['p90_ms']:7.2f} {c['p99_ms']:7.2f} {c['max_ms']:7.2f}")
     lines.append(f"    ratio      {r['median_ms']:7.2f} {r['p90_ms']:7.2f} {r['p99_ms']:7.2f} {r['max_ms']:7.2f}")
     lines.append(f"    max |u1 ours - u1 crocoddyl| = {tick['max_control_difference_Nm']:.2e} N·m")
+    if "budgeted" in tick:
+        b = tick["budgeted"]
+        lines.append(f"    ours, {b['time_budget_s'] * 1e3:.1f} ms budget "
+                     f"{b['median_ms']:7.2f} {b['p90_ms']:7.2f} {b['p99_ms']:7.2f} {b['max_ms']:7.2f}   "
+                     f"({b['deadline_ticks']} of {b['n']} ticks cut short; max |u1 - u1 unbudgeted| = "
+                     f"{b['max_control_difference_to_unbudgeted_Nm']:.2e} N·m)")
     return lines

@@ -83,6 +83,33 @@ def test_update_returns_the_contract(bolt, walking):
     assert not cold
     np.testing.assert_array_equal(us_init[:-1], ticks[-1].us[1:])
     np.testing.assert_array_equal(xs_init[0], ticks[-1].xs[1])
+    np.testing.assert_array_equal(xs_init[1:-1], ticks[-1].xs[2:])
+
+
+def test_warm_start_extends_the_horizon_end_without_a_gap(bolt):
+    """The node entering at the end takes the control of the latest node with its contact set and
+    its successor state is the node's dynamics: no gap at the end, also when the contact set of
+    the new node differs from its predecessor's (a step starts at the end of the horizon)."""
+    n = 40
+    mpc = WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=n, dt=DT, max_iterations=1, cold_start_iterations=10)
+    com_ref = np.array([0.3, 0.0, 0.3])
+    solution = mpc.update(0.18, standing_state(bolt), alternating_schedule(0.18, DT, n), com_ref)
+    switches = 0
+    for t in (0.19, 0.20, 0.21, 0.22):  # node n - 1 reaches the touchdown at 0.6 s at t = 0.21
+        x = solution.xs[1]
+        mpc.ocp.update(x, alternating_schedule(t, DT, n), com_ref)
+        xs, us, cold = mpc.warm_start(t, x)
+        assert not cold
+        models, datas = mpc.problem.running_models, mpc.problem.running_datas
+        keys = [m.differential.active_key for m in models]
+        models[n - 1].calc(datas[n - 1], xs[n - 1], us[n - 1])
+        np.testing.assert_allclose(xs[n], datas[n - 1].xnext, rtol=0, atol=1e-12)
+        same = max(i for i in range(n - 1) if keys[i] == keys[n - 1])
+        np.testing.assert_array_equal(us[n - 1], us[same])
+        switches += keys[n - 1] != keys[n - 2]
+        solution = mpc.update(t, x, alternating_schedule(t, DT, n), com_ref)
+        assert solution.ok
+    assert switches == 1
 
 
 def test_failures_keep_the_last_good_solution(bolt, walking):
@@ -114,3 +141,16 @@ def test_constructor_rejects_bad_parameters(bolt):
         WalkingMPC(bolt, n_nodes=10, dt=DT, max_iterations=0)
     with pytest.raises(ParameterError, match="dt=-0.01"):
         WalkingMPC(bolt, n_nodes=10, dt=-0.01)
+    with pytest.raises(ParameterError, match="horizon_end='zeros' must be one of"):
+        WalkingMPC(bolt, n_nodes=10, dt=DT, horizon_end="zeros")
+
+
+def test_repeat_horizon_end_is_the_plain_shift(bolt, walking):
+    """horizon_end="repeat": the last node's state and control repeated (the usual shift)."""
+    mpc, ticks = walking
+    plain = WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=N_NODES, dt=DT, horizon_end="repeat")
+    plain.last_good = ticks[-1]
+    xs, us, _ = plain.warm_start(4 * DT, ticks[-1].xs[1])
+    np.testing.assert_array_equal(us[-1], ticks[-1].us[-1])
+    np.testing.assert_array_equal(xs[-1], ticks[-1].xs[-1])
+    np.testing.assert_array_equal(xs[-2], ticks[-1].xs[-1])

@@ -75,6 +75,10 @@ def _shift(array: np.ndarray, nodes: int) -> np.ndarray:
     return np.concatenate([array[nodes:], np.repeat(array[-1:], nodes, axis=0)])
 
 
+HORIZON_ENDS = ("rollout", "repeat")
+"""Warm-start fills of the nodes entering at the end of the horizon (``WalkingMPC(horizon_end=)``)."""
+
+
 class WalkingMPC:
     """Receding-horizon FDDP on the walking OCP.
 
@@ -85,6 +89,11 @@ class WalkingMPC:
         dt: node spacing [s].
         max_iterations: FDDP iterations per update (the paper runs 1).
         cold_start_iterations: iterations of the first update (no warm start yet).
+        horizon_end: how the warm start fills the node(s) entering at the end of the shifted
+            horizon: "rollout" (default; the control of the latest node with the same contact set,
+            the state rolled out through the node's dynamics: no gap, see
+            :meth:`_extend_horizon_end`) or "repeat" (the last state and control repeated, the
+            usual shift; leaves a gap at the end).
         time_budget: wall time [s] an update may take, counted from its call (a real-time tick's
             deadline, e.g. 0.009 for a 100 Hz loop with 1 ms to spare), or None (no limit). The
             solver starts no iteration or line-search trial that would end after it (see
@@ -93,11 +102,14 @@ class WalkingMPC:
     """
 
     def __init__(self, robot, config: WalkingOCPConfig | None = None, n_nodes: int = 100, dt: float = 0.01,
-                 max_iterations: int = 1, cold_start_iterations: int = 20, time_budget: float | None = None):
+                 max_iterations: int = 1, cold_start_iterations: int = 20, horizon_end: str = "rollout",
+                 time_budget: float | None = None):
         if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or max_iterations < 1:
             raise ParameterError(f"max_iterations={max_iterations!r} must be an integer >= 1")
         if int(cold_start_iterations) != cold_start_iterations or cold_start_iterations < 1:
             raise ParameterError(f"cold_start_iterations={cold_start_iterations!r} must be an integer >= 1")
+        if horizon_end not in HORIZON_ENDS:
+            raise ParameterError(f"horizon_end={horizon_end!r} must be one of {HORIZON_ENDS}")
         if time_budget is not None and not (isinstance(time_budget, (int, float)) and 0 < time_budget < 1e3):
             raise ParameterError(f"time_budget={time_budget!r} must be None or a number of seconds in (0, 1000)")
         self.config = WalkingOCPConfig() if config is None else config
@@ -110,6 +122,7 @@ class WalkingMPC:
         self.solver.th_stop = self.config.th_stop
         self.max_iterations = int(max_iterations)
         self.cold_start_iterations = int(cold_start_iterations)
+        self.horizon_end = horizon_end
         self.time_budget = None if time_budget is None else float(time_budget)
         self.n_nodes = self.ocp.n_nodes
         self.dt = self.ocp.dt
@@ -117,8 +130,9 @@ class WalkingMPC:
 
     def warm_start(self, t: float, x_measured: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
         """Initial guess at time t: the last good solution shifted by round((t − t_last)/dt)
-        nodes, with x_measured as node 0; a quasi-static guess if there is none.
-        Returns (xs_init, us_init, cold)."""
+        nodes, with x_measured as node 0, and the nodes that enter at the end filled as
+        ``horizon_end`` says; a quasi-static guess if there is none. Call after the OCP's update
+        (the "rollout" fill reads the new contact sets). Returns (xs_init, us_init, cold)."""
         last = self.last_good
         if last is None:
             xs = np.repeat(x_measured[None, :], self.n_nodes + 1, axis=0)
@@ -129,7 +143,38 @@ class WalkingMPC:
         xs = _shift(last.xs, nodes)
         us = _shift(last.us, nodes)
         xs[0] = x_measured
+        if self.horizon_end == "rollout":
+            self._extend_horizon_end(xs, us, min(nodes, self.n_nodes - 1))
         return xs, us, False
+
+    def _contact_keys(self) -> list[tuple]:
+        return [model.differential.active_key for model in self.problem.running_models]
+
+    def _extend_horizon_end(self, xs: np.ndarray, us: np.ndarray, nodes: int) -> None:
+        """Fill the last ``nodes`` running nodes of a shifted guess (in place): each takes the
+        control of the latest earlier node with the same contact set (the last node's when there
+        is none) and its successor state is rolled out through the node's dynamics.
+
+        Repeating the last state and control instead leaves a gap at the end of the horizon (one
+        step of motion, ~1-3 in velocity units on Bolt) and, when the new node's contact set
+        differs (a stance torque on a swinging leg), a gap of ~30 rad/s; FDDP's full step then
+        fails its line search: on the Bolt benchmark loop 23 of 300 first steps were rejected
+        with repetition, 14 with this extension (docs/ocp.md). A rollout that does not stay
+        finite keeps the repeated guess.
+        """
+        if nodes <= 0:
+            return
+        models, datas = self.problem.running_models, self.problem.running_datas
+        keys = self._contact_keys()
+        N = self.n_nodes
+        for j in range(N - nodes, N):
+            same = next((i for i in range(j - 1, -1, -1) if keys[i] == keys[j]), None)
+            if same is not None:
+                us[j] = us[same]
+            models[j].calc(datas[j], xs[j], us[j])
+            if not np.all(np.isfinite(datas[j].xnext)):
+                return
+            xs[j + 1] = datas[j].xnext
 
     def update(self, t: float, x_measured: np.ndarray, schedule, com_terminal_reference: np.ndarray) -> MPCSolution:
         """Re-solve from the measured state; never raises (failures come back with ok=False)."""
