@@ -94,10 +94,13 @@ class WalkingControllerConfig:
         n_nodes: MPC horizon length N (nodes), paper: 100.
         node_dt: MPC node spacing [s], paper: 0.01 (horizon H_u = 1 s).
         replan_period: period of the sequencer + MPC update [s], paper: 0.01 (100 Hz).
-        max_iterations: FDDP iterations per MPC update. The paper runs 1; the closed loop's default
-            is 3: with 1 iteration Bolt fell after 2.1 s on terrain and 10.5 s in the transition
-            scenario (seed 0) and walked 0.1 m/s too fast, with 3 it completed both with speed
-            errors of 17 mm/s (docs/closed_loop.md).
+        max_iterations: FDDP iterations per MPC update, paper and default: 1. Until the warm start
+            filled the end of the horizon by a rollout (``mpc_horizon_end``), one iteration fell
+            (after 2.1 s on terrain, 10.5 s in the transition) and the closed loop ran 3, 2.5x
+            slower (docs/closed_loop.md).
+        mpc_horizon_end: how the MPC's warm start fills the node entering at the end of the
+            horizon: "rollout" (default) or "repeat" (see ``wbmpc.WalkingMPC``). With "repeat",
+            1 iteration per update falls (see ``max_iterations``).
         delay_nodes: 1 applies node 1 of each solution as soon as it is computed (the paper's
             pipeline: its solver needs about one node, 10 ms, so node 1 is "now" when the solution
             arrives); 0 applies node 0.
@@ -166,7 +169,8 @@ class WalkingControllerConfig:
     n_nodes: int = 100
     node_dt: float = 0.01
     replan_period: float = 0.01
-    max_iterations: int = 3
+    max_iterations: int = 1
+    mpc_horizon_end: str = "rollout"
     delay_nodes: int = 1
     computation_delay: float = 0.0
     interpolate: bool = False
@@ -222,6 +226,10 @@ class WalkingControllerConfig:
             raise ParameterError(f"first_stance_foot={self.first_stance_foot!r} must be 'left' or 'right'")
         if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
             raise ParameterError(f"max_iterations={self.max_iterations!r} must be an integer >= 1")
+        from wbmpc.mpc import HORIZON_ENDS
+
+        if self.mpc_horizon_end not in HORIZON_ENDS:
+            raise ParameterError(f"mpc_horizon_end={self.mpc_horizon_end!r} must be one of {HORIZON_ENDS}")
         if self.sequencer_params_from is not None:
             switch = self.sequencer_params_from
             if not (isinstance(switch, tuple) and len(switch) == 2 and np.isfinite(switch[0]) and switch[0] >= 0):
@@ -294,6 +302,7 @@ class WalkingController:
             n_nodes=cfg.n_nodes,
             dt=cfg.node_dt,
             max_iterations=cfg.max_iterations,
+            horizon_end=cfg.mpc_horizon_end,
         )
         self.stance = StanceTracker(self.feet, cfg.touchdown_detection)
         feet_world = self._feet_position(np.asarray(x0)[: self.nq])
@@ -623,7 +632,7 @@ def default_ocp_config():
     return WalkingOCPConfig(foothold_weight=FOOTHOLD_WEIGHT, touchdown_height_weight=TOUCHDOWN_HEIGHT_WEIGHT)
 
 
-MPC_STATUS_CODES = {"converged": 0, "max_iter": 1, "failed": 2, "injected_failure": 3}
+MPC_STATUS_CODES = {"converged": 0, "max_iter": 1, "failed": 2, "injected_failure": 3, "deadline": 4}
 """Numeric codes of the MPC statuses in the replan log (``mpc_status_code``); -1 = other."""
 
 

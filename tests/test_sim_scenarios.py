@@ -46,7 +46,9 @@ def test_slip_patch_friction_is_the_one_used_in_contacts():
 
     robot = load_robot("bolt")
     spec = robot.mujoco_spec()
-    make_scenario("slip", friction=0.05, x_start=-0.2, length=0.4).modify_spec(spec, np.random.default_rng(0))
+    left_y = robot.foot_positions(robot.q_reference)["left"][1]  # the standing left foot
+    make_scenario("slip", friction=0.05, x_start=-0.2, length=0.4, track_y=left_y).modify_spec(
+        spec, np.random.default_rng(0))
     model = spec.compile()
     data = mujoco.MjData(model)
     data.qpos[:], data.qvel[:] = pinocchio_to_mujoco_state(robot, robot.q_reference, robot.v_reference)
@@ -58,6 +60,22 @@ def test_slip_patch_friction_is_the_one_used_in_contacts():
     assert len(on_patch) == 1  # the left foot (y > 0) stands on the patch
     assert on_patch[0].friction[0] == pytest.approx(0.05)  # the patch's friction, not the foot's 1.0
     assert robot.mujoco_contact.friction == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("side, track_y", [("left", None), ("right", None), ("left", 0.2)])
+def test_slip_patch_lies_on_the_chosen_track(side, track_y):
+    """By default on the side's foot track of the default walk gait; else centred on track_y."""
+    from sim.scenarios.slip import Slip
+
+    spec = load_robot("bolt").mujoco_spec()
+    make_scenario("slip", side=side, track_y=track_y).modify_spec(spec, np.random.default_rng(0))
+    model = spec.compile()
+    patch = model.geom("slip_patch")
+    expected = Slip.DEFAULT_TRACKS[side] if track_y is None else track_y
+    assert patch.pos[1] == pytest.approx(expected)
+    assert 2 * patch.size[1] == pytest.approx(0.07)
+    with pytest.raises(ParameterError, match="track_y=nan"):
+        make_scenario("slip", track_y=float("nan"))
 
 
 def test_transition_command_changes_at_the_switch_and_walk_ramps():

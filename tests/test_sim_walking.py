@@ -182,6 +182,8 @@ def test_lipm_corrections_are_identified_from_undisturbed_steps_only(controller_
     assert controller.sequencer_params is params
     with pytest.raises(ParameterError, match=r"lipm_correction_gain=1.5 must be in \[0, 1\]"):
         WalkingControllerConfig(lipm_correction_gain=1.5)
+    with pytest.raises(ParameterError, match=r"mpc_horizon_end='last' must be one of \('rollout', 'repeat'\)"):
+        WalkingControllerConfig(mpc_horizon_end="last")
 
 
 def test_a_step_whose_stance_foot_slid_is_not_used_for_the_lipm_corrections(controller_with_known_reference):

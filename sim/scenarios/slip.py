@@ -17,20 +17,23 @@ from wbmpc.errors import ParameterError
 class Slip(Scenario):
     """Walk at ``speed`` across a low-friction patch under the ``side`` foot.
 
-    The default patch spans y in [-0.03, 0.12] m (left): the left foot's track of the ``walk`` gait
-    (which settles about 5 cm to the right of the start, footholds near y = 0 and y = -0.1 m), and
-    not the right foot's.
+    The patch is centred on ``track_y``; by default on the ``side`` foot's track of the default
+    ``walk`` gait (seed 0), which settles about 13 cm to the right of its start during the first
+    steps: left footholds near y = -0.085 m, right ones near y = -0.168 m (``DEFAULT_TRACKS``).
+    The default width, 7 cm, covers the left track and not the right one (4 cm apart).
     """
 
     default_duration = 12.0
 
     speed: float = 0.33  # [m/s]
-    friction: float = 0.15  # sliding friction coefficient on the patch (0.14 and below: Bolt falls, seed 0)
+    friction: float = 0.15  # sliding friction coefficient on the patch (seed 0: 0.12 walks, 0.10 falls)
     side: str = "left"  # "left" (y > 0) or "right" (y < 0) foot's track
     x_start: float = 1.0  # [m], world x where the patch begins
     length: float = 0.4  # [m], patch length along x
-    patch_width: float = 0.15  # [m], along y
-    track_offset: float = 0.045  # [m], |y| of the patch centre: covers y in [-0.03, 0.12] m for "left"
+    patch_width: float = 0.07  # [m], along y
+    track_y: float | None = None  # [m], world y of the patch centre; None: DEFAULT_TRACKS[side]
+
+    DEFAULT_TRACKS = {"left": -0.085, "right": -0.168}  # [m], footholds' y of the default walk gait
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -39,13 +42,15 @@ class Slip(Scenario):
         _check_range("friction", self.friction, 0.0, 10.0, "")
         _check_range("length", self.length, 1e-3, 100.0, "m")
         _check_range("patch_width", self.patch_width, 1e-3, 10.0, "m")
+        if self.track_y is not None:
+            _check_range("track_y", self.track_y, -100.0, 100.0, "m")
 
     def modify_spec(self, spec, rng) -> None:
         import numpy as np
 
         from robots.mujoco_model import add_box_geom
 
-        y = self.track_offset if self.side == "left" else -self.track_offset
+        y = self.DEFAULT_TRACKS[self.side] if self.track_y is None else self.track_y
         add_box_geom(
             spec, "slip_patch", np.array([self.x_start + 0.5 * self.length, y, 0.0]),
             np.array([0.5 * self.length, 0.5 * self.patch_width, 0.001]),
