@@ -148,3 +148,28 @@ def test_solves_take_the_same_iterates(bolt):
     np.testing.assert_allclose(xs1, xs0, atol=1e-8)
     np.testing.assert_allclose(us1, us0, atol=1e-8)
     np.testing.assert_allclose(K1, K0, atol=1e-6 * np.max(np.abs(K0)))
+
+
+@pytest.mark.parametrize("config", [BATCHED_TERMS, WalkingOCPConfig(foothold_weight=1e5, touchdown_height_weight=1e5)])
+def test_update_fast_path_equals_a_full_sync(bolt, config):
+    """WalkingOCP.update writes the frame terms' columns and the changed contact sets directly;
+    a full sync() from the node models it updated reads the same batched configuration."""
+    ocp = WalkingOCP(bolt, config, n_nodes=40, dt=0.01)
+    problem = ocp.problem
+    x0 = standing_state(bolt)
+    for t0, step_duration in ((0.0, 0.3), (0.01, 0.3), (0.13, 0.27), (0.29, 0.3)):
+        ocp.update(x0, alternating_schedule(t0, 0.01, 40, step_duration=step_duration), np.array([0.1, 0.0, 0.3]))
+        fast = (problem._term_scale.copy(), problem._reference.copy(), problem._frame_needed.copy(),
+                list(problem._node_dynamics))
+        problem.sync()
+        np.testing.assert_array_equal(fast[0], problem._term_scale)
+        active = problem._term_scale != 0.0
+        np.testing.assert_array_equal(fast[1][active], problem._reference[active])
+        np.testing.assert_array_equal(fast[2], problem._frame_needed)
+        for k, (entry_fast, entry_full) in enumerate(zip(fast[3], problem._node_dynamics)):
+            assert all(a is b for a, b in zip(entry_fast, entry_full)), k
+    assert active[:, problem.term_index("left_foothold")].any()
+    with pytest.raises(ParameterError, match="no running cost term 'nose_height'"):
+        problem.term_index("nose_height")
+    with pytest.raises(ParameterError, match="'state_regularization' is not a frame term"):
+        problem.set_term_columns({"state_regularization": (np.zeros(40), None)})

@@ -184,6 +184,48 @@ class BatchedShootingProblem(ShootingProblem):
                 else:
                     row_reference[j, :nu] = residual.reference
             self._node_dynamics[k] = self._dynamics_of(model.differential)
+        self._node_contact_keys = [m.differential.active_key for m in self.running_models]
+
+    def term_index(self, name: str) -> int:
+        """Column of the running cost term ``name`` in the batched arrays."""
+        try:
+            return self._term_names.index(name)
+        except ValueError:
+            raise ParameterError(f"no running cost term {name!r}; terms: {self._term_names}") from None
+
+    def sync_contacts(self) -> None:
+        """Read the node models' contact sets only (the part of :meth:`sync` that
+        :meth:`set_term_columns` does not cover); nodes whose contact set is unchanged are skipped."""
+        keys = self._node_contact_keys
+        for k, model in enumerate(self.running_models):
+            dam = model.differential
+            if dam.active_key != keys[k] or dam._moving_references:
+                self._node_dynamics[k] = self._dynamics_of(dam)
+                keys[k] = dam.active_key
+
+    def set_term_columns(self, columns: dict) -> None:
+        """Write the activity, weight and reference of frame terms over the whole horizon at once:
+        ``columns[name] = (scale (N,), reference (N, d) or None)`` with scale = weight where the
+        term is active and 0 elsewhere, d = 1 (frame height) or 3 (frame translation).
+
+        The fast path of :meth:`sync` for a caller that updates the node models from the same
+        arrays (:meth:`wbmpc.walking.WalkingOCP.update`); the result is the one :meth:`sync`
+        would read from them (tested).
+        """
+        for name, (scale, reference) in columns.items():
+            j = self.term_index(name)
+            kind = self._term_kind[j]
+            if kind not in (FRAME_HEIGHT, FRAME_TRANSLATION):
+                raise ParameterError(f"set_term_columns: {name!r} is not a frame term")
+            self._term_scale[:, j] = scale
+            if reference is not None:
+                d = 1 if kind == FRAME_HEIGHT else 3
+                self._reference[:, j, :d] = np.asarray(reference, dtype=float).reshape(self.T, d)
+        needed = self._frame_needed
+        needed[:] = False
+        for j in range(len(self._term_names)):
+            if self._term_kind[j] in (FRAME_HEIGHT, FRAME_TRANSLATION):
+                needed[:, self._term_slot[j]] |= self._term_scale[:, j] != 0.0
 
     def _dynamics_of(self, dam) -> tuple:
         """(constraint models or None without contacts, Pinocchio data, constraint datas, proximal
