@@ -21,6 +21,7 @@ from numba import njit
 
 from wbmpc.errors import ParameterError
 from wbmpc.kernels import _quaternion_matrix
+from wbmpc.small_linalg import mat3_mul, mat3_vec
 
 _AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "JointModelRZ": (0.0, 0.0, 1.0)}
 
@@ -108,6 +109,10 @@ def frame_kinematics(qs, needed, parents, placement_rotation, placement_translat
     p = np.zeros((n_joints, 3))  # world position of each joint origin
     R[0] = np.eye(3)
     local = np.empty((3, 3))
+    Rp = np.empty((3, 3))
+    offset = np.empty(3)
+    pf = np.empty(3)
+    w = np.empty(3)
     for t in range(qs.shape[0]):
         any_needed = False
         for s in range(n_frames):
@@ -119,23 +124,26 @@ def frame_kinematics(qs, needed, parents, placement_rotation, placement_translat
         for i in range(1, n_joints):
             parent = parents[i]
             # parent · placement
-            Rp = np.dot(R[parent], placement_rotation[i])
-            pp = p[parent] + np.dot(R[parent], placement_translation[i])
+            mat3_mul(R[parent], placement_rotation[i], Rp)
+            mat3_vec(R[parent], placement_translation[i], offset)
             if i == 1:  # free flyer: (R(quaternion), position)
                 _quaternion_matrix(q[3:7], local)
-                R[i] = np.dot(Rp, local)
+                mat3_mul(Rp, local, R[i])
                 for a in range(3):
-                    p[i, a] = pp[a] + Rp[a, 0] * q[0] + Rp[a, 1] * q[1] + Rp[a, 2] * q[2]
+                    p[i, a] = p[parent, a] + offset[a] + Rp[a, 0] * q[0] + Rp[a, 1] * q[1] + Rp[a, 2] * q[2]
             else:
                 _axis_rotation(axes[i], q[idx_q[i]], local)
-                R[i] = np.dot(Rp, local)
-                p[i] = pp
+                mat3_mul(Rp, local, R[i])
+                for a in range(3):
+                    p[i, a] = p[parent, a] + offset[a]
         for s in range(n_frames):
             if not needed[t, s]:
                 continue
             j = frame_joint[s]
-            pf = p[j] + np.dot(R[j], frame_translation[s])
-            positions[t, s] = pf
+            mat3_vec(R[j], frame_translation[s], pf)
+            for a in range(3):
+                pf[a] += p[j, a]
+                positions[t, s, a] = pf[a]
             if not with_jacobians:
                 continue
             J = jacobians[t, s]
@@ -143,7 +151,7 @@ def frame_kinematics(qs, needed, parents, placement_rotation, placement_translat
             for i in range(1, n_joints):
                 if not support[s, i]:
                     continue
-                r = pf - p[i]
+                r0, r1, r2 = pf[0] - p[i, 0], pf[1] - p[i, 1], pf[2] - p[i, 2]
                 if i == 1:  # base: linear R₁, angular −[r]× R₁
                     v0 = idx_v[i]
                     for a in range(3):
@@ -151,12 +159,12 @@ def frame_kinematics(qs, needed, parents, placement_rotation, placement_translat
                             J[a, v0 + b] = R[i, a, b]
                     for b in range(3):
                         w0, w1, w2 = R[i, 0, b], R[i, 1, b], R[i, 2, b]
-                        J[0, v0 + 3 + b] = w1 * r[2] - w2 * r[1]
-                        J[1, v0 + 3 + b] = w2 * r[0] - w0 * r[2]
-                        J[2, v0 + 3 + b] = w0 * r[1] - w1 * r[0]
+                        J[0, v0 + 3 + b] = w1 * r2 - w2 * r1
+                        J[1, v0 + 3 + b] = w2 * r0 - w0 * r2
+                        J[2, v0 + 3 + b] = w0 * r1 - w1 * r0
                 else:  # revolute: (R_i a_i) × (p_f − p_i)
-                    w = np.dot(R[i], axes[i])
+                    mat3_vec(R[i], axes[i], w)
                     col = idx_v[i]
-                    J[0, col] = w[1] * r[2] - w[2] * r[1]
-                    J[1, col] = w[2] * r[0] - w[0] * r[2]
-                    J[2, col] = w[0] * r[1] - w[1] * r[0]
+                    J[0, col] = w[1] * r2 - w[2] * r1
+                    J[1, col] = w[2] * r0 - w[0] * r2
+                    J[2, col] = w[0] * r1 - w[1] * r0
