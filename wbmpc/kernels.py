@@ -6,6 +6,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from wbmpc.small_linalg import mat3_tmul, mat3_tvec
+
 
 @njit(cache=True)
 def skew3(w):
@@ -211,11 +213,13 @@ def free_flyer_difference(q0, q1, nq, out):
     R1 = np.empty((3, 3))
     _quaternion_matrix(q0[3:7], R0)
     _quaternion_matrix(q1[3:7], R1)
-    R = np.dot(R0.T, R1)
+    R = np.empty((3, 3))
+    mat3_tmul(R0, R1, R)
     dp = np.empty(3)
     for i in range(3):
         dp[i] = q1[i] - q0[i]
-    p = np.dot(R0.T, dp)
+    p = np.empty(3)
+    mat3_tvec(R0, dp, p)
     trace = R[0, 0] + R[1, 1] + R[2, 2]
     if trace >= 3.0:
         theta = 0.0

@@ -13,27 +13,39 @@ the coupling block Q; dDifference is its inverse at ξ = log6(M0⁻¹ M1).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
-from wbmpc.kernels import _quaternion_matrix, free_flyer_difference, free_flyer_feedback_control, skew3
+from wbmpc.kernels import _quaternion_matrix, free_flyer_difference, free_flyer_feedback_control
+from wbmpc.small_linalg import mat3_mul, mat3_tmul, mat3_vec
 
 # [rad] below it the coefficients come from their Taylor series (terms up to θ¹²): the closed
 # forms of the higher ones cancel catastrophically (c3's numerator is ~θ⁵/60).
 SERIES_ANGLE = 0.5
 
 
-@njit(cache=True)
-def _series(t2, offset, weight_step):
-    """Σ_{n=0..6} (−1)ⁿ (1 + weight_step·n) θ²ⁿ / (2n + offset)!."""
-    total = 0.0
-    power = 1.0
-    for n in range(7):
-        factorial = 1.0
-        for i in range(2, 2 * n + offset + 1):
-            factorial *= i
-        total += (-1.0) ** n * (1.0 + weight_step * n) * power / factorial
-        power *= t2
+def _series_coefficients(offset: int, weight_step: float) -> np.ndarray:
+    """Coefficients c_n = (−1)ⁿ (1 + weight_step·n) / (2n + offset)! of θ²ⁿ, n = 0..6."""
+    return np.array([(-1.0) ** n * (1.0 + weight_step * n) / math.factorial(2 * n + offset) for n in range(7)])
+
+
+# Taylor coefficients (in θ²) of sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³ and of the coupling
+# block's c2 and c3 (constants of the compiled code)
+_SIN_OVER = _series_coefficients(1, 0.0)
+_ONE_MINUS_COS = _series_coefficients(2, 0.0)
+_THETA_MINUS_SIN = _series_coefficients(3, 0.0)
+_COUPLING_2 = _series_coefficients(4, 0.0)
+_COUPLING_3 = _series_coefficients(5, 1.0)
+
+
+@njit(cache=True, inline="always")
+def _series(t2, coefficients):
+    """Σ_n coefficients[n] θ²ⁿ (Horner)."""
+    total = coefficients[6]
+    for n in range(5, -1, -1):
+        total = total * t2 + coefficients[n]
     return total
 
 
@@ -42,9 +54,39 @@ def _so3_coefficients(theta):
     """(sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³)."""
     t2 = theta * theta
     if theta < SERIES_ANGLE:
-        return _series(t2, 1, 0.0), _series(t2, 2, 0.0), _series(t2, 3, 0.0)
+        return _series(t2, _SIN_OVER), _series(t2, _ONE_MINUS_COS), _series(t2, _THETA_MINUS_SIN)
     s, c = np.sin(theta), np.cos(theta)
     return s / theta, (1.0 - c) / t2, (theta - s) / (t2 * theta)
+
+
+@njit(cache=True, inline="always")
+def _so3_polynomial(w, s1, s2, out):
+    """out (3, 3) = I + s1 [w]× + s2 [w]×², with [w]×² = w wᵀ − |w|² I."""
+    w0, w1, w2 = w[0], w[1], w[2]
+    t2 = w0 * w0 + w1 * w1 + w2 * w2
+    out[0, 0] = 1.0 + s2 * (w0 * w0 - t2)
+    out[1, 1] = 1.0 + s2 * (w1 * w1 - t2)
+    out[2, 2] = 1.0 + s2 * (w2 * w2 - t2)
+    out[0, 1] = -s1 * w2 + s2 * w0 * w1
+    out[1, 0] = s1 * w2 + s2 * w0 * w1
+    out[0, 2] = s1 * w1 + s2 * w0 * w2
+    out[2, 0] = -s1 * w1 + s2 * w0 * w2
+    out[1, 2] = -s1 * w0 + s2 * w1 * w2
+    out[2, 1] = s1 * w0 + s2 * w1 * w2
+
+
+@njit(cache=True, inline="always")
+def _skew(w, out):
+    """out (3, 3) = [w]×."""
+    out[0, 0] = 0.0
+    out[1, 1] = 0.0
+    out[2, 2] = 0.0
+    out[0, 1] = -w[2]
+    out[0, 2] = w[1]
+    out[1, 0] = w[2]
+    out[1, 2] = -w[0]
+    out[2, 0] = -w[1]
+    out[2, 1] = w[0]
 
 
 @njit(cache=True)
@@ -81,9 +123,13 @@ def se3_exp(xi):
     w = xi[3:6]
     theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
     a, b, c = _so3_coefficients(theta)
-    W = skew3(w)
-    W2 = np.dot(W, W)
-    return np.eye(3) + a * W + b * W2, np.dot(np.eye(3) + b * W + c * W2, xi[:3])
+    R = np.empty((3, 3))
+    V = np.empty((3, 3))
+    p = np.empty(3)
+    _so3_polynomial(w, a, b, R)
+    _so3_polynomial(w, b, c, V)
+    mat3_vec(V, xi[:3], p)
+    return R, p
 
 
 @njit(cache=True)
@@ -93,10 +139,12 @@ def free_flyer_integrate(q, dq, out):
     R_exp, p_exp = se3_exp(dq[:6])
     R0 = np.empty((3, 3))
     _quaternion_matrix(q[3:7], R0)
-    p1 = np.dot(R0, p_exp)
+    p1 = np.empty(3)
+    mat3_vec(R0, p_exp, p1)
     for i in range(3):
         out[i] = q[i] + p1[i]
-    R1 = np.dot(R0, R_exp)
+    R1 = np.empty((3, 3))
+    mat3_mul(R0, R_exp, R1)
     quat = np.empty(4)
     _matrix_quaternion(R1, quat)
     dot = quat[0] * q[3] + quat[1] * q[4] + quat[2] * q[5] + quat[3] * q[6]
@@ -114,8 +162,7 @@ def _so3_right_jacobian(w, J):
     """J (3, 3) = I − (1 − cos θ)/θ² [ω]× + (θ − sin θ)/θ³ [ω]×², θ = |ω|."""
     theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
     _, b, c = _so3_coefficients(theta)
-    W = skew3(w)
-    J[:, :] = np.eye(3) - b * W + c * np.dot(W, W)
+    _so3_polynomial(w, -b, c, J)
 
 
 @njit(cache=True)
@@ -124,22 +171,36 @@ def _se3_left_coupling(rho, phi, Q):
     theta = np.sqrt(phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2])
     t2 = theta * theta
     if theta < SERIES_ANGLE:
-        c1 = _series(t2, 3, 0.0)
-        c2 = _series(t2, 4, 0.0)
-        c3 = _series(t2, 5, 1.0)
+        c1 = _series(t2, _THETA_MINUS_SIN)
+        c2 = _series(t2, _COUPLING_2)
+        c3 = _series(t2, _COUPLING_3)
     else:
         s, c = np.sin(theta), np.cos(theta)
         c1 = (theta - s) / (t2 * theta)
         c2 = (t2 + 2.0 * c - 2.0) / (2.0 * t2 * t2)
         c3 = (2.0 * theta - 3.0 * s + theta * c) / (2.0 * t2 * t2 * theta)
-    P = skew3(phi)
-    Rh = skew3(rho)
-    PR = np.dot(P, Rh)
-    RP = np.dot(Rh, P)
-    PRP = np.dot(PR, P)
-    PP = np.dot(P, P)
-    Q[:, :] = (0.5 * Rh + c1 * (PR + RP + PRP) + c2 * (np.dot(P, PR) + np.dot(RP, P) - 3.0 * PRP)
-               + c3 * (np.dot(PRP, P) + np.dot(P, PRP)))
+    P = np.empty((3, 3))
+    Rh = np.empty((3, 3))
+    _skew(phi, P)
+    _skew(rho, Rh)
+    PR = np.empty((3, 3))
+    RP = np.empty((3, 3))
+    PRP = np.empty((3, 3))
+    PPR = np.empty((3, 3))
+    RPP = np.empty((3, 3))
+    PRPP = np.empty((3, 3))
+    PPRP = np.empty((3, 3))
+    mat3_mul(P, Rh, PR)
+    mat3_mul(Rh, P, RP)
+    mat3_mul(PR, P, PRP)
+    mat3_mul(P, PR, PPR)
+    mat3_mul(RP, P, RPP)
+    mat3_mul(PRP, P, PRPP)
+    mat3_mul(P, PRP, PPRP)
+    for i in range(3):
+        for j in range(3):
+            Q[i, j] = (0.5 * Rh[i, j] + c1 * (PR[i, j] + RP[i, j] + PRP[i, j])
+                       + c2 * (PPR[i, j] + RPP[i, j] - 3.0 * PRP[i, j]) + c3 * (PRPP[i, j] + PPRP[i, j]))
 
 
 @njit(cache=True)
@@ -166,10 +227,15 @@ def free_flyer_dintegrate(q, dq, J_q, J_dq):
         J_q[i, i] = 1.0
         J_dq[i, i] = 1.0
     R, p = se3_exp(dq[:6])
-    RT = np.ascontiguousarray(R.T)
-    J_q[:3, :3] = RT
-    J_q[3:6, 3:6] = RT
-    J_q[:3, 3:6] = -np.dot(RT, skew3(p))
+    S = np.empty((3, 3))
+    _skew(p, S)
+    RTS = np.empty((3, 3))
+    mat3_tmul(R, S, RTS)
+    for i in range(3):
+        for j in range(3):
+            J_q[i, j] = R[j, i]
+            J_q[3 + i, 3 + j] = R[j, i]
+            J_q[i, 3 + j] = -RTS[i, j]
     J6 = np.empty((6, 6))
     se3_right_jacobian(dq[:6], J6)
     J_dq[:6, :6] = J6
@@ -189,19 +255,25 @@ def free_flyer_ddifference_second(q0, q1, J):
         J[i, i] = 1.0
     w = xi[3:6]
     theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-    W = skew3(w)
     # inverse of the SO(3) right Jacobian: I + ½[ω]× + (1/θ² − (1 + cos θ)/(2θ sin θ)) [ω]×²
     if theta < 0.1:  # series of the closed form below (cancellation ~ eps/θ²)
         t2 = theta * theta
         d = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0 + t2 * t2 * t2 / 1209600.0
     else:
         d = 1.0 / (theta * theta) - (1.0 + np.cos(theta)) / (2.0 * theta * np.sin(theta))
-    A_inv = np.eye(3) + 0.5 * W + d * np.dot(W, W)
+    A_inv = np.empty((3, 3))
+    _so3_polynomial(w, 0.5, d, A_inv)
     Q = np.empty((3, 3))
     _se3_left_coupling(-xi[:3], -xi[3:6], Q)
-    J[:3, :3] = A_inv
-    J[3:6, 3:6] = A_inv
-    J[:3, 3:6] = -np.dot(np.dot(A_inv, Q), A_inv)
+    AQ = np.empty((3, 3))
+    AQA = np.empty((3, 3))
+    mat3_mul(A_inv, Q, AQ)
+    mat3_mul(AQ, A_inv, AQA)
+    for i in range(3):
+        for j in range(3):
+            J[i, j] = A_inv[i, j]
+            J[3 + i, 3 + j] = A_inv[i, j]
+            J[i, 3 + j] = -AQA[i, j]
     return True
 
 
