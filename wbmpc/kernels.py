@@ -6,19 +6,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from wbmpc.small_linalg import mat3_tmul, mat3_tvec
+from wbmpc.small_linalg import mat3_tmul, mat3_tvec, skew_into
 
 
 @njit(cache=True)
 def skew3(w):
     """[w]×, shape (3, 3)."""
-    S = np.zeros((3, 3))
-    S[0, 1] = -w[2]
-    S[0, 2] = w[1]
-    S[1, 0] = w[2]
-    S[1, 2] = -w[0]
-    S[2, 0] = -w[1]
-    S[2, 1] = w[0]
+    S = np.empty((3, 3))
+    skew_into(w, S)
     return S
 
 

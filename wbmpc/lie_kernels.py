@@ -19,7 +19,7 @@ import numpy as np
 from numba import njit
 
 from wbmpc.kernels import _quaternion_matrix, free_flyer_difference, free_flyer_feedback_control
-from wbmpc.small_linalg import mat3_mul, mat3_tmul, mat3_vec
+from wbmpc.small_linalg import mat3_mul, mat3_vec, skew_into
 
 # [rad] below it the coefficients come from their Taylor series (terms up to θ¹²): the closed
 # forms of the higher ones cancel catastrophically (c3's numerator is ~θ⁵/60).
@@ -73,20 +73,6 @@ def _so3_polynomial(w, s1, s2, out):
     out[2, 0] = -s1 * w1 + s2 * w0 * w2
     out[1, 2] = -s1 * w0 + s2 * w1 * w2
     out[2, 1] = s1 * w0 + s2 * w1 * w2
-
-
-@njit(cache=True, inline="always")
-def _skew(w, out):
-    """out (3, 3) = [w]×."""
-    out[0, 0] = 0.0
-    out[1, 1] = 0.0
-    out[2, 2] = 0.0
-    out[0, 1] = -w[2]
-    out[0, 2] = w[1]
-    out[1, 0] = w[2]
-    out[1, 2] = -w[0]
-    out[2, 0] = -w[1]
-    out[2, 1] = w[0]
 
 
 @njit(cache=True)
@@ -181,8 +167,8 @@ def _se3_left_coupling(rho, phi, Q):
         c3 = (2.0 * theta - 3.0 * s + theta * c) / (2.0 * t2 * t2 * theta)
     P = np.empty((3, 3))
     Rh = np.empty((3, 3))
-    _skew(phi, P)
-    _skew(rho, Rh)
+    skew_into(phi, P)
+    skew_into(rho, Rh)
     PR = np.empty((3, 3))
     RP = np.empty((3, 3))
     PRP = np.empty((3, 3))
@@ -216,6 +202,16 @@ def se3_right_jacobian(xi, J):
     J[:3, 3:] = Q
 
 
+@njit(cache=True, inline="always")
+def _write_base_block(J, A, C):
+    """J[:6, :6] = [[A, −C], [0, A]] (the lower-left block is left as it is)."""
+    for i in range(3):
+        for j in range(3):
+            J[i, j] = A[i, j]
+            J[3 + i, 3 + j] = A[i, j]
+            J[i, 3 + j] = -C[i, j]
+
+
 @njit(cache=True)
 def free_flyer_dintegrate(q, dq, J_q, J_dq):
     """Jacobians (nv, nv) of q ⊕ dq with respect to q (J_q) and dq (J_dq) (Pinocchio's
@@ -228,14 +224,14 @@ def free_flyer_dintegrate(q, dq, J_q, J_dq):
         J_dq[i, i] = 1.0
     R, p = se3_exp(dq[:6])
     S = np.empty((3, 3))
-    _skew(p, S)
-    RTS = np.empty((3, 3))
-    mat3_tmul(R, S, RTS)
+    skew_into(p, S)
+    RT = np.empty((3, 3))
     for i in range(3):
         for j in range(3):
-            J_q[i, j] = R[j, i]
-            J_q[3 + i, 3 + j] = R[j, i]
-            J_q[i, 3 + j] = -RTS[i, j]
+            RT[i, j] = R[j, i]
+    RTS = np.empty((3, 3))
+    mat3_mul(RT, S, RTS)
+    _write_base_block(J_q, RT, RTS)
     J6 = np.empty((6, 6))
     se3_right_jacobian(dq[:6], J6)
     J_dq[:6, :6] = J6
@@ -269,11 +265,7 @@ def free_flyer_ddifference_second(q0, q1, J):
     AQA = np.empty((3, 3))
     mat3_mul(A_inv, Q, AQ)
     mat3_mul(AQ, A_inv, AQA)
-    for i in range(3):
-        for j in range(3):
-            J[i, j] = A_inv[i, j]
-            J[3 + i, 3 + j] = A_inv[i, j]
-            J[i, 3 + j] = -AQA[i, j]
+    _write_base_block(J, A_inv, AQA)
     return True
 
 

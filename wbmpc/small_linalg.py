@@ -39,3 +39,17 @@ def mat3_tvec(A, x, out):
     x0, x1, x2 = x[0], x[1], x[2]
     for i in range(3):
         out[i] = A[0, i] * x0 + A[1, i] * x1 + A[2, i] * x2
+
+
+@njit(cache=True, inline="always")
+def skew_into(w, out):
+    """out (3, 3) = [w]×, the cross-product matrix of w (3,)."""
+    out[0, 0] = 0.0
+    out[1, 1] = 0.0
+    out[2, 2] = 0.0
+    out[0, 1] = -w[2]
+    out[0, 2] = w[1]
+    out[1, 0] = w[2]
+    out[1, 2] = -w[0]
+    out[2, 0] = -w[1]
+    out[2, 1] = w[0]
