@@ -28,6 +28,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--repeats", type=int, default=20, help="repetitions of the per-phase iteration timing")
     parser.add_argument("--g1-nodes", type=int, default=50, help="G1 horizon (dt = 20 ms); 0 skips G1")
     parser.add_argument("--seed", type=int, default=0, help="seed of the state disturbances of the MPC loop")
+    parser.add_argument("--horizon-end", choices=("rollout", "repeat"), default="rollout",
+                        help="warm-start fill of the Bolt MPC's horizon end (the closed loop's: rollout; G1: repeat)")
     parser.add_argument("--time-budget", type=float, default=None, metavar="S",
                         help="also time our MPC with this budget per tick [s], e.g. 0.009 (real-time deadline)")
 
@@ -63,7 +65,7 @@ def _schedule(t0: float, dt: float, n_nodes: int, step_duration: float, foot_y=(
 
 
 def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot_y, ticks: int, seed: int,
-              speed: float = 0.3, time_budget: float | None = None) -> dict:
+              speed: float = 0.3, time_budget: float | None = None, horizon_end: str = "repeat") -> dict:
     """Run both MPCs (and ours with ``time_budget``) on the same measured states; returns tick
     statistics and the control gaps."""
     import crocoddyl
@@ -72,9 +74,11 @@ def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot
     from wbmpc.mpc import WalkingMPC
     from wbmpc.walking import quasi_static_controls
 
-    mpc = WalkingMPC(robot, config, n_nodes=n_nodes, dt=dt, max_iterations=1, cold_start_iterations=20)
+    mpc = WalkingMPC(robot, config, n_nodes=n_nodes, dt=dt, max_iterations=1, cold_start_iterations=20,
+                     horizon_end=horizon_end)
     budgeted = None if time_budget is None else WalkingMPC(robot, config, n_nodes=n_nodes, dt=dt, max_iterations=1,
-                                                          cold_start_iterations=20, time_budget=time_budget)
+                                                          cold_start_iterations=20, horizon_end=horizon_end,
+                                                          time_budget=time_budget)
     budget_times, budget_hits, budget_gap = [], 0, 0.0
     mirror = CrocoddylMirror(mpc.problem)
     twin = crocoddyl.SolverFDDP(mirror.problem)
@@ -201,11 +205,11 @@ def run(args: argparse.Namespace) -> dict:
             raise ValueError(f"--nodes {n}: every horizon must have at least 2 nodes")
     bolt = load_robot("bolt")
     config = WalkingOCPConfig()
-    result = {"robot": "bolt", "dt_s": 0.01, "horizons": {}}
+    result = {"robot": "bolt", "dt_s": 0.01, "horizon_end": args.horizon_end, "horizons": {}}
     for n_nodes in args.nodes:
         entry = _phases(bolt, config, n_nodes, 0.01, args.repeats)
         entry["mpc_tick"] = _mpc_loop(bolt, config, n_nodes, 0.01, 0.3, (0.1, -0.1), args.ticks, args.seed,
-                                      time_budget=args.time_budget)
+                                      time_budget=args.time_budget, horizon_end=args.horizon_end)
         result["horizons"][str(n_nodes)] = entry
     if args.g1_nodes:
         g1 = load_robot("g1")
@@ -220,7 +224,7 @@ def format_report(result: dict) -> str:
     lines = ["wbmpc FDDP vs Crocoddyl (single thread, same problem, same run); ratio = ours / Crocoddyl"]
     for n, entry in result["horizons"].items():
         cold = entry["cold_solve"]
-        lines.append(f"\nBolt N={n} (dt {result['dt_s'] * 1e3:.0f} ms)")
+        lines.append(f"\nBolt N={n} (dt {result['dt_s'] * 1e3:.0f} ms, MPC horizon end: {result['horizon_end']})")
         lines.append(f"  cold solve      ours {cold['ours_s'] * 1e3:9.1f} ms ({cold['ours_iterations']} it)   "
                      f"crocoddyl {cold['crocoddyl_s'] * 1e3:8.1f} ms ({cold['crocoddyl_iterations']} it)   "
                      f"ratio {cold['ratio']:5.2f}")

@@ -103,7 +103,8 @@ def test_receding_horizon_applies_the_same_controls(bolt):
     """100 MPC ticks (1 iteration each, warm-started by shifting) give Crocoddyl's controls (the
     twin starts from our warm start: the shifted plan with the horizon end rolled out)."""
     n_nodes, dt = 50, 0.01
-    mpc = WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=n_nodes, dt=dt, max_iterations=1, cold_start_iterations=10)
+    mpc = WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=n_nodes, dt=dt, max_iterations=1, cold_start_iterations=10,
+                     horizon_end="rollout")
     mirror = CrocoddylMirror(mpc.problem)
     twin = crocoddyl.SolverFDDP(mirror.problem)
     x = standing_state(bolt)

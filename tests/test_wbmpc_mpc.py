@@ -91,7 +91,8 @@ def test_warm_start_extends_the_horizon_end_without_a_gap(bolt):
     its successor state is the node's dynamics: no gap at the end, also when the contact set of
     the new node differs from its predecessor's (a step starts at the end of the horizon)."""
     n = 40
-    mpc = WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=n, dt=DT, max_iterations=1, cold_start_iterations=10)
+    mpc = WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=n, dt=DT, max_iterations=1, cold_start_iterations=10,
+                     horizon_end="rollout")
     com_ref = np.array([0.3, 0.0, 0.3])
     solution = mpc.update(0.18, standing_state(bolt), alternating_schedule(0.18, DT, n), com_ref)
     switches = 0
@@ -146,8 +147,9 @@ def test_constructor_rejects_bad_parameters(bolt):
 
 
 def test_repeat_horizon_end_is_the_plain_shift(bolt, walking):
-    """horizon_end="repeat": the last node's state and control repeated (the usual shift)."""
+    """horizon_end="repeat" (the default): the last node's state and control repeated (the usual shift)."""
     mpc, ticks = walking
+    assert mpc.horizon_end == "repeat"
     plain = WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=N_NODES, dt=DT, horizon_end="repeat")
     plain.last_good = ticks[-1]
     xs, us, _ = plain.warm_start(4 * DT, ticks[-1].xs[1])

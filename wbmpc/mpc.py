@@ -90,10 +90,13 @@ class WalkingMPC:
         max_iterations: FDDP iterations per update (the paper runs 1).
         cold_start_iterations: iterations of the first update (no warm start yet).
         horizon_end: how the warm start fills the node(s) entering at the end of the shifted
-            horizon: "rollout" (default; the control of the latest node with the same contact set,
-            the state rolled out through the node's dynamics: no gap, see
-            :meth:`_extend_horizon_end`) or "repeat" (the last state and control repeated, the
-            usual shift; leaves a gap at the end).
+            horizon: "repeat" (default: the last state and control repeated, the usual shift;
+            leaves a gap at the end) or "rollout" (the control of the latest node with the same
+            contact set, the state rolled out through the node's dynamics: no gap, see
+            :meth:`_extend_horizon_end`). "rollout" is what lets Bolt's closed loop run one
+            iteration per update (its controller's default); it needs a plan whose end is
+            stable: on the G1 benchmark problem, whose cold start ends on a diverging tail, each
+            rolled-out node extended the divergence and the MPC failed after 13 ticks.
         time_budget: wall time [s] an update may take, counted from its call (a real-time tick's
             deadline, e.g. 0.009 for a 100 Hz loop with 1 ms to spare), or None (no limit). The
             solver starts no iteration or line-search trial that would end after it (see
@@ -102,7 +105,7 @@ class WalkingMPC:
     """
 
     def __init__(self, robot, config: WalkingOCPConfig | None = None, n_nodes: int = 100, dt: float = 0.01,
-                 max_iterations: int = 1, cold_start_iterations: int = 20, horizon_end: str = "rollout",
+                 max_iterations: int = 1, cold_start_iterations: int = 20, horizon_end: str = "repeat",
                  time_budget: float | None = None):
         if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or max_iterations < 1:
             raise ParameterError(f"max_iterations={max_iterations!r} must be an integer >= 1")
