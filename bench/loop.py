@@ -21,7 +21,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--scenario", default="walk", help="scenario to run (default: walk)")
     parser.add_argument(
-        "--max-iterations", type=int, default=None, help="FDDP iterations per MPC update (default: the controller's, 3)"
+        "--max-iterations", type=int, default=None, help="FDDP iterations per MPC update (default: the controller's, 1)"
     )
 
 
@@ -48,6 +48,7 @@ def _bare_step_time(n_steps: int = 3000) -> float:
 
 
 def run(args: argparse.Namespace) -> dict:
+    from sim.controller import WalkingControllerConfig
     from sim.runner import run_scenario
 
     bare = _bare_step_time()
@@ -68,7 +69,8 @@ def run(args: argparse.Namespace) -> dict:
     n_ticks = len(log.ticks["t"])
     return {
         "scenario": args.scenario,
-        "max_iterations": args.max_iterations or log.params["controller_options"].get("max_iterations", 3),
+        "max_iterations": args.max_iterations or log.params["controller_options"].get(
+            "max_iterations", WalkingControllerConfig().max_iterations),
         "status": log.status,
         "simulated_time": simulated,
         "wall_time": total,
