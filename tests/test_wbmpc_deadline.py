@@ -95,7 +95,7 @@ def test_mpc_time_budget_cuts_the_update_short_and_reports_it(bolt):
     assert np.all(np.isfinite(second.K)) and np.all(np.isfinite(second.us))
 
 
-@pytest.mark.parametrize("budget", [0.0, -0.01, float("inf"), "9 ms"])
+@pytest.mark.parametrize("budget", [0.0, -0.01, float("inf"), "9 ms", True])
 def test_time_budget_is_checked(bolt, budget):
     with pytest.raises(ParameterError, match="time_budget="):
         WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=N_NODES, dt=DT, time_budget=budget)

@@ -113,7 +113,8 @@ class WalkingMPC:
             raise ParameterError(f"cold_start_iterations={cold_start_iterations!r} must be an integer >= 1")
         if horizon_end not in HORIZON_ENDS:
             raise ParameterError(f"horizon_end={horizon_end!r} must be one of {HORIZON_ENDS}")
-        if time_budget is not None and not (isinstance(time_budget, (int, float)) and 0 < time_budget < 1e3):
+        if time_budget is not None and (isinstance(time_budget, bool) or not isinstance(time_budget, (int, float))
+                                        or not 0 < time_budget < 1e3):
             raise ParameterError(f"time_budget={time_budget!r} must be None or a number of seconds in (0, 1000)")
         self.config = WalkingOCPConfig() if config is None else config
         self.ocp = WalkingOCP(robot, self.config, n_nodes, dt)
@@ -172,11 +173,11 @@ class WalkingMPC:
         N = self.n_nodes
         for j in range(N - nodes, N):
             same = next((i for i in range(j - 1, -1, -1) if keys[i] == keys[j]), None)
-            if same is not None:
-                us[j] = us[same]
-            models[j].calc(datas[j], xs[j], us[j])
+            u = us[same] if same is not None else us[j]
+            models[j].calc(datas[j], xs[j], u)
             if not np.all(np.isfinite(datas[j].xnext)):
                 return
+            us[j] = u
             xs[j + 1] = datas[j].xnext
 
     def update(self, t: float, x_measured: np.ndarray, schedule, com_terminal_reference: np.ndarray) -> MPCSolution:
