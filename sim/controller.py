@@ -97,7 +97,8 @@ class WalkingControllerConfig:
         max_iterations: FDDP iterations per MPC update, paper and default: 1. Until the warm start
             filled the end of the horizon by a rollout (``mpc_horizon_end``), one iteration fell
             (after 2.1 s on terrain, 10.5 s in the transition) and the closed loop ran 3, 2.5x
-            slower (docs/closed_loop.md).
+            slower (docs/closed_loop.md). Three recover more pushes (push map 27.1 % against
+            21.4 %, docs/campaigns.md).
         mpc_horizon_end: how the MPC's warm start fills the node entering at the end of the
             horizon: "rollout" (default) or "repeat" (see ``wbmpc.WalkingMPC``). With "repeat",
             1 iteration per update falls (see ``max_iterations``).
