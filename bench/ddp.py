@@ -109,7 +109,7 @@ def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot
             us0 = [quasi_static_controls(mpc.ocp, x)] * n_nodes
             mirror.problem.x0 = x
             twin.solve(xs0, us0, 20)
-        else:  # the same guess as ours: the shifted plan, the horizon end rolled out
+        else:  # the same guess as ours: the shifted plan, its end filled as horizon_end says
             mirror.problem.x0 = x
             twin.solve(list(guess_xs), list(guess_us), 1)
         theirs = time.perf_counter() - tic
