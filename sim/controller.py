@@ -371,9 +371,15 @@ class WalkingController:
         self._stance_slide = max(self._stance_slide, slide)
         return slide
 
-    def _update_stance_slide(self, switched: bool, feet_world: np.ndarray, foot_in_contact: np.ndarray) -> float:
+    def _update_stance_slide(self, switched: bool, slide: float, feet_world: np.ndarray,
+                             foot_in_contact: np.ndarray) -> float:
         """Track how far the stance foot has slid from its touchdown point; past
         ``stance_slide_follow`` the sequencer plans from where the foot is.
+
+        Args:
+            switched: the stance switched at this replan.
+            slide: :meth:`_measure_stance_slide` before the switch [m] (the stance foot's slide
+                when there was no switch; re-measured for the new stance foot after one).
 
         Returns:
             at a stance switch, the largest slide [m] of the stance that just ended; otherwise 0.
@@ -383,7 +389,7 @@ class WalkingController:
             ended = self._stance_slide
             self._stance_slide = 0.0
             self._stance_plan_position = self.stance.state.position.copy()
-        slide = self._measure_stance_slide(feet_world)
+            slide = self._measure_stance_slide(feet_world)
         index = self.feet.index(self.stance.state.foot)
         tolerance = self.config.stance_slide_follow
         if tolerance is not None and slide > tolerance and foot_in_contact[index]:
@@ -457,7 +463,7 @@ class WalkingController:
 
         # Stance switch from the previous plan (touchdown time reached, or early contact).
         first = self.plan.steps[0] if self.plan is not None and len(self.plan.steps) else None
-        self._measure_stance_slide(feet_world)
+        slide = self._measure_stance_slide(feet_world)
         switched = self.stance.update(
             t,
             None if first is None else first.foot,
@@ -466,7 +472,7 @@ class WalkingController:
             feet_world,
             measurement.foot_in_contact,
         )
-        ended_slide = self._update_stance_slide(switched, feet_world, measurement.foot_in_contact)
+        ended_slide = self._update_stance_slide(switched, slide, feet_world, measurement.foot_in_contact)
         self._update_lipm_corrections(t, dcm, switched, self.plan, ended_slide)
         if switched and self._params_switch is not None and t >= self._params_switch[0] - 1e-9:
             self._switch_sequencer_params(self._params_switch[1])

@@ -215,8 +215,8 @@ def test_the_sequencer_plans_from_a_sliding_stance_foot(controller_with_known_re
 
     def at(offset, in_contact=contact, switched=False):
         feet[0, :2] = touchdown + offset
-        controller._measure_stance_slide(feet)
-        return controller._update_stance_slide(switched, feet, in_contact)
+        slide = controller._measure_stance_slide(feet)
+        return controller._update_stance_slide(switched, slide, feet, in_contact)
 
     at([0.005, 0.01])  # rolling: the touchdown point is kept
     np.testing.assert_array_equal(controller._stance_plan_position, touchdown)
@@ -228,7 +228,7 @@ def test_the_sequencer_plans_from_a_sliding_stance_foot(controller_with_known_re
     # at the next touchdown: the largest slide of the stance that ended, then a fresh stance
     controller.stance.state = dataclasses.replace(controller.stance.state, foot="right", position=np.array([0.2, -0.1]))
     feet[1, :2] = [0.2, -0.1]
-    ended = controller._update_stance_slide(True, feet, np.array([True, True]))
+    ended = controller._update_stance_slide(True, controller._measure_stance_slide(feet), feet, np.array([True, True]))
     assert ended == pytest.approx(np.hypot(0.01, 0.08))
     np.testing.assert_array_equal(controller._stance_plan_position, [0.2, -0.1])
     assert controller._stance_slide == 0.0
