@@ -151,6 +151,16 @@ class BatchedShootingProblem(ShootingProblem):
         self._scratch_r = np.zeros(nr)
         self._difference_ok = np.ones(N, dtype=np.bool_)
         self._no_gaps = np.zeros((N + 1, ndx))
+        # dynamics prepared ahead for the next calcDiff (see prepare_dynamics)
+        self._prepared = np.zeros(N, dtype=np.bool_)
+        self._prepared_x = np.zeros((N, nx))
+        self._prepared_u = np.zeros((N, nu))
+        self._prepared_key: list = [None] * N
+        self._prepared_xnext = np.zeros((N, nx))
+        self._prepared_euler_dx = np.zeros((N, ndx))
+        self._prepared_da_dx = np.zeros((N, nv, ndx))
+        self._prepared_da_du = np.zeros((N, nv, nu))
+        self.prepared_used = 0  # nodes the last calcDiff took from the preparation
         self.sync()
 
     # ----------------------------------------------------------------- configuration
@@ -247,6 +257,96 @@ class BatchedShootingProblem(ShootingProblem):
             entry = self._contact_sets[key] = (pdata, constraint_datas, dam.proximal_settings)
         return (dam.active_constraints if dam.nc else None, *entry)
 
+    # ----------------------------------------------------------------- preparation
+    def prepare_dynamics(self, xs: np.ndarray, us: np.ndarray, keys: list) -> int:
+        """Compute ahead the part of the next :meth:`calcDiff` that is known before it is called.
+
+        In a receding-horizon loop most of the next guess is the current solution shifted by one
+        node: only node 0 waits for the measured state. This computes, for each node k with
+        ``keys[k]`` not None, the contact dynamics of the contact set ``keys[k]`` at (xs[k], us[k])
+        and their derivatives (Pinocchio's ``constraintDynamics`` and
+        ``computeConstraintDynamicsDerivatives``, ~20 µs per Bolt node, two thirds of calcDiff).
+        The next :meth:`calcDiff` (or :meth:`calc_and_diff`) takes them for every node whose
+        state, control and contact set are then exactly these (bit-identical results) and computes
+        the others, then the preparation is spent. Contact sets with a moving Baumgarte position
+        reference (Kp > 0) are not prepared (their constraint depends on the update).
+
+        Args:
+            xs: (N, nx) states of the running nodes of the next evaluation (row 0 may be anything
+                when keys[0] is None).
+            us: (N, nu) their controls [N·m].
+            keys: N contact-set keys (``active_key`` of the node's dynamics, a set present in the
+                current horizon) or None (not prepared).
+
+        Returns:
+            The number of nodes prepared.
+        """
+        N, nq, nv = self.T, self.state.nq, self.state.nv
+        xs, us = np.asarray(xs, dtype=float), np.asarray(us, dtype=float)
+        if xs.shape != (N, self.nx) or us.shape != (N, self.nu) or len(keys) != N:
+            raise ParameterError(f"prepare_dynamics: xs {xs.shape}, us {us.shape}, {len(keys)} keys; expected "
+                                 f"({N}, {self.nx}), ({N}, {self.nu}), {N}")
+        entries = {}
+        for k, model in enumerate(self.running_models):
+            if not model.differential._moving_references:
+                entries.setdefault(self._node_contact_keys[k], self._node_dynamics[k])
+        self._prepared[:] = False
+        model, tau = self._pin_model, self._tau
+        constraint_dynamics, derivatives = pin.constraintDynamics, pin.computeConstraintDynamicsDerivatives
+        count = 0
+        for k in range(N):
+            entry = None if keys[k] is None else entries.get(keys[k])
+            if entry is None:
+                continue
+            constraints, pdata, constraint_datas, settings = entry
+            x, u = xs[k], us[k]
+            q, v = x[:nq], x[nq:]
+            tau[6:] = u
+            if constraints is None:
+                a = pin.aba(model, pdata, q, v, tau)
+                free_flyer_euler_step(x, a, self._dt[k], self._prepared_euler_dx[k], self._prepared_xnext[k])
+                da_dq, da_dv, da_dtau = pin.computeABADerivatives(model, pdata, q, v, tau)
+            else:
+                a = constraint_dynamics(model, pdata, q, v, tau, constraints, constraint_datas, settings)
+                free_flyer_euler_step(x, a, self._dt[k], self._prepared_euler_dx[k], self._prepared_xnext[k])
+                da_dq, da_dv, da_dtau = derivatives(model, pdata, constraints, constraint_datas, settings)[:3]
+            da_dx = self._prepared_da_dx[k]
+            da_dx[:, :nv] = da_dq
+            da_dx[:, nv:] = da_dv
+            self._prepared_da_du[k] = da_dtau[:, 6:]
+            self._prepared_x[k] = x
+            self._prepared_u[k] = u
+            self._prepared_key[k] = keys[k]
+            self._prepared[k] = True
+            count += 1
+        return count
+
+    def _take_prepared(self, xs: np.ndarray, us: np.ndarray) -> np.ndarray | None:
+        """Copy the prepared dynamics of the nodes they match (state, control, contact set) into
+        the evaluation buffers and spend the preparation; returns the mask of those nodes, or None."""
+        self.prepared_used = 0
+        if not self._prepared.any():
+            return None
+        N = self.T
+        match = self._prepared & np.all(xs[:N] == self._prepared_x, axis=1) & np.all(us == self._prepared_u, axis=1)
+        keys, prepared_keys = self._node_contact_keys, self._prepared_key
+        for k in np.flatnonzero(match):
+            if prepared_keys[k] != keys[k] or self.running_models[k].differential._moving_references:
+                match[k] = False
+        self._prepared[:] = False
+        nodes = np.flatnonzero(match)
+        self.prepared_used = int(nodes.size)
+        self.xnext[nodes] = self._prepared_xnext[nodes]
+        self._euler_dx[nodes] = self._prepared_euler_dx[nodes]
+        self._da_dx[nodes] = self._prepared_da_dx[nodes]
+        self._da_du[nodes] = self._prepared_da_du[nodes]
+        return match
+
+    @property
+    def prepared_nodes(self) -> int:
+        """Nodes currently prepared for the next calcDiff (see :meth:`prepare_dynamics`)."""
+        return int(np.count_nonzero(self._prepared))
+
     # ----------------------------------------------------------------- evaluation
     def _node_dynamics_calc(self, k: int, x: np.ndarray, u: np.ndarray, derivatives: bool) -> None:
         """Accelerations of node k by contact-constrained dynamics (and their derivatives when
@@ -323,14 +423,18 @@ class BatchedShootingProblem(ShootingProblem):
         return self.cost
 
     def calcDiff(self, xs, us) -> float:
-        """Derivatives of every node (values too: calc is not needed first); returns the total cost."""
+        """Derivatives of every node (values too: calc is not needed first); returns the total
+        cost. Nodes prepared by :meth:`prepare_dynamics` at these (x, u, contact set) take the
+        prepared dynamics."""
         xs, us = np.asarray(xs, dtype=float), np.asarray(us, dtype=float)
         model, nq, nv = self._pin_model, self.state.nq, self.state.nv
         constraint_dynamics, derivatives = pin.constraintDynamics, pin.computeConstraintDynamicsDerivatives
         dynamics, dts, euler_dx, xnext, da_dx, da_du = (self._node_dynamics, self._dt, self._euler_dx, self.xnext,
                                                          self._da_dx, self._da_du)
         tau = self._tau
-        for k in range(self.T):
+        prepared = self._take_prepared(xs, us)
+        nodes = range(self.T) if prepared is None else np.flatnonzero(~prepared).tolist()
+        for k in nodes:
             x = xs[k]
             constraints, pdata, constraint_datas, settings = dynamics[k]
             if constraints is None:  # no contact: ABA and its derivatives

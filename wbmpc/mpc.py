@@ -180,6 +180,36 @@ class WalkingMPC:
             us[j] = u
             xs[j + 1] = datas[j].xnext
 
+    def prepare(self) -> int:
+        """Between two updates: compute ahead what the next update's FDDP iteration needs and can
+        know before the measurement, the contact dynamics and their derivatives at nodes 1..N−1
+        of the guess it will make (the last good solution shifted by one node, the contact sets
+        shifted with it). The next :meth:`update` takes them where its guess and contact sets
+        match exactly (the same torques to the last bit, tested) and computes the rest: node 0
+        (the measured state), re-timed contact switches, the entering node, or everything when
+        the next update comes later than one node or after a failure.
+
+        This moves about two thirds of the derivative work (~2 ms of a ~6 ms Bolt update,
+        N = 100) out of the time between measurement and torque; the total work per cycle is
+        unchanged. Call it after handing the solution over and before the next measurement.
+
+        Returns:
+            Nodes prepared (0 before the first good update, or when the problem is not batched).
+        """
+        last = self.last_good
+        prepare = getattr(self.problem, "prepare_dynamics", None)
+        if last is None or prepare is None:
+            return 0
+        N = self.n_nodes
+        keys = self._contact_keys()
+        xs = np.empty((N, self.ocp.state.nx))
+        us = np.empty((N, self.ocp.nu))
+        xs[0], us[0] = last.xs[0], last.us[0]  # node 0 will be the measurement: not prepared
+        xs[1:] = last.xs[2:]
+        us[1:N - 1] = last.us[2:]
+        us[N - 1] = last.us[N - 1]  # the entering node as "repeat" fills it (a mismatch is recomputed)
+        return prepare(xs, us, [None] + keys[2:] + [keys[N - 1]])
+
     def update(self, t: float, x_measured: np.ndarray, schedule, com_terminal_reference: np.ndarray) -> MPCSolution:
         """Re-solve from the measured state; never raises (failures come back with ok=False)."""
         tic = time.perf_counter()
