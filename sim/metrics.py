@@ -153,6 +153,14 @@ def compute_metrics(log) -> dict[str, Any]:
         if len(tick_time):
             metrics["mpc_tick_time_median"] = float(np.median(tick_time))
             metrics["mpc_tick_time_p99"] = float(np.percentile(tick_time, 99))
+        if "mpc_prepare_time" in replans:  # work done ahead of the next update (WalkingMPC.prepare)
+            prepare = np.nan_to_num(replans["mpc_prepare_time"], nan=0.0)
+            # cycle of update k: its tick plus the preparation made for it after update k - 1
+            cycle = (replans["mpc_tick_time"][1:] + prepare[:-1])[real[1:]]
+            if len(cycle):
+                metrics["mpc_prepare_time_median"] = float(np.median(prepare[prepare > 0])) if np.any(prepare > 0) else 0.0
+                metrics["mpc_cycle_time_median"] = float(np.median(cycle))
+                metrics["mpc_cycle_time_p99"] = float(np.percentile(cycle, 99))
         metrics["sequencer_failures"] = int(np.sum(replans.get("sequencer_ok", np.ones(1)) < 0.5))
         if "stance_switched" in replans:
             metrics["steps"] = int(np.sum(replans["stance_switched"] > 0.5))

@@ -340,6 +340,7 @@ class _ClosedLoop:
         if timers is not None:
             timing["sequencer"] = timers.sequencer
             timing["mpc"] = timers.mpc
+            timing["mpc_prepare"] = getattr(timers, "mpc_prepare", 0.0)
         timing["simulated_time"] = ticks_done * getattr(self, "dt", 0.0)
         log.timing = timing
         if getattr(self, "robot", None) is not None:

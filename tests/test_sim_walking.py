@@ -49,6 +49,19 @@ def test_injected_mpc_failure_is_survived_and_logged(short_walk):
     assert replans["mpc_ok"][after] == 1.0 and replans["mpc_reference_age"][after] == 0.0
 
 
+def test_prepared_mpc_gives_the_same_closed_loop():
+    """WalkingMPC.prepare (the default) moves derivative work ahead of the measurement and changes
+    nothing else: the same torques to the last bit, through re-timed touchdowns and a failed update."""
+    kwargs = dict(duration=1.2, seed=0, mpc_failure_times=(1.0,), progress=False)
+    plain = run_scenario("walk", mpc_prepare=False, **kwargs)
+    prepared = run_scenario("walk", **kwargs)
+    np.testing.assert_array_equal(plain.ticks["tau"], prepared.ticks["tau"])
+    used = prepared.replans["mpc_prepared_used"][1:]
+    assert np.nanmedian(used) >= 97  # of 99 prepared nodes; re-timed contact switches are recomputed
+    assert "mpc_prepared_used" not in plain.replans or np.nanmax(plain.replans["mpc_prepared_used"]) == 0
+    assert prepared.metrics["mpc_cycle_time_median"] > prepared.metrics["mpc_tick_time_median"]
+
+
 def test_same_seed_same_walking_log():
     kwargs = dict(duration=0.15, seed=3, noise_q=1e-4, noise_v=1e-3, progress=False)
     a = run_scenario("walk", **kwargs)
