@@ -303,7 +303,7 @@ class _ClosedLoop:
                 tic = time.perf_counter()
                 tau_command = np.asarray(self.controller.compute(t, measurement), dtype=float)
                 timing["feedback"] += time.perf_counter() - tic
-                tau = np.clip(tau_command, -self.torque_limit, self.torque_limit)
+                tau = np.minimum(np.maximum(tau_command, -self.torque_limit), self.torque_limit)  # clip, 4x faster
                 ticks["tau_command"][i] = tau_command
                 ticks["tau"][i] = tau
 
