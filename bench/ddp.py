@@ -282,7 +282,7 @@ def _tick_lines(tick: dict) -> list[str]:
     else:
         lines.append(row("ours", o))
     lines.append(row("crocoddyl", c) + "   (update = cycle)")
-    lines.append(row("ratio update", r))
+    lines.append(row("ratio update" if tick.get("prepare") else "ratio", r))
     if tick.get("prepare"):
         lines.append(row("ratio cycle", tick["cycle_ratio"]))
     lines.append(f"    max |u1 ours - u1 crocoddyl| = {tick['max_control_difference_Nm']:.2e} N·m")
