@@ -328,11 +328,10 @@ class BatchedShootingProblem(ShootingProblem):
         if not self._prepared.any():
             return None
         N = self.T
-        match = self._prepared & np.all(xs[:N] == self._prepared_x, axis=1) & np.all(us == self._prepared_u, axis=1)
-        keys, prepared_keys = self._node_contact_keys, self._prepared_key
-        for k in np.flatnonzero(match):
-            if prepared_keys[k] != keys[k] or self.running_models[k].differential._moving_references:
-                match[k] = False
+        # the same contact set (prepare_dynamics never prepares one with a moving reference)
+        same_set = np.array([a == b for a, b in zip(self._prepared_key, self._node_contact_keys)], dtype=np.bool_)
+        match = (self._prepared & same_set & np.all(xs[:N] == self._prepared_x, axis=1)
+                 & np.all(us == self._prepared_u, axis=1))
         self._prepared[:] = False
         nodes = np.flatnonzero(match)
         self.prepared_used = int(nodes.size)
