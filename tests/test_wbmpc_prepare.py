@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 
@@ -64,6 +66,23 @@ def test_prepared_updates_equal_plain_ones(bolt, horizon_end):
     assert used[4] <= (horizon_end == "repeat")
     assert used[6] <= (horizon_end == "repeat")
     assert used[7] >= N_NODES - 2
+
+
+def test_a_prepare_deadline_prepares_fewer_nodes_and_the_update_computes_the_rest(bolt):
+    plain, prepared = _pair(bolt, "rollout")
+    x = standing_state(bolt)
+    for i, t in enumerate((0.0, 0.01, 0.02)):
+        schedule = alternating_schedule(t, DT, N_NODES)
+        a = plain.update(t, x, schedule, COM_REF)
+        b = prepared.update(t, x, schedule, COM_REF)
+        _assert_same(a, b)
+        if i == 1:
+            assert prepared.problem.prepared_used == 0  # the deadline had passed: nothing prepared
+        deadline = time.perf_counter() - 1.0 if i == 0 else None
+        assert prepared.prepare(deadline=deadline) == (0 if i == 0 else N_NODES - 1)
+        x = a.xs[1]
+    with pytest.raises(ParameterError, match="deadline=nan must be a finite"):
+        prepared.prepare(deadline=float("nan"))
 
 
 def test_prepare_dynamics_rejects_bad_shapes(bolt):

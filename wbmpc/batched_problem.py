@@ -34,6 +34,8 @@ node datas' other buffers (accelerations, forces, residuals) are not filled.
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pinocchio as pin
 from numba import njit
@@ -258,7 +260,7 @@ class BatchedShootingProblem(ShootingProblem):
         return (dam.active_constraints if dam.nc else None, *entry)
 
     # ----------------------------------------------------------------- preparation
-    def prepare_dynamics(self, xs: np.ndarray, us: np.ndarray, keys: list) -> int:
+    def prepare_dynamics(self, xs: np.ndarray, us: np.ndarray, keys: list, deadline: float | None = None) -> int:
         """Compute ahead the part of the next :meth:`calcDiff` that is known before it is called.
 
         In a receding-horizon loop most of the next guess is the current solution shifted by one
@@ -277,6 +279,8 @@ class BatchedShootingProblem(ShootingProblem):
             us: (N, nu) their controls [N·m].
             keys: N contact-set keys (``active_key`` of the node's dynamics, a set present in the
                 current horizon) or None (not prepared).
+            deadline: ``time.perf_counter()`` value [s] after which no further node is prepared
+                (the nodes left are computed by the next calcDiff), or None.
 
         Returns:
             The number of nodes prepared.
@@ -295,6 +299,8 @@ class BatchedShootingProblem(ShootingProblem):
         constraint_dynamics, derivatives = pin.constraintDynamics, pin.computeConstraintDynamicsDerivatives
         count = 0
         for k in range(N):
+            if deadline is not None and time.perf_counter() >= deadline:
+                break
             entry = None if keys[k] is None else entries.get(keys[k])
             if entry is None:
                 continue

@@ -10,6 +10,7 @@ tangent-space difference (pin.difference on q, plain on v), size ndx = 2 nv.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -180,7 +181,7 @@ class WalkingMPC:
             us[j] = u
             xs[j + 1] = datas[j].xnext
 
-    def prepare(self) -> int:
+    def prepare(self, deadline: float | None = None) -> int:
         """Between two updates: compute ahead what the next update's FDDP iteration needs and can
         know before the measurement, the contact dynamics and their derivatives at nodes 1..N−1
         of the guess it will make (the last good solution shifted by one node, the contact sets
@@ -192,6 +193,12 @@ class WalkingMPC:
         This moves about two thirds of the derivative work (~2 ms of a ~6 ms Bolt update,
         N = 100) out of the time between measurement and torque; the total work per cycle is
         unchanged. Call it after handing the solution over and before the next measurement.
+
+        Args:
+            deadline: ``time.perf_counter()`` value [s] at which to stop preparing (e.g. shortly
+                before the next measurement is due), or None. Preparing fewer nodes is always
+                valid: the next update computes the rest, so a real-time loop can give the
+                preparation just the slack of its period.
 
         Returns:
             Nodes prepared (0 before the first good update, or when the problem is not batched).
@@ -208,7 +215,9 @@ class WalkingMPC:
         xs[1:] = last.xs[2:]
         us[1:N - 1] = last.us[2:]
         us[N - 1] = last.us[N - 1]  # the entering node as "repeat" fills it (a mismatch is recomputed)
-        return prepare(xs, us, [None] + keys[2:] + [keys[N - 1]])
+        if deadline is not None and not math.isfinite(deadline):
+            raise ParameterError(f"deadline={deadline} must be a finite time.perf_counter() value or None")
+        return prepare(xs, us, [None] + keys[2:] + [keys[N - 1]], deadline=deadline)
 
     def update(self, t: float, x_measured: np.ndarray, schedule, com_terminal_reference: np.ndarray) -> MPCSolution:
         """Re-solve from the measured state; never raises (failures come back with ok=False)."""
