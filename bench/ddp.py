@@ -289,7 +289,6 @@ def _tick_lines(tick: dict) -> list[str]:
     if "budgeted" in tick:
         b = tick["budgeted"]
         lines.append(row(f"ours, {b['time_budget_s'] * 1e3:.1f} ms budget", b) + "   "
-                     
                      f"({b['deadline_ticks']} of {b['n']} ticks cut short; max |u1 - u1 unbudgeted| = "
                      f"{b['max_control_difference_to_unbudgeted_Nm']:.2e} N·m)")
     return lines

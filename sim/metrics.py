@@ -158,7 +158,8 @@ def compute_metrics(log) -> dict[str, Any]:
             # cycle of update k: its tick plus the preparation made for it after update k - 1
             cycle = (replans["mpc_tick_time"][1:] + prepare[:-1])[real[1:]]
             if len(cycle):
-                metrics["mpc_prepare_time_median"] = float(np.median(prepare[prepare > 0])) if np.any(prepare > 0) else 0.0
+                made = prepare[prepare > 0]
+                metrics["mpc_prepare_time_median"] = float(np.median(made)) if made.size else 0.0
                 metrics["mpc_cycle_time_median"] = float(np.median(cycle))
                 metrics["mpc_cycle_time_p99"] = float(np.percentile(cycle, 99))
         metrics["sequencer_failures"] = int(np.sum(replans.get("sequencer_ok", np.ones(1)) < 0.5))

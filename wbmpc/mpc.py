@@ -203,6 +203,8 @@ class WalkingMPC:
         Returns:
             Nodes prepared (0 before the first good update, or when the problem is not batched).
         """
+        if deadline is not None and not math.isfinite(deadline):
+            raise ParameterError(f"deadline={deadline} must be a finite time.perf_counter() value or None")
         last = self.last_good
         prepare = getattr(self.problem, "prepare_dynamics", None)
         if last is None or prepare is None:
@@ -215,8 +217,6 @@ class WalkingMPC:
         xs[1:] = last.xs[2:]
         us[1:N - 1] = last.us[2:]
         us[N - 1] = last.us[N - 1]  # the entering node as "repeat" fills it (a mismatch is recomputed)
-        if deadline is not None and not math.isfinite(deadline):
-            raise ParameterError(f"deadline={deadline} must be a finite time.perf_counter() value or None")
         return prepare(xs, us, [None] + keys[2:] + [keys[N - 1]], deadline=deadline)
 
     def update(self, t: float, x_measured: np.ndarray, schedule, com_terminal_reference: np.ndarray) -> MPCSolution:
