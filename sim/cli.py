@@ -161,8 +161,10 @@ def format_metrics(summary: dict) -> str:
     row("saturated ticks", m.get("saturated_fraction"), "%", 100.0, ".1f")
     if "mpc_updates" in m:
         lines.append(f"  {'MPC updates / failures':<28} {m['mpc_updates']} / {m['mpc_failures']}")
-        row("MPC tick median", m.get("mpc_tick_time_median"), "ms", 1e3, ".2f")
-        row("MPC tick p99", m.get("mpc_tick_time_p99"), "ms", 1e3, ".2f")
+        row("MPC update median", m.get("mpc_tick_time_median"), "ms", 1e3, ".2f")  # measurement to solution
+        row("MPC update p99", m.get("mpc_tick_time_p99"), "ms", 1e3, ".2f")
+        if "mpc_cycle_time_median" in m:  # with the preparation made ahead (WalkingMPC.prepare)
+            row("MPC cycle median", m["mpc_cycle_time_median"], "ms", 1e3, ".2f")
     if "steps" in m:
         lines.append(f"  {'steps':<28} {m['steps']}")
     row("real-time factor", m.get("real_time_factor"), "x", fmt=".2f")
