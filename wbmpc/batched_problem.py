@@ -285,7 +285,7 @@ class BatchedShootingProblem(ShootingProblem):
         Returns:
             The number of nodes prepared.
         """
-        N, nq, nv = self.T, self.state.nq, self.state.nv
+        N = self.T
         xs, us = np.asarray(xs, dtype=float), np.asarray(us, dtype=float)
         if xs.shape != (N, self.nx) or us.shape != (N, self.nu) or len(keys) != N:
             raise ParameterError(f"prepare_dynamics: xs {xs.shape}, us {us.shape}, {len(keys)} keys; expected "
@@ -295,8 +295,6 @@ class BatchedShootingProblem(ShootingProblem):
             if not model.differential._moving_references:
                 entries.setdefault(self._node_contact_keys[k], self._node_dynamics[k])
         self._prepared[:] = False
-        model, tau = self._pin_model, self._tau
-        constraint_dynamics, derivatives = pin.constraintDynamics, pin.computeConstraintDynamicsDerivatives
         count = 0
         for k in range(N):
             if deadline is not None and time.perf_counter() >= deadline:
@@ -304,24 +302,11 @@ class BatchedShootingProblem(ShootingProblem):
             entry = None if keys[k] is None else entries.get(keys[k])
             if entry is None:
                 continue
-            constraints, pdata, constraint_datas, settings = entry
-            x, u = xs[k], us[k]
-            q, v = x[:nq], x[nq:]
-            tau[6:] = u
-            if constraints is None:
-                a = pin.aba(model, pdata, q, v, tau)
-                free_flyer_euler_step(x, a, self._dt[k], self._prepared_euler_dx[k], self._prepared_xnext[k])
-                da_dq, da_dv, da_dtau = pin.computeABADerivatives(model, pdata, q, v, tau)
-            else:
-                a = constraint_dynamics(model, pdata, q, v, tau, constraints, constraint_datas, settings)
-                free_flyer_euler_step(x, a, self._dt[k], self._prepared_euler_dx[k], self._prepared_xnext[k])
-                da_dq, da_dv, da_dtau = derivatives(model, pdata, constraints, constraint_datas, settings)[:3]
-            da_dx = self._prepared_da_dx[k]
-            da_dx[:, :nv] = da_dq
-            da_dx[:, nv:] = da_dv
-            self._prepared_da_du[k] = da_dtau[:, 6:]
-            self._prepared_x[k] = x
-            self._prepared_u[k] = u
+            self._dynamics_and_derivatives(entry, self._dt[k], xs[k], us[k], self._prepared_xnext[k],
+                                           self._prepared_euler_dx[k], self._prepared_da_dx[k],
+                                           self._prepared_da_du[k])
+            self._prepared_x[k] = xs[k]
+            self._prepared_u[k] = us[k]
             self._prepared_key[k] = keys[k]
             self._prepared[k] = True
             count += 1
@@ -353,11 +338,10 @@ class BatchedShootingProblem(ShootingProblem):
         return int(np.count_nonzero(self._prepared))
 
     # ----------------------------------------------------------------- evaluation
-    def _node_dynamics_calc(self, k: int, x: np.ndarray, u: np.ndarray, derivatives: bool) -> None:
-        """Accelerations of node k by contact-constrained dynamics (and their derivatives when
-        ``derivatives``), then x⁺ by the Euler step. The rollout and :meth:`calcDiff` inline this
-        for speed; it serves the half-turn fallback and documents the per-node work."""
-        model, nq, nv = self._pin_model, self.state.nq, self.state.nv
+    def _node_dynamics_calc(self, k: int, x: np.ndarray, u: np.ndarray) -> None:
+        """Accelerations of node k by contact-constrained dynamics, then x⁺ by the Euler step.
+        The rollout inlines this for speed; it serves the nodes without contact and :meth:`calc`."""
+        model, nq = self._pin_model, self.state.nq
         constraints, pdata, constraint_datas, settings = self._node_dynamics[k]
         q, v = x[:nq], x[nq:]
         tau = self._tau
@@ -367,21 +351,33 @@ class BatchedShootingProblem(ShootingProblem):
         else:
             a = pin.aba(model, pdata, q, v, tau)
         free_flyer_euler_step(x, a, self._dt[k], self._euler_dx[k], self.xnext[k])
-        if derivatives:
-            self._store_derivatives(k, q, v, constraints, pdata, constraint_datas, settings)
 
-    def _store_derivatives(self, k, q, v, constraints, pdata, constraint_datas, settings) -> None:
-        """∂a/∂x (nv, ndx) and ∂a/∂u (nv, nu) of node k, right after its dynamics."""
-        nv = self.state.nv
-        if constraints is not None:
-            da_dq, da_dv, da_dtau = pin.computeConstraintDynamicsDerivatives(
-                self._pin_model, pdata, constraints, constraint_datas, settings)[:3]
+    def _dynamics_and_derivatives(self, entry: tuple, dt: float, x: np.ndarray, u: np.ndarray, xnext: np.ndarray,
+                                  euler_dx: np.ndarray, da_dx: np.ndarray, da_du: np.ndarray) -> None:
+        """The Pinocchio work of one node in :meth:`calcDiff` and :meth:`prepare_dynamics`.
+
+        Contact dynamics of the contact set ``entry`` (an item of ``_node_dynamics``) at the state
+        x (nx,) and joint torques u (nu,) [N·m] (ABA without contact), the Euler step of dt [s]
+        into xnext (nx,) and euler_dx (ndx,), then ∂a/∂x into da_dx (nv, ndx) and ∂a/∂u into
+        da_du (nv, nu).
+        """
+        model, nq, nv = self._pin_model, self.state.nq, self.state.nv
+        constraints, pdata, constraint_datas, settings = entry
+        q, v = x[:nq], x[nq:]
+        tau = self._tau
+        tau[6:] = u
+        if constraints is None:
+            a = pin.aba(model, pdata, q, v, tau)
+            free_flyer_euler_step(x, a, dt, euler_dx, xnext)
+            da_dq, da_dv, da_dtau = pin.computeABADerivatives(model, pdata, q, v, tau)
         else:
-            da_dq, da_dv, da_dtau = pin.computeABADerivatives(self._pin_model, pdata, q, v, self._tau)
-        da_dx = self._da_dx[k]
+            a = pin.constraintDynamics(model, pdata, q, v, tau, constraints, constraint_datas, settings)
+            free_flyer_euler_step(x, a, dt, euler_dx, xnext)
+            da_dq, da_dv, da_dtau = pin.computeConstraintDynamicsDerivatives(
+                model, pdata, constraints, constraint_datas, settings)[:3]
         da_dx[:, :nv] = da_dq
         da_dx[:, nv:] = da_dv
-        self._da_du[k] = da_dtau[:, 6:]
+        da_du[:] = da_dtau[:, 6:]
 
     def _frame_kinematics(self, xs: np.ndarray, jacobians: bool) -> None:
         """Positions (and LOCAL_WORLD_ALIGNED Jacobians) of the frames of the active frame terms."""
@@ -420,7 +416,7 @@ class BatchedShootingProblem(ShootingProblem):
         """Next states (``xnext``) and costs of every node; returns the total cost."""
         xs, us = np.asarray(xs, dtype=float), np.asarray(us, dtype=float)
         for k in range(self.T):
-            self._node_dynamics_calc(k, xs[k], us[k], derivatives=False)
+            self._node_dynamics_calc(k, xs[k], us[k])
         self._frame_kinematics(xs, jacobians=False)
         cost = self._running_cost(xs, us)
         self.terminal_model.calc(self.terminal_data, xs[-1])
@@ -432,27 +428,12 @@ class BatchedShootingProblem(ShootingProblem):
         cost. Nodes prepared by :meth:`prepare_dynamics` at these (x, u, contact set) take the
         prepared dynamics."""
         xs, us = np.asarray(xs, dtype=float), np.asarray(us, dtype=float)
-        model, nq, nv = self._pin_model, self.state.nq, self.state.nv
-        constraint_dynamics, derivatives = pin.constraintDynamics, pin.computeConstraintDynamicsDerivatives
         dynamics, dts, euler_dx, xnext, da_dx, da_du = (self._node_dynamics, self._dt, self._euler_dx, self.xnext,
                                                          self._da_dx, self._da_du)
-        tau = self._tau
         prepared = self._take_prepared(xs, us)
         nodes = range(self.T) if prepared is None else np.flatnonzero(~prepared).tolist()
         for k in nodes:
-            x = xs[k]
-            constraints, pdata, constraint_datas, settings = dynamics[k]
-            if constraints is None:  # no contact: ABA and its derivatives
-                self._node_dynamics_calc(k, x, us[k], derivatives=True)
-                continue
-            tau[6:] = us[k]
-            a = constraint_dynamics(model, pdata, x[:nq], x[nq:], tau, constraints, constraint_datas, settings)
-            free_flyer_euler_step(x, a, dts[k], euler_dx[k], xnext[k])
-            da_dq, da_dv, da_dtau = derivatives(model, pdata, constraints, constraint_datas, settings)[:3]
-            node_da_dx = da_dx[k]
-            node_da_dx[:, :nv] = da_dq
-            node_da_dx[:, nv:] = da_dv
-            da_du[k] = da_dtau[:, 6:]
+            self._dynamics_and_derivatives(dynamics[k], dts[k], xs[k], us[k], xnext[k], euler_dx[k], da_dx[k], da_du[k])
         self._frame_kinematics(xs, jacobians=True)
         self._state_residuals(xs)
         self._state_jacobians(xs)
@@ -488,7 +469,7 @@ class BatchedShootingProblem(ShootingProblem):
                 raise RolloutError(f"control not finite at node {t}")
             constraints, pdata, constraint_datas, settings = dynamics[t]
             if constraints is None:
-                self._node_dynamics_calc(t, x_try, us_try[t], derivatives=False)
+                self._node_dynamics_calc(t, x_try, us_try[t])
             else:
                 a = constraint_dynamics(model, pdata, x_try[:nq], x_try[nq:], tau, constraints, constraint_datas,
                                         settings)
