@@ -91,8 +91,11 @@ class WalkingControllerConfig:
     """Options of the walking controller (defaults: the paper's pipeline).
 
     Attributes:
-        n_nodes: MPC horizon length N (nodes), paper: 100.
-        node_dt: MPC node spacing [s], paper: 0.01 (horizon H_u = 1 s).
+        n_nodes: MPC horizon length N (nodes), 100 (H_u = 1 s, three 0.3 s steps). The paper
+            gives the node spacing (~10 ms) but not N. Shorter horizons walk worse (20 s walk,
+            seed 0: N = 80 speed error 12 mm/s, 70 34 mm/s, 60 falls at 1.7 s, 50 0.15 m/s;
+            100: 4 mm/s; docs/closed_loop.md).
+        node_dt: MPC node spacing [s], paper: ~0.01.
         replan_period: period of the sequencer + MPC update [s], paper: 0.01 (100 Hz).
         max_iterations: FDDP iterations per MPC update, paper and default: 1. Until the warm start
             filled the end of the horizon by a rollout (``mpc_horizon_end``), one iteration fell
