@@ -101,7 +101,8 @@ def _crocoddyl_steps(ocp, mirror, maxiter):
 
 def test_receding_horizon_applies_the_same_controls(bolt):
     """100 MPC ticks (1 iteration each, warm-started by shifting) give Crocoddyl's controls (the
-    twin starts from our warm start: the shifted plan with the horizon end rolled out)."""
+    twin starts from our warm start: the shifted plan with the horizon end rolled out). Ours
+    prepares each next update's derivatives ahead (WalkingMPC.prepare), as the closed loop does."""
     n_nodes, dt = 50, 0.01
     mpc = WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=n_nodes, dt=dt, max_iterations=1, cold_start_iterations=10,
                      horizon_end="rollout")
@@ -110,6 +111,7 @@ def test_receding_horizon_applies_the_same_controls(bolt):
     x = standing_state(bolt)
     rng = np.random.default_rng(5)
     worst = 0.0
+    used = []
     for tick in range(100):
         t = tick * dt
         schedule = alternating_schedule(t, dt, n_nodes)
@@ -119,6 +121,7 @@ def test_receding_horizon_applies_the_same_controls(bolt):
             guess_xs, guess_us, _ = mpc.warm_start(t, x)
         solution = mpc.update(t, x, schedule, com_ref)
         assert solution.ok, solution.status
+        used.append(mpc.problem.prepared_used)
         mirror.update()
         if tick == 0:
             xs0 = [x] * (n_nodes + 1)
@@ -133,7 +136,9 @@ def test_receding_horizon_applies_the_same_controls(bolt):
         # the "plant": the predicted next state with a small disturbance
         x = solution.xs[1].copy()
         x[mpc.ocp.state.nq:] += 0.01 * rng.standard_normal(mpc.ocp.state.nv)
+        mpc.prepare()
     assert worst < 1e-6
+    assert np.median(used[1:]) >= n_nodes - 2  # the prepared derivatives were used
 
 
 @pytest.mark.parametrize("backend", ["pinocchio", "kkt"])
