@@ -85,6 +85,30 @@ def test_a_prepare_deadline_prepares_fewer_nodes_and_the_update_computes_the_res
         prepared.prepare(deadline=float("nan"))
 
 
+def test_several_iterations_and_node_wise_evaluation(bolt):
+    """With 3 iterations per update the preparation serves the first one only (same results);
+    a problem evaluated node by node has nothing to prepare."""
+    make = lambda: WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=N_NODES, dt=DT, max_iterations=3,  # noqa: E731
+                              cold_start_iterations=10)
+    plain, prepared = make(), make()
+    nodes = WalkingMPC(bolt, WalkingOCPConfig(evaluation="nodes"), n_nodes=N_NODES, dt=DT, cold_start_iterations=10)
+    first_iteration_used = []  # prepared nodes taken by each update's first calcDiff
+    prepared.solver.callbacks.append(
+        lambda solver: first_iteration_used.append(solver.problem.prepared_used) if len(solver.log) == 1 else None)
+    x = standing_state(bolt)
+    for t in (0.0, 0.01, 0.02):
+        schedule = alternating_schedule(t, DT, N_NODES)
+        a = plain.update(t, x, schedule, COM_REF)
+        b = prepared.update(t, x, schedule, COM_REF)
+        _assert_same(a, b)
+        assert b.iterations > 1
+        prepared.prepare()
+        assert nodes.update(t, x, schedule, COM_REF).ok and nodes.prepare() == 0
+        x = a.xs[1]
+    assert first_iteration_used[0] == 0 and min(first_iteration_used[1:]) >= N_NODES - 2
+    assert prepared.problem.prepared_used == 0  # later iterations compute every node
+
+
 def test_prepare_dynamics_rejects_bad_shapes(bolt):
     mpc = WalkingMPC(bolt, n_nodes=10, dt=DT)
     nx, nu = mpc.ocp.state.nx, mpc.ocp.nu
