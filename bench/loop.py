@@ -7,7 +7,12 @@ simulated seconds and reports:
 - the share of the wall time spent in MuJoCo stepping, the sequencer, the MPC update, the 1 kHz
   feedback and the runner's own bookkeeping (state conversion, kinematics, logging);
 - as the in-run baseline, the cost of bare ``mj_step`` on the same model measured in the same
-  process, and the loop's cost per tick as a multiple of it (machine-independent ratio).
+  process, and the loop's cost per tick as a multiple of it (machine-independent ratio);
+- with ``--baseline crocoddyl`` (the default when Crocoddyl is installed), the same scenario run
+  with Crocoddyl's FDDP as the MPC solver (:mod:`bench.crocoddyl_loop`): its real-time factor,
+  ours over it, and the largest difference between the two runs' torques. The runs go ours,
+  Crocoddyl, Crocoddyl, ours, and the ratio uses both of each, so that a drift of the shared
+  machine's speed during the benchmark (25 % within minutes was seen) cancels to first order.
 """
 
 from __future__ import annotations
@@ -22,6 +27,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenario", default="walk", help="scenario to run (default: walk)")
     parser.add_argument(
         "--max-iterations", type=int, default=None, help="FDDP iterations per MPC update (default: the controller's, 1)"
+    )
+    parser.add_argument(
+        "--baseline", choices=("crocoddyl", "none"), default="crocoddyl",
+        help="also run the loop with Crocoddyl's FDDP as the MPC solver (default; skipped if Crocoddyl is absent)",
     )
 
 
@@ -69,7 +78,20 @@ def run(args: argparse.Namespace) -> dict:
     }
     shares["other (setup, Python loop)"] = max(0.0, 1.0 - sum(shares.values()))
     n_ticks = len(log.ticks["t"])
+    baseline = None
+    if args.baseline == "crocoddyl":  # runs ours, Crocoddyl, Crocoddyl, ours: a drift of the machine's speed cancels
+        first = _crocoddyl_loop(args, extra, log)
+        baseline = first
+        if "skipped" not in first:
+            second = _crocoddyl_loop(args, extra, log)
+            again = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False, **extra)
+            ours_rtf = (simulated + again.timing["simulated_time"]) / (total + again.timing["total"])
+            theirs_rtf = ((first["simulated_time"] + second["simulated_time"])
+                          / (first["wall_time"] + second["wall_time"]))
+            baseline = {**first, "runs": [first, second], "real_time_factor": theirs_rtf,
+                        "ours_real_time_factor_both_runs": ours_rtf, "ratio": ours_rtf / theirs_rtf}
     return {
+        "baseline": baseline,
         "scenario": args.scenario,
         "max_iterations": args.max_iterations or log.params["controller_options"].get(
             "max_iterations", WalkingControllerConfig().max_iterations),
@@ -86,6 +108,38 @@ def run(args: argparse.Namespace) -> dict:
         "mpc_tick_over_replan_period": (log.metrics.get("mpc_tick_time_median") or 0.0) / 0.01,
         "mpc_cycle_time_median": log.metrics.get("mpc_cycle_time_median"),
         "mpc_cycle_time_p99": log.metrics.get("mpc_cycle_time_p99"),
+    }
+
+
+def _crocoddyl_loop(args: argparse.Namespace, extra: dict, ours) -> dict:
+    """The same run with Crocoddyl's FDDP solving the MPC; its real-time factor without the
+    reference copies into the twin (see :mod:`bench.crocoddyl_loop`)."""
+    try:
+        import crocoddyl  # noqa: F401
+    except ImportError as err:
+        return {"skipped": f"crocoddyl is not installed ({err}); pip install -e .[bench]"}
+    import numpy as np
+
+    from bench.crocoddyl_loop import CrocoddylWalkingController
+    from sim.controller import WalkingControllerConfig
+    from sim.runner import run_scenario
+    from sim.scenarios.base import make_scenario
+
+    command = make_scenario(args.scenario).velocity_command(0.0)
+    controller = CrocoddylWalkingController(WalkingControllerConfig(velocity_command=tuple(command), **extra))
+    log = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False, controller=controller)
+    mirror = controller.mirror_seconds
+    wall = log.timing["total"] - mirror
+    simulated = log.timing.get("simulated_time", 0.0)
+    n = min(len(ours.ticks["tau"]), len(log.ticks["tau"]))
+    return {
+        "status": log.status,
+        "simulated_time": simulated,
+        "wall_time": wall,
+        "mirror_copy_time_excluded": mirror,
+        "real_time_factor": simulated / wall if wall > 0 else None,
+        "mpc_tick_time_median": log.metrics.get("mpc_tick_time_median"),
+        "max_torque_difference_Nm": float(np.max(np.abs(ours.ticks["tau"][:n] - log.ticks["tau"][:n]))) if n else None,
     }
 
 
@@ -108,6 +162,19 @@ def format_report(result: dict) -> str:
         lines.append(
             f"  MPC cycle median / p99  {result['mpc_cycle_time_median'] * 1e3:.2f} / "
             f"{result['mpc_cycle_time_p99'] * 1e3:.2f} ms  (update + the preparation made for it)"
+        )
+    base = result.get("baseline")
+    if base is not None and "skipped" in base:
+        lines.append(f"  Crocoddyl baseline skipped: {base['skipped']}")
+    elif base is not None:
+        lines.append(
+            f"  same loop, Crocoddyl's FDDP as the solver ({base['status']}): real-time factor "
+            f"{base['real_time_factor']:.2f} x; ours {base['ours_real_time_factor_both_runs']:.2f} x -> "
+            f"ours / Crocoddyl {base['ratio']:.2f}   (runs ours, Crocoddyl, Crocoddyl, ours)"
+        )
+        lines.append(
+            f"    (its reference copies into the twin, {base['mirror_copy_time_excluded']:.2f} s, excluded; "
+            f"largest torque difference to ours {base['max_torque_difference_Nm']:.1e} N·m)"
         )
     lines.append("  share of wall time:")
     for name, share in result["shares"].items():

@@ -141,6 +141,21 @@ def test_receding_horizon_applies_the_same_controls(bolt):
     assert np.median(used[1:]) >= n_nodes - 2  # the prepared derivatives were used
 
 
+def test_closed_loop_with_crocoddyl_as_the_solver_applies_the_same_torques():
+    """The whole closed loop (sequencer, MPC, 1 kHz feedback, MuJoCo) with Crocoddyl's FDDP as the
+    MPC solver (bench.crocoddyl_loop, the baseline of `wbmpc bench loop`) applies our torques."""
+    from bench.crocoddyl_loop import CrocoddylWalkingController
+    from sim.controller import WalkingControllerConfig
+    from sim.runner import run_scenario
+
+    ours = run_scenario("walk", duration=0.4, seed=0, progress=False)
+    controller = CrocoddylWalkingController(WalkingControllerConfig(velocity_command=(0.0, 0.0)))
+    theirs = run_scenario("walk", duration=0.4, seed=0, progress=False, controller=controller)
+    assert ours.status == theirs.status == "completed"
+    np.testing.assert_allclose(theirs.ticks["tau"], ours.ticks["tau"], rtol=0, atol=1e-6)
+    assert controller.mirror_seconds > 0.0
+
+
 @pytest.mark.parametrize("backend", ["pinocchio", "kkt"])
 def test_g1_flat_feet_solve_matches_crocoddyl(backend):
     g1 = load_robot("g1")
