@@ -22,3 +22,18 @@ def test_ocp_command_reports_a_walking_plan(capsys, tmp_path):
 def test_ocp_command_rejects_bad_iterations(capsys):
     assert main(["ocp", "--nodes", "10", "--iterations", "0"]) == 2
     assert "iterations=0" in capsys.readouterr().err
+
+
+def test_bench_loop_reports_the_real_time_factor_against_the_crocoddyl_loop(capsys):
+    import pytest
+
+    pytest.importorskip("crocoddyl", reason="the Crocoddyl loop is the baseline (bench extra)")
+    assert main(["bench", "loop", "--duration", "0.3", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["status"] == "completed" and report["real_time_factor"] > 0
+    assert abs(sum(report["shares"].values()) - 1.0) < 1e-9
+    base = report["baseline"]
+    assert [run["status"] for run in base["runs"]] == ["completed", "completed"]
+    assert base["max_torque_difference_Nm"] < 1e-6  # the same closed loop
+    assert base["ratio"] == base["ours_real_time_factor_both_runs"] / base["real_time_factor"]
+    assert base["mirror_copy_time_excluded"] > 0
