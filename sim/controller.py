@@ -200,6 +200,10 @@ class WalkingControllerConfig:
     ocp: Any = None
 
     def __post_init__(self) -> None:
+        for name in ("mpc_prepare", "interpolate", "feedback"):
+            value = getattr(self, name)
+            if not isinstance(value, (bool, np.bool_)):
+                raise ParameterError(f"{name}={value!r} must be True or False")
         if not (isinstance(self.n_nodes, int) and self.n_nodes >= 2):
             raise ParameterError(f"n_nodes={self.n_nodes!r} must be an integer >= 2")
         for name in ("node_dt", "replan_period"):

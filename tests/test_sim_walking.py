@@ -195,6 +195,8 @@ def test_lipm_corrections_are_identified_from_undisturbed_steps_only(controller_
     assert controller.sequencer_params is params
     with pytest.raises(ParameterError, match=r"lipm_correction_gain=1.5 must be in \[0, 1\]"):
         WalkingControllerConfig(lipm_correction_gain=1.5)
+    with pytest.raises(ParameterError, match=r"mpc_prepare='yes' must be True or False"):
+        WalkingControllerConfig(mpc_prepare="yes")
     with pytest.raises(ParameterError, match=r"mpc_horizon_end='last' must be one of \('rollout', 'repeat'\)"):
         WalkingControllerConfig(mpc_horizon_end="last")
 
