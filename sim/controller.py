@@ -108,6 +108,10 @@ class WalkingControllerConfig:
         mpc_prepare: after each update, compute the next update's contact dynamics derivatives
             ahead (``WalkingMPC.prepare``): the same torques, ~2 ms less between measurement and
             torque (the ``mpc_tick_time`` metric), the same work per cycle (``mpc_prepare_time``).
+        mpc_time_budget: wall time [s] an MPC update may take (``WalkingMPC(time_budget=)``: no
+            FDDP iteration or line-search trial starts that would end after it; status
+            "deadline"), or None (default). Set, it makes the run depend on the machine's speed:
+            the same seed no longer gives the same log.
         delay_nodes: 1 applies node 1 of each solution as soon as it is computed (the paper's
             pipeline: its solver needs about one node, 10 ms, so node 1 is "now" when the solution
             arrives); 0 applies node 0.
@@ -179,6 +183,7 @@ class WalkingControllerConfig:
     max_iterations: int = 1
     mpc_horizon_end: str = "rollout"
     mpc_prepare: bool = True
+    mpc_time_budget: float | None = None
     delay_nodes: int = 1
     computation_delay: float = 0.0
     interpolate: bool = False
@@ -210,6 +215,10 @@ class WalkingControllerConfig:
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ParameterError(f"{name}={value} s must be a finite positive number")
+        budget = self.mpc_time_budget
+        if budget is not None and (isinstance(budget, bool) or not isinstance(budget, (int, float))
+                                   or not 0.0 < budget < 1.0):
+            raise ParameterError(f"mpc_time_budget={budget!r} must be None or a number of seconds in (0, 1)")
         if not (np.isfinite(self.computation_delay) and 0.0 <= self.computation_delay <= 0.1):
             raise ParameterError(f"computation_delay={self.computation_delay} s must be in [0, 0.1] s")
         if not (np.isfinite(self.velocity_integral_gain) and self.velocity_integral_gain >= 0):
@@ -316,6 +325,7 @@ class WalkingController:
             dt=cfg.node_dt,
             max_iterations=cfg.max_iterations,
             horizon_end=cfg.mpc_horizon_end,
+            time_budget=cfg.mpc_time_budget,
         )
         self.stance = StanceTracker(self.feet, cfg.touchdown_detection)
         feet_world = self._feet_position(np.asarray(x0)[: self.nq])

@@ -11,7 +11,7 @@ import pytest
 
 from robots import load_robot
 from sim import WalkingController, WalkingControllerConfig, run_scenario
-from sim.controller import _Reference
+from sim.controller import MPC_STATUS_CODES, _Reference
 from sim.measurement import Measurement
 from wbmpc.errors import ParameterError
 
@@ -60,6 +60,17 @@ def test_prepared_mpc_gives_the_same_closed_loop():
     assert np.nanmedian(used) >= 97  # of 99 prepared nodes; re-timed contact switches are recomputed
     assert "mpc_prepared_used" not in plain.replans or np.nanmax(plain.replans["mpc_prepared_used"]) == 0
     assert prepared.metrics["mpc_cycle_time_median"] > prepared.metrics["mpc_tick_time_median"]
+
+
+def test_mpc_time_budget_reaches_the_mpc_and_is_logged():
+    """A budget too short for more than one rollout cuts the line search: status "deadline" (code
+    4) in the log, and the loop goes on."""
+    log = run_scenario("walk", duration=0.3, seed=0, progress=False, mpc_time_budget=1e-6)
+    codes = log.replans["mpc_status_code"][1:]  # the cold start has no budget
+    assert log.status == "completed" and np.all(log.replans["mpc_ok"] == 1.0)
+    assert np.any(codes == MPC_STATUS_CODES["deadline"])
+    with pytest.raises(ParameterError, match=r"mpc_time_budget=0 must be None or a number of seconds"):
+        WalkingControllerConfig(mpc_time_budget=0)
 
 
 def test_same_seed_same_walking_log():
