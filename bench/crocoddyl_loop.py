@@ -65,7 +65,8 @@ class CrocoddylWalkingMPC:
             converged = self.solver.solve(list(xs), list(us), iterations, False)
             solver = self.solver
             solution = MPCSolution(
-                ok=True, status="converged" if converged else "max_iter", iterations=int(solver.iter) + 1,
+                ok=True, status="converged" if converged else "max_iter",
+                iterations=int(solver.iter) + 1 if converged else int(solver.iter),  # Crocoddyl's iter: index or maxiter
                 cost=float(solver.cost), solve_time=time.perf_counter() - tic, t=float(t),
                 xs=np.array(solver.xs), us=np.array(solver.us), K=-np.array(solver.K),  # library sign
             )
