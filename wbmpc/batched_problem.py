@@ -170,16 +170,14 @@ class BatchedShootingProblem(ShootingProblem):
         """Read the node models' contact sets, cost activity, weights and references."""
         nx, nu = self.nx, self.nu
         scale, reference = self._term_scale, self._reference
-        if self._node_terms is None:  # (j, kind, slot, item) per node, in term order
+        if self._node_terms is None:  # (j, kind, item) per node, in term order
             self._node_terms = [
-                [(j, int(self._term_kind[j]), int(self._term_slot[j]), m.differential.costs.costs[name])
+                [(j, int(self._term_kind[j]), m.differential.costs.costs[name])
                  for j, name in enumerate(self._term_names)] for m in self.running_models]
-        needed = self._frame_needed
-        needed[:] = False
         for k, model in enumerate(self.running_models):
             row_scale = scale[k]
             row_reference = reference[k]
-            for j, kind, slot, item in self._node_terms[k]:
+            for j, kind, item in self._node_terms[k]:
                 if not item.active or item.weight == 0.0:
                     row_scale[j] = 0.0
                     continue
@@ -187,16 +185,15 @@ class BatchedShootingProblem(ShootingProblem):
                 residual = item.cost.residual
                 if kind == FRAME_HEIGHT:
                     row_reference[j, 0] = residual.reference
-                    needed[k, slot] = True
                 elif kind == FRAME_TRANSLATION:
                     row_reference[j, :3] = residual.reference
-                    needed[k, slot] = True
                 elif kind == STATE:
                     row_reference[j, :nx] = residual.reference
                 else:
                     row_reference[j, :nu] = residual.reference
             self._node_dynamics[k] = self._dynamics_of(model.differential)
         self._node_contact_keys = [m.differential.active_key for m in self.running_models]
+        self._refresh_frame_needed()
 
     def term_index(self, name: str) -> int:
         """Column of the running cost term ``name`` in the batched arrays."""
@@ -233,6 +230,10 @@ class BatchedShootingProblem(ShootingProblem):
             if reference is not None:
                 d = 1 if kind == FRAME_HEIGHT else 3
                 self._reference[:, j, :d] = np.asarray(reference, dtype=float).reshape(self.T, d)
+        self._refresh_frame_needed()
+
+    def _refresh_frame_needed(self) -> None:
+        """The frames whose kinematics each node needs: those of its active frame terms."""
         needed = self._frame_needed
         needed[:] = False
         for j in range(len(self._term_names)):
@@ -331,11 +332,6 @@ class BatchedShootingProblem(ShootingProblem):
         self._da_dx[nodes] = self._prepared_da_dx[nodes]
         self._da_du[nodes] = self._prepared_da_du[nodes]
         return match
-
-    @property
-    def prepared_nodes(self) -> int:
-        """Nodes currently prepared for the next calcDiff (see :meth:`prepare_dynamics`)."""
-        return int(np.count_nonzero(self._prepared))
 
     # ----------------------------------------------------------------- evaluation
     def _node_dynamics_calc(self, k: int, x: np.ndarray, u: np.ndarray) -> None:
