@@ -1,91 +1,98 @@
 """The closed loop with Crocoddyl's FDDP as the MPC solver (benchmark baseline only).
 
 ``wbmpc bench loop --baseline crocoddyl`` runs the same scenario twice: with the library's MPC
-and with this one. Everything but the solve is shared: the sequencer, the OCP update from the
-schedule and the warm start are the library's (a :class:`~wbmpc.WalkingMPC` inside), and the
-solve runs Crocoddyl 3.2's ``SolverFDDP`` on the problem's twin (:mod:`bench.crocoddyl_mirror`,
-single thread). The references are copied into the twin before each solve; that copy is Python
-glue a C++ user would not have, so it is timed apart (``mirror_seconds``) and taken out of the
+and with this one. Everything but the solve is shared: the controller's :class:`~wbmpc.WalkingMPC`
+keeps its OCP update, warm start and failure handling, and only its solver is replaced by
+Crocoddyl 3.2's ``SolverFDDP`` on the problem's twin (:mod:`bench.crocoddyl_mirror`, single
+thread). The references are copied into the twin before each solve; that copy is Python glue a
+C++ user would not have, so it is timed apart (``mirror_seconds``) and taken out of the
 baseline's wall time. Both loops take the same controls to ~1e-8 N·m per update, so they walk
 the same way and the comparison is the solver's cost in the closed loop.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import Any
 
 import numpy as np
 
-from sim.controller import WalkingController
-from wbmpc.mpc import MPCSolution
+from sim.controller import WalkingController, WalkingControllerConfig
 
 
-class CrocoddylWalkingMPC:
-    """A :class:`~wbmpc.WalkingMPC`'s update with the solve done by Crocoddyl's ``SolverFDDP``.
+class CrocoddylSolver:
+    """Crocoddyl's ``SolverFDDP`` on the twin of a wbmpc problem, with the part of
+    :class:`~wbmpc.solvers.SolverFDDP`'s interface that :class:`~wbmpc.WalkingMPC` uses.
 
     Args:
-        mpc: the library's MPC whose OCP, warm start and options are used (its solver is not).
+        problem: the wbmpc shooting problem (its twin is refreshed from it at every solve).
+        like: the wbmpc solver whose options (th_stop, reg_min, reg_max) are copied.
 
     Attributes:
         mirror_seconds: wall time spent copying references into the Crocoddyl twin [s].
     """
 
-    def __init__(self, mpc: Any):
+    def __init__(self, problem: Any, like: Any):
         import crocoddyl
 
         from bench.crocoddyl_mirror import CrocoddylMirror
 
-        self.inner = mpc
-        self.problem = mpc.problem
-        self.mirror = CrocoddylMirror(mpc.problem)
+        self.mirror = CrocoddylMirror(problem)
         self.solver = crocoddyl.SolverFDDP(self.mirror.problem)
-        self.solver.th_stop = mpc.solver.th_stop
-        self.solver.reg_min = mpc.solver.reg_min
-        self.solver.reg_max = mpc.solver.reg_max
+        self.solver.th_stop = like.th_stop
+        self.solver.reg_min = like.reg_min
+        self.solver.reg_max = self.reg_max = like.reg_max
+        self.deadline_hit = False  # Crocoddyl has no deadline; the baseline runs without one
+        self.log: list = []
         self.mirror_seconds = 0.0
 
-    def prepare(self, deadline: float | None = None) -> int:
-        """Crocoddyl has no preparation: nothing to do."""
-        return 0
-
-    def update(self, t: float, x_measured: np.ndarray, schedule, com_terminal_reference: np.ndarray) -> MPCSolution:
-        """The library's update (OCP update, warm start) with Crocoddyl's solve; never raises."""
-        mpc = self.inner
+    def solve(self, init_xs, init_us, maxiter: int = 100, is_feasible: bool = False, deadline=None) -> bool:
+        """Refresh the twin (timed apart) and run Crocoddyl's solve; ``deadline`` is ignored."""
         tic = time.perf_counter()
-        try:
-            x = mpc.ocp.state.check_state("x_measured", x_measured)
-            mpc.ocp.update(x, schedule, com_terminal_reference)
-            xs, us, cold = mpc.warm_start(float(t), x)
-            copy = time.perf_counter()
-            self.mirror.update()
-            self.mirror_seconds += time.perf_counter() - copy
-            self.mirror.problem.x0 = x
-            iterations = mpc.cold_start_iterations if cold else mpc.max_iterations
-            converged = self.solver.solve(list(xs), list(us), iterations, False)
-            solver = self.solver
-            solution = MPCSolution(
-                ok=True, status="converged" if converged else "max_iter",
-                iterations=int(solver.iter) + 1 if converged else int(solver.iter),  # Crocoddyl's iter: index or maxiter
-                cost=float(solver.cost), solve_time=time.perf_counter() - tic, t=float(t),
-                xs=np.array(solver.xs), us=np.array(solver.us), K=-np.array(solver.K),  # library sign
-            )
-            if not (np.isfinite(solution.cost) and np.all(np.isfinite(solution.us))):
-                raise FloatingPointError("the solution is not finite")
-            mpc.last_good = solution
-            return solution
-        except Exception as err:  # same contract as WalkingMPC.update
-            return mpc._failed(float(t), x_measured, f"failed: {type(err).__name__}: {err}", tic)
+        self.mirror.update()
+        self.mirror_seconds += time.perf_counter() - tic
+        converged = self.solver.solve(list(init_xs), list(init_us), maxiter, is_feasible)
+        # Crocoddyl's iter: index of the converging iteration, or maxiter
+        self.log = [None] * (self.solver.iter + 1 if converged else self.solver.iter)
+        return converged
+
+    @property
+    def xs(self) -> np.ndarray:
+        return np.array(self.solver.xs)
+
+    @property
+    def us(self) -> np.ndarray:
+        return np.array(self.solver.us)
+
+    @property
+    def K(self) -> np.ndarray:
+        """Feedback gains, library sign (the negative of Crocoddyl's)."""
+        return -np.array(self.solver.K)
+
+    @property
+    def cost(self) -> float:
+        return self.solver.cost
+
+    @property
+    def preg(self) -> float:
+        return self.solver.preg
 
 
 class CrocoddylWalkingController(WalkingController):
-    """The walking controller with :class:`CrocoddylWalkingMPC` as its MPC."""
+    """The walking controller with Crocoddyl's FDDP as its MPC solver (:class:`CrocoddylSolver`).
+    Nothing is prepared between updates (``mpc_prepare`` off): Crocoddyl evaluates everything in
+    its solve."""
+
+    def __init__(self, config: WalkingControllerConfig | None = None) -> None:
+        super().__init__(dataclasses.replace(config or WalkingControllerConfig(), mpc_prepare=False))
 
     def reset(self, robot: Any, x0: np.ndarray, t0: float) -> None:
         super().reset(robot, x0, t0)
-        self.mpc = CrocoddylWalkingMPC(self.mpc)
+        self.mpc.solver = CrocoddylSolver(self.mpc.problem, self.mpc.solver)
 
     @property
     def mirror_seconds(self) -> float:
+        """Wall time spent copying references into the Crocoddyl twin [s] (0 before reset)."""
         mpc = getattr(self, "mpc", None)
-        return getattr(mpc, "mirror_seconds", 0.0)
+        return 0.0 if mpc is None else mpc.solver.mirror_seconds
