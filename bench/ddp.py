@@ -109,34 +109,32 @@ def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot
     gc.collect()
     gc.freeze()
     gap = 0.0
-    previous_xs = previous_us = None
     for tick in range(ticks + 1):
         t = tick * dt
         schedule = _schedule(t, dt, n_nodes, step_duration, foot_y)
         com_ref = com0 + np.array([speed * (t + n_nodes * dt), 0.0, 0.0])
-        if previous_xs is not None:  # the guess our update is about to make, for Crocoddyl (not timed)
+        if tick > 0:  # the guess our update is about to make, for Crocoddyl (not timed)
             mpc.ocp.update(x, schedule, com_ref)
             guess_xs, guess_us, _ = mpc.warm_start(t, x)
         tic = time.perf_counter()
         solution = mpc.update(t, x, schedule, com_ref)
         ours = time.perf_counter() - tic
-        if tick > 0:
+        if tick > 0:  # tick 0 is the cold start; the preparation timed is the one made for this update
+            ours_times.append(ours)
             prepare_times.append(prepared)
         if prepare:
             tic = time.perf_counter()
             mpc.prepare()
             prepared = time.perf_counter() - tic
-        mirror.update()  # copies references into the twin (not timed: a C++ user sets them directly)
+        mirror.update()  # copies references and x0 into the twin (not timed: a C++ user sets them directly)
         tic = time.perf_counter()
-        if previous_xs is None:
-            xs0 = [x] * (n_nodes + 1)
-            us0 = [quasi_static_controls(mpc.ocp, x)] * n_nodes
-            mirror.problem.x0 = x
-            twin.solve(xs0, us0, 20)
+        if tick == 0:
+            twin.solve([x] * (n_nodes + 1), [quasi_static_controls(mpc.ocp, x)] * n_nodes, 20)
         else:  # the same guess as ours: the shifted plan, its end filled as horizon_end says
-            mirror.problem.x0 = x
             twin.solve(list(guess_xs), list(guess_us), 1)
         theirs = time.perf_counter() - tic
+        if tick > 0:
+            theirs_times.append(theirs)
         if budgeted is not None:
             tic = time.perf_counter()
             cut = budgeted.update(t, x, schedule, com_ref)
@@ -148,13 +146,9 @@ def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot
             if prepare:
                 budgeted.prepare()
             budget_gap = max(budget_gap, float(np.max(np.abs(cut.us[1] - solution.us[1]))))
-        previous_xs, previous_us = np.array(twin.xs), np.array(twin.us)
-        if tick > 0:  # tick 0 is the cold start
-            ours_times.append(ours)
-            theirs_times.append(theirs)
         if not solution.ok:
             raise RuntimeError(f"wbmpc MPC failed at tick {tick}: {solution.status}")
-        gap = max(gap, float(np.max(np.abs(solution.us[1] - previous_us[1]))))
+        gap = max(gap, float(np.max(np.abs(solution.us[1] - np.asarray(twin.us[1])))))
         x = solution.xs[1].copy()
         x[nq:] += 0.01 * rng.standard_normal(nv)
     ours_stats, theirs_stats = _stats(ours_times), _stats(theirs_times)
