@@ -56,15 +56,86 @@ def _bare_step_time(n_steps: int = 3000) -> float:
     return float(np.median(batches))
 
 
+def pinocchio_floor(mpc, rollouts_per_update: float, repeats: int = 10) -> dict:
+    """Pinocchio's own share of one MPC update, timed call by call at the MPC's last solution.
+
+    Each update evaluates, at every node, the contact dynamics (``constraintDynamics``; ABA at a
+    flight node) and their derivatives (``computeConstraintDynamicsDerivatives``), and the contact
+    dynamics again in each rollout of the line search. Timing these calls alone (on each node's
+    own contact set and state, ``repeats`` times, best of 3 rounds) gives the time an update needs
+    whatever the code around them: the floor of the MPC's cycle on this machine.
+
+    Returns:
+        dynamics_per_node, derivatives_per_node: mean seconds per call over the nodes;
+        per_update: N (dynamics (1 + rollouts_per_update) + derivatives) [s];
+        per_update_one_rollout: the same with a single rollout (every full step accepted) [s].
+    """
+    import numpy as np
+    import pinocchio as pin
+
+    problem, solution = mpc.problem, mpc.last_good
+    model = problem.state.pinocchio
+    nq, nv = model.nq, model.nv
+    data = model.createData()
+    calls = []
+    for k, running in enumerate(problem.running_models):
+        dam = running.differential
+        q, v = solution.xs[k][:nq].copy(), solution.xs[k][nq:].copy()
+        tau = np.zeros(nv)
+        tau[nv - problem.nu:] = solution.us[k]
+        if dam.nc:
+            constraints, settings = dam.active_constraints, dam.proximal_settings
+            constraint_datas = pin.StdVec_RigidConstraintData()
+            for constraint in constraints:
+                constraint_datas.append(constraint.createData())
+            pin.initConstraintDynamics(model, data, constraints, constraint_datas)
+            calls.append((
+                lambda q=q, v=v, tau=tau, c=constraints, d=constraint_datas, s=settings:
+                    pin.constraintDynamics(model, data, q, v, tau, c, d, s),
+                lambda c=constraints, d=constraint_datas, s=settings:
+                    pin.computeConstraintDynamicsDerivatives(model, data, c, d, s),
+            ))
+        else:
+            calls.append((lambda q=q, v=v, tau=tau: pin.aba(model, data, q, v, tau),
+                          lambda q=q, v=v, tau=tau: pin.computeABADerivatives(model, data, q, v, tau)))
+    dynamics = derivatives = float("inf")
+    for _ in range(3):
+        dyn = both = 0.0
+        for calc, diff in calls:
+            tic = time.perf_counter()
+            for _ in range(repeats):
+                calc()
+            dyn += time.perf_counter() - tic
+            tic = time.perf_counter()
+            for _ in range(repeats):
+                calc()
+                diff()
+            both += time.perf_counter() - tic
+        dynamics, derivatives = min(dynamics, dyn / repeats), min(derivatives, (both - dyn) / repeats)
+    n = len(calls)
+    return {
+        "dynamics_per_node": dynamics / n,
+        "derivatives_per_node": derivatives / n,
+        "rollouts_per_update": rollouts_per_update,
+        "per_update": dynamics * (1.0 + rollouts_per_update) + derivatives,
+        "per_update_one_rollout": 2.0 * dynamics + derivatives,
+    }
+
+
 def run(args: argparse.Namespace) -> dict:
-    from sim.controller import WalkingControllerConfig
+    import numpy as np
+
+    from sim.controller import WalkingController, WalkingControllerConfig
     from sim.runner import run_scenario
+    from sim.scenarios.base import make_scenario
 
     bare = _bare_step_time()
     extra = {} if args.max_iterations is None else {"max_iterations": args.max_iterations}
-    log = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False, **extra)
+    command = make_scenario(args.scenario).velocity_command(0.0)
+    controller = WalkingController(WalkingControllerConfig(velocity_command=tuple(command), **extra))
+    log = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False, controller=controller)
     timing = dict(log.timing)
-    total = timing["total"]
+    total = timing["loop"]  # the ticks; the setup (models, cold first solve) is reported apart
     simulated = timing.get("simulated_time", 0.0)
     prepare = timing.get("mpc_prepare", 0.0)
     replan_other = timing["replan"] - timing.get("sequencer", 0.0) - timing.get("mpc", 0.0) - prepare
@@ -76,8 +147,20 @@ def run(args: argparse.Namespace) -> dict:
         "feedback": timing["feedback"] / total,
         "runner (state conversion, kinematics, logging)": (timing["logging"] + max(replan_other, 0.0)) / total,
     }
-    shares["other (setup, Python loop)"] = max(0.0, 1.0 - sum(shares.values()))
+    shares["other (Python loop)"] = max(0.0, 1.0 - sum(shares.values()))
     n_ticks = len(log.ticks["t"])
+    # What the loop would cost if the MPC were Pinocchio's calls and nothing else.
+    n_updates = len(log.replans.get("t", ()))
+    rollouts = log.replans.get("mpc_rollouts")
+    floor = None
+    if controller.mpc.last_good is not None and rollouts is not None and n_updates:
+        floor = pinocchio_floor(controller.mpc, float(np.nanmean(rollouts[1:])))
+        period = controller.replan_period
+        outside = (total - timing.get("mpc", 0.0) - prepare) / n_updates  # per period: all but the MPC
+        floor["outside_mpc_per_period"] = outside
+        floor["mpc_per_update"] = (timing.get("mpc", 0.0) + prepare) / n_updates
+        floor["best_real_time_factor"] = period / (floor["per_update"] + outside)
+        floor["best_real_time_factor_one_rollout"] = period / (floor["per_update_one_rollout"] + outside)
     baseline = None
     if args.baseline == "crocoddyl":  # runs ours, Crocoddyl, Crocoddyl, ours: a drift of the machine's speed cancels
         first = _crocoddyl_loop(args, extra, log)
@@ -85,7 +168,7 @@ def run(args: argparse.Namespace) -> dict:
         if "skipped" not in first:
             second = _crocoddyl_loop(args, extra, log)
             again = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False, **extra)
-            ours_rtf = (simulated + again.timing["simulated_time"]) / (total + again.timing["total"])
+            ours_rtf = (simulated + again.timing["simulated_time"]) / (total + again.timing["loop"])
             theirs_rtf = ((first["simulated_time"] + second["simulated_time"])
                           / (first["wall_time"] + second["wall_time"]))
             baseline = {**first, "runs": [first, second], "real_time_factor": theirs_rtf,
@@ -98,6 +181,7 @@ def run(args: argparse.Namespace) -> dict:
         "status": log.status,
         "simulated_time": simulated,
         "wall_time": total,
+        "setup_time": timing["setup"],
         "real_time_factor": simulated / total if total > 0 else None,
         "target_real_time_factor": 1.5,
         "shares": shares,
@@ -108,6 +192,7 @@ def run(args: argparse.Namespace) -> dict:
         "mpc_tick_over_replan_period": (log.metrics.get("mpc_tick_time_median") or 0.0) / 0.01,
         "mpc_cycle_time_median": log.metrics.get("mpc_cycle_time_median"),
         "mpc_cycle_time_p99": log.metrics.get("mpc_cycle_time_p99"),
+        "pinocchio_floor": floor,
     }
 
 
@@ -129,7 +214,7 @@ def _crocoddyl_loop(args: argparse.Namespace, extra: dict, ours) -> dict:
     controller = CrocoddylWalkingController(WalkingControllerConfig(velocity_command=tuple(command), **extra))
     log = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False, controller=controller)
     mirror = controller.mirror_seconds
-    wall = log.timing["total"] - mirror
+    wall = log.timing["loop"] - mirror
     simulated = log.timing.get("simulated_time", 0.0)
     n = min(len(ours.ticks["tau"]), len(log.ticks["tau"]))
     return {
@@ -163,6 +248,19 @@ def format_report(result: dict) -> str:
             f"  MPC cycle median / p99  {result['mpc_cycle_time_median'] * 1e3:.2f} / "
             f"{result['mpc_cycle_time_p99'] * 1e3:.2f} ms  (update + the preparation made for it)"
         )
+    floor = result.get("pinocchio_floor")
+    if floor is not None:
+        lines += [
+            f"  Pinocchio alone, per MPC update: {floor['per_update'] * 1e3:.2f} ms "
+            f"(contact dynamics {floor['dynamics_per_node'] * 1e6:.1f} us x (1 + {floor['rollouts_per_update']:.2f} "
+            f"rollouts) + derivatives {floor['derivatives_per_node'] * 1e6:.1f} us, per node); "
+            f"the MPC took {floor['mpc_per_update'] * 1e3:.2f} ms",
+            f"    with all else per period ({floor['outside_mpc_per_period'] * 1e3:.2f} ms): best real-time factor "
+            f"{floor['best_real_time_factor']:.2f} x, {floor['best_real_time_factor_one_rollout']:.2f} x "
+            "if every full step were accepted",
+        ]
+    if result.get("setup_time") is not None:
+        lines.append(f"  setup (models, first cold solve; not in the factor) {result['setup_time']:.2f} s")
     base = result.get("baseline")
     if base is not None and "skipped" in base:
         lines.append(f"  Crocoddyl baseline skipped: {base['skipped']}")

@@ -167,7 +167,8 @@ def format_metrics(summary: dict) -> str:
             row("MPC cycle median", m["mpc_cycle_time_median"], "ms", 1e3, ".2f")
     if "steps" in m:
         lines.append(f"  {'steps':<28} {m['steps']}")
-    row("real-time factor", m.get("real_time_factor"), "x", fmt=".2f")
+    row("real-time factor", m.get("real_time_factor"), "x", fmt=".2f")  # of the loop, setup excluded
+    row("setup (models, cold solve)", m.get("setup_time"), "s", fmt=".2f")
     for path in summary.get("files", []):
         lines.append(f"  wrote {path}")
     return "\n".join(lines)

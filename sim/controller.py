@@ -554,6 +554,7 @@ class WalkingController:
             solution = self.mpc.update(t, x, schedule, com_terminal)
             ok, status = bool(solution.ok), str(solution.status)
             record["mpc_prepared_used"] = float(getattr(self.mpc.problem, "prepared_used", 0))
+            record["mpc_rollouts"] = float(getattr(self.mpc.solver, "rollouts", np.nan))
             iterations, cost, solve_time = int(solution.iterations), float(solution.cost), solution.solve_time
             if ok:
                 reference = _Reference(

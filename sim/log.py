@@ -48,7 +48,9 @@ class RunLog:
         ticks: 1 kHz signals (see ``TICK_SIGNALS_DOC``), truncated to the ticks simulated.
         replans: replan-rate signals; ``t`` plus the controller's record keys (e.g. ``mpc_ok``,
             ``mpc_solve_time``, ``stance_foot``, ``next_x``), each shape (n_replans,).
-        timing: wall-clock seconds spent in simulation, replanning, feedback and in total.
+        timing: wall-clock seconds spent in simulation, replanning, feedback and in total;
+            ``setup`` (models, buffers and the controller's reset with its cold first solve) and
+            ``loop`` (the ticks: total − setup).
         metrics: summary figures (see ``sim.metrics``), filled at the end of the run.
     """
 

@@ -60,6 +60,19 @@ def test_prepared_mpc_gives_the_same_closed_loop():
     assert np.nanmedian(used) >= 97  # of 99 prepared nodes; re-timed contact switches are recomputed
     assert "mpc_prepared_used" not in plain.replans or np.nanmax(plain.replans["mpc_prepared_used"]) == 0
     assert prepared.metrics["mpc_cycle_time_median"] > prepared.metrics["mpc_tick_time_median"]
+    # each update runs its accepted rollout and the rejected line-search trials, all logged
+    np.testing.assert_array_equal(plain.replans["mpc_rollouts"], prepared.replans["mpc_rollouts"])
+    ok = prepared.replans["mpc_ok"] == 1.0
+    assert np.all(prepared.replans["mpc_rollouts"][ok] >= 1)
+
+
+def test_real_time_factor_is_of_the_loop_without_the_setup(short_walk):
+    """The setup (models, buffers, the controller's reset and cold first solve) is timed apart."""
+    timing, metrics = short_walk.timing, short_walk.metrics
+    assert timing["setup"] > 0 and timing["loop"] > 0
+    assert timing["setup"] + timing["loop"] == pytest.approx(timing["total"])
+    assert metrics["real_time_factor"] == pytest.approx(3.0 / timing["loop"])
+    assert metrics["setup_time"] == timing["setup"]
 
 
 def test_mpc_time_budget_reaches_the_mpc_and_is_logged():

@@ -37,3 +37,13 @@ def test_bench_loop_reports_the_real_time_factor_against_the_crocoddyl_loop(caps
     assert base["max_torque_difference_Nm"] < 1e-6  # the same closed loop
     assert base["ratio"] == base["ours_real_time_factor_both_runs"] / base["real_time_factor"]
     assert base["mirror_copy_time_excluded"] > 0
+    floor = report["pinocchio_floor"]  # Pinocchio's calls alone, timed at the MPC's last solution
+    assert floor["dynamics_per_node"] > 0 and floor["derivatives_per_node"] > 0
+    assert floor["rollouts_per_update"] >= 1.0  # at least the rollout of the accepted step
+    n_nodes = 100
+    assert floor["per_update"] == pytest.approx(n_nodes * (floor["dynamics_per_node"] * (1 + floor["rollouts_per_update"])
+                                                           + floor["derivatives_per_node"]))
+    # the MPC does more than Pinocchio's calls, so the bound is above the measured factor
+    assert floor["mpc_per_update"] > floor["per_update"]
+    assert floor["best_real_time_factor"] > report["real_time_factor"]
+    assert report["setup_time"] > 0  # models and the cold first solve, outside the factor

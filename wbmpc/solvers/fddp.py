@@ -70,7 +70,8 @@ class SolverFDDP:
         k (N, nu): feedforward search direction, library sign.
         cost, stop, is_feasible, preg, steplength, log (list of :class:`IterationLog`, one per
         iteration run), iter (Crocoddyl's meaning: index of the converging iteration, or maxiter),
-        deadline_hit (the last solve stopped early to meet its ``deadline``).
+        deadline_hit (the last solve stopped early to meet its ``deadline``), rollouts (number of
+        line-search trials, i.e. nonlinear rollouts of the dynamics, the last solve ran).
 
     Options (attributes): reg_min=1e-9, reg_max=1e9, reg_incfactor=10, reg_decfactor=10,
         th_stop=1e-9, th_grad=1e-12, th_acceptstep=0.1, th_acceptnegstep=2, th_stepdec=0.5,
@@ -121,6 +122,7 @@ class SolverFDDP:
         self.dg = self.dq = self.dv = 0.0
         self.dV = self.dVexp = 0.0
         self.deadline_hit = False
+        self.rollouts = 0
         self._rollout_seconds = 0.0  # duration of the last rollout (deadline estimates)
 
     # ----------------------------------------------------------------- public API
@@ -170,6 +172,7 @@ class SolverFDDP:
         self.was_feasible = False
         self.log = []
         self.deadline_hit = False
+        self.rollouts = 0
         recalc_diff = True
         self.iter = 0
         iteration_start = time.perf_counter()
@@ -315,6 +318,7 @@ class SolverFDDP:
         self.d[1] = self.dq - 2.0 * dv
 
     def _try_step(self, alpha: float) -> float:
+        self.rollouts += 1
         tic = time.perf_counter()
         try:
             self._forward_pass(alpha)
