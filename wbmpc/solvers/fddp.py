@@ -220,11 +220,7 @@ class SolverFDDP:
                     break
             if self.deadline_hit:  # the line search was cut short: keep the iterate, report, stop
                 self.steplength = 0.0
-                self.stop = abs(self.d[0] + 0.5 * self.d[1])
-                self.log.append(IterationLog(self.iter, self.cost, self.stop, 0.0, self.preg, infeasibility,
-                                             (float(self.d[0]), float(self.d[1])), self.is_feasible))
-                for callback in self.callbacks:
-                    callback(self)
+                self._record_iteration(infeasibility)
                 return False
             if self.steplength > self.th_stepdec:
                 self._decrease_regularization()
@@ -232,15 +228,19 @@ class SolverFDDP:
                 self._increase_regularization()
                 if self.preg == self.reg_max:
                     return False
-            self.stop = abs(self.d[0] + 0.5 * self.d[1])
-            self.log.append(IterationLog(self.iter, self.cost, self.stop, self.steplength, self.preg,
-                                         infeasibility, (float(self.d[0]), float(self.d[1])), self.is_feasible))
-            for callback in self.callbacks:
-                callback(self)
+            self._record_iteration(infeasibility)
             if self.was_feasible and self.stop < self.th_stop:
                 return True  # like Crocoddyl, iter stays the index of the converged iteration
             self.iter += 1
         return False
+
+    def _record_iteration(self, infeasibility: float) -> None:
+        """Stopping value, log entry and callbacks of the iteration that just ended."""
+        self.stop = abs(self.d[0] + 0.5 * self.d[1])
+        self.log.append(IterationLog(self.iter, self.cost, self.stop, self.steplength, self.preg,
+                                     infeasibility, (float(self.d[0]), float(self.d[1])), self.is_feasible))
+        for callback in self.callbacks:
+            callback(self)
 
     # ----------------------------------------------------------------- algorithm
     def _set_candidate(self, xs, us, is_feasible: bool) -> None:
