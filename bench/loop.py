@@ -122,18 +122,27 @@ def pinocchio_floor(mpc, rollouts_per_update: float, repeats: int = 10) -> dict:
     }
 
 
-def run(args: argparse.Namespace) -> dict:
-    import numpy as np
-
+def _run_loop(args: argparse.Namespace, controller_class=None):
+    """One run of the benchmarked closed loop with a walking controller of ``controller_class``
+    (default :class:`~sim.controller.WalkingController`) built as ``run_scenario`` builds its own
+    (the scenario's velocity command, ``--max-iterations``); returns (log, controller)."""
     from sim.controller import WalkingController, WalkingControllerConfig
     from sim.runner import run_scenario
     from sim.scenarios.base import make_scenario
 
-    bare = _bare_step_time()
     extra = {} if args.max_iterations is None else {"max_iterations": args.max_iterations}
     command = make_scenario(args.scenario).velocity_command(0.0)
-    controller = WalkingController(WalkingControllerConfig(velocity_command=tuple(command), **extra))
+    controller = (controller_class or WalkingController)(WalkingControllerConfig(velocity_command=tuple(command),
+                                                                                 **extra))
     log = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False, controller=controller)
+    return log, controller
+
+
+def run(args: argparse.Namespace) -> dict:
+    import numpy as np
+
+    bare = _bare_step_time()
+    log, controller = _run_loop(args)
     timing = dict(log.timing)
     total = timing["loop"]  # the ticks; the setup (models, cold first solve) is reported apart
     simulated = timing.get("simulated_time", 0.0)
@@ -163,11 +172,11 @@ def run(args: argparse.Namespace) -> dict:
         floor["best_real_time_factor_one_rollout"] = period / (floor["per_update_one_rollout"] + outside)
     baseline = None
     if args.baseline == "crocoddyl":  # runs ours, Crocoddyl, Crocoddyl, ours: a drift of the machine's speed cancels
-        first = _crocoddyl_loop(args, extra, log)
+        first = _crocoddyl_loop(args, log)
         baseline = first
         if "skipped" not in first:
-            second = _crocoddyl_loop(args, extra, log)
-            again = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False, **extra)
+            second = _crocoddyl_loop(args, log)
+            again, _ = _run_loop(args)
             ours_rtf = (simulated + again.timing["simulated_time"]) / (total + again.timing["loop"])
             theirs_rtf = ((first["simulated_time"] + second["simulated_time"])
                           / (first["wall_time"] + second["wall_time"]))
@@ -176,8 +185,7 @@ def run(args: argparse.Namespace) -> dict:
     return {
         "baseline": baseline,
         "scenario": args.scenario,
-        "max_iterations": args.max_iterations or log.params["controller_options"].get(
-            "max_iterations", WalkingControllerConfig().max_iterations),
+        "max_iterations": controller.config.max_iterations,
         "status": log.status,
         "simulated_time": simulated,
         "wall_time": total,
@@ -196,7 +204,7 @@ def run(args: argparse.Namespace) -> dict:
     }
 
 
-def _crocoddyl_loop(args: argparse.Namespace, extra: dict, ours) -> dict:
+def _crocoddyl_loop(args: argparse.Namespace, ours) -> dict:
     """The same run with Crocoddyl's FDDP solving the MPC; its real-time factor without the
     reference copies into the twin (see :mod:`bench.crocoddyl_loop`)."""
     try:
@@ -206,13 +214,8 @@ def _crocoddyl_loop(args: argparse.Namespace, extra: dict, ours) -> dict:
     import numpy as np
 
     from bench.crocoddyl_loop import CrocoddylWalkingController
-    from sim.controller import WalkingControllerConfig
-    from sim.runner import run_scenario
-    from sim.scenarios.base import make_scenario
 
-    command = make_scenario(args.scenario).velocity_command(0.0)
-    controller = CrocoddylWalkingController(WalkingControllerConfig(velocity_command=tuple(command), **extra))
-    log = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False, controller=controller)
+    log, controller = _run_loop(args, CrocoddylWalkingController)
     mirror = controller.mirror_seconds
     wall = log.timing["loop"] - mirror
     simulated = log.timing.get("simulated_time", 0.0)
