@@ -18,8 +18,10 @@ setup: $(STAMP)
 demo: $(STAMP)
 	$(VENV)/bin/wbmpc demo --out runs/demo
 
-## The test suite (what CI runs through .ci/run).
+## The test suite (what CI runs through .ci/run): the layer contracts, ruff, then pytest.
 test: $(STAMP)
+	$(VENV)/bin/lint-imports
+	$(VENV)/bin/ruff check .
 	$(PY) -m pytest -q
 
 bench: $(STAMP)

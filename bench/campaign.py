@@ -152,7 +152,8 @@ def run(args: argparse.Namespace) -> dict:
 
 def format_report(result: dict) -> str:
     lines = [
-        f"campaign throughput: {result['trials']} push trials ({result['controller']} controller) of {result['trial_duration']:.1f} s simulated per "
+        f"campaign throughput: {result['trials']} push trials ({result['controller']} controller) "
+        f"of {result['trial_duration']:.1f} s simulated per "
         f"configuration, {result['rounds']} interleaved round(s) ({result['cpu_count']} CPUs, load average "
         f"{result['load_average_1min']:.1f})",
         f"  {'configuration':<20} {'trials/min':>10} {'start-up [s]':>13} {'cores used':>11} {'trial CPU / wall':>17}",

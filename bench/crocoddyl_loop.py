@@ -1,7 +1,7 @@
 """The closed loop with Crocoddyl's FDDP as the MPC solver (benchmark baseline only).
 
 ``wbmpc bench loop --baseline crocoddyl`` runs the same scenario twice: with the library's MPC
-and with this one. Everything but the solve is shared: the controller's :class:`~wbmpc.WalkingMPC`
+and with this one. Everything but the solve is shared: the controller's :class:`~wbmpc.walking.WalkingMPC`
 keeps its OCP update, warm start and failure handling, and only its solver is replaced by
 Crocoddyl 3.2's ``SolverFDDP`` on the problem's twin (:mod:`bench.crocoddyl_mirror`, single
 thread). The references are copied into the twin before each solve; that copy is Python glue a
@@ -18,12 +18,12 @@ from typing import Any
 
 import numpy as np
 
-from sim.controller import WalkingController, WalkingControllerConfig
+from wbmpc.walking.controller import WalkingController, WalkingControllerConfig
 
 
 class CrocoddylSolver:
     """Crocoddyl's ``SolverFDDP`` on the twin of a wbmpc problem, with the part of
-    :class:`~wbmpc.solvers.SolverFDDP`'s interface that :class:`~wbmpc.WalkingMPC` uses.
+    :class:`~wbmpc.ocp.solvers.SolverFDDP`'s interface that :class:`~wbmpc.walking.WalkingMPC` uses.
 
     Args:
         problem: the wbmpc shooting problem (its twin is refreshed from it at every solve).
@@ -85,11 +85,8 @@ class CrocoddylWalkingController(WalkingController):
     its solve."""
 
     def __init__(self, config: WalkingControllerConfig | None = None) -> None:
-        super().__init__(dataclasses.replace(config or WalkingControllerConfig(), mpc_prepare=False))
-
-    def reset(self, robot: Any, x0: np.ndarray, t0: float) -> None:
-        super().reset(robot, x0, t0)
-        self.mpc.solver = CrocoddylSolver(self.mpc.problem, self.mpc.solver)
+        super().__init__(dataclasses.replace(config or WalkingControllerConfig(), mpc_prepare=False),
+                         mpc_solver=CrocoddylSolver)
 
     @property
     def mirror_seconds(self) -> float:

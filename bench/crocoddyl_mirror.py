@@ -30,10 +30,10 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from wbmpc.activations import ActivationQuad, ActivationQuadraticBarrier, ActivationWeightedQuad
-from wbmpc.contacts import ContactModel3D, ContactModel6D
-from wbmpc.problem import ShootingProblem
-from wbmpc.residuals import (
+from wbmpc.ocp.activations import ActivationQuad, ActivationQuadraticBarrier, ActivationWeightedQuad
+from wbmpc.ocp.contacts import ContactModel3D, ContactModel6D
+from wbmpc.ocp.problem import ShootingProblem
+from wbmpc.ocp.residuals import (
     ResidualCoMPosition,
     ResidualContactForce,
     ResidualControl,

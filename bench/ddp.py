@@ -4,7 +4,7 @@ For each horizon N: a cold solve, one iteration split into calc / calcDiff / bac
 and the receding-horizon MPC tick (shift, warm start, one iteration), median / p90 / p99 / max,
 each with the ratio ours / Crocoddyl measured in the same run (both single-threaded; the two
 solvers alternate tick by tick so machine noise hits both alike). The problems are built once by
-``wbmpc.walking`` and mirrored into Crocoddyl by :mod:`bench.crocoddyl_mirror`.
+``wbmpc.walking.ocp`` and mirrored into Crocoddyl by :mod:`bench.crocoddyl_mirror`.
 
 With ``--time-budget`` a third MPC, ours with that budget per tick (``WalkingMPC(time_budget=)``),
 runs in the same loop on the same measured states: its tick times, how many ticks the budget cut
@@ -83,8 +83,8 @@ def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot
     import crocoddyl
 
     from bench.crocoddyl_mirror import CrocoddylMirror
-    from wbmpc.mpc import WalkingMPC
-    from wbmpc.walking import quasi_static_controls
+    from wbmpc.walking.mpc import WalkingMPC
+    from wbmpc.walking.ocp import quasi_static_controls
 
     mpc = WalkingMPC(robot, config, n_nodes=n_nodes, dt=dt, max_iterations=1, cold_start_iterations=20,
                      horizon_end=horizon_end)
@@ -168,8 +168,8 @@ def _phases(robot, config, n_nodes: int, dt: float, repeats: int) -> dict:
     import crocoddyl
 
     from bench.crocoddyl_mirror import CrocoddylMirror
-    from wbmpc.solvers import SolverFDDP
-    from wbmpc.walking import WalkingOCP, quasi_static_controls
+    from wbmpc.ocp.solvers import SolverFDDP
+    from wbmpc.walking.ocp import WalkingOCP, quasi_static_controls
 
     ocp = WalkingOCP(robot, config, n_nodes=n_nodes, dt=dt)
     x0 = np.concatenate([robot.q_reference, np.zeros(robot.pinocchio_model.nv)])
@@ -201,7 +201,7 @@ def _phases(robot, config, n_nodes: int, dt: float, repeats: int) -> dict:
             samples["ours"][name].append(time.perf_counter() - tic)
         lxs, lus = list(xs), list(us)
         theirs.setCandidate(lxs, lus, False)
-        for name, fn in (("calc", lambda: mirror.problem.calc(lxs, lus)),
+        for name, fn in (("calc", lambda lxs=lxs, lus=lus: mirror.problem.calc(lxs, lus)),
                          ("calcDiff", theirs.calcDiff),
                          ("backward", theirs.backwardPass),
                          ("forward", lambda: theirs.forwardPass(1.0))):
@@ -219,8 +219,8 @@ def _phases(robot, config, n_nodes: int, dt: float, repeats: int) -> dict:
 
 def run(args: argparse.Namespace) -> dict:
     from robots import load_robot
-    from wbmpc.blas import limit_blas_threads
-    from wbmpc.walking import WalkingOCPConfig
+    from wbmpc.ocp.blas import limit_blas_threads
+    from wbmpc.walking.ocp import WalkingOCPConfig
 
     limit_blas_threads(1)
     for n in args.nodes:

@@ -41,9 +41,10 @@ def _bare_step_time(n_steps: int = 3000) -> float:
 
     from robots import load_robot
     from robots.conventions import pinocchio_to_mujoco_state
+    from robots.mujoco_model import build_mujoco_spec
 
     robot = load_robot("bolt")
-    model = robot.mujoco_spec(link_collisions=True).compile()
+    model = build_mujoco_spec(robot, link_collisions=True).compile()
     data = mujoco.MjData(model)
     batches = []
     for _ in range(3):
@@ -124,11 +125,11 @@ def pinocchio_floor(mpc, rollouts_per_update: float, repeats: int = 10) -> dict:
 
 def _run_loop(args: argparse.Namespace, controller_class=None):
     """One run of the benchmarked closed loop with a walking controller of ``controller_class``
-    (default :class:`~sim.controller.WalkingController`) built as ``run_scenario`` builds its own
+    (default :class:`~wbmpc.walking.controller.WalkingController`) built as ``run_scenario`` builds its own
     (the scenario's velocity command, ``--max-iterations``); returns (log, controller)."""
-    from sim.controller import WalkingController, WalkingControllerConfig
     from sim.runner import run_scenario
     from sim.scenarios.base import make_scenario
+    from wbmpc.walking.controller import WalkingController, WalkingControllerConfig
 
     extra = {} if args.max_iterations is None else {"max_iterations": args.max_iterations}
     command = make_scenario(args.scenario).velocity_command(0.0)

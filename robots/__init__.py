@@ -9,10 +9,10 @@ Each robot is one module registering a builder (see :mod:`robots.registry`); imp
 package registers them all.
 """
 
-from robots.description import CONTACT_TYPES, MujocoContactSettings, RobotDescription
-from robots.registry import available_robots, load_robot, register_robot
 from robots import bolt as _bolt  # noqa: F401  (registers "bolt")
 from robots import g1 as _g1  # noqa: F401  (registers "g1")
+from robots.description import CONTACT_TYPES, MujocoContactSettings, RobotDescription
+from robots.registry import available_robots, load_robot, register_robot
 
 __all__ = [
     "CONTACT_TYPES",

@@ -27,8 +27,10 @@ import mujoco
 import numpy as np
 
 from robots.description import RobotDescription
-from robots.mujoco_model import FREE_JOINT_NAME
 from wbmpc.errors import ParameterError
+
+FREE_JOINT_NAME = "root_joint"
+"""Name of the floating base's free joint in the MuJoCo model."""
 
 
 def _vector(name: str, value, size: int) -> np.ndarray:
@@ -189,7 +191,9 @@ class MujocoIndexMap:
                 and np.array_equal(self.actuators, np.arange(self.nu_mujoco)))
 
 
-def read_mujoco_state(robot: RobotDescription, index_map: MujocoIndexMap, mj_data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
+def read_mujoco_state(
+    robot: RobotDescription, index_map: MujocoIndexMap, mj_data: mujoco.MjData
+) -> tuple[np.ndarray, np.ndarray]:
     """The robot's Pinocchio state (q (nq,), v (nv,)) read from ``mj_data`` (new arrays)."""
     return mujoco_to_pinocchio_state(robot, mj_data.qpos[index_map.qpos_indices], mj_data.qvel[index_map.qvel_indices])
 

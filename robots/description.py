@@ -19,15 +19,12 @@ from __future__ import annotations
 import dataclasses
 import types
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import Any, Mapping
 
 import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
-
-if TYPE_CHECKING:  # pragma: no cover - import only for type hints
-    import mujoco
 
 CONTACT_TYPES = ("point3d", "flat6d")
 """Allowed ``RobotDescription.contact_type`` values: 3D point contacts (forces only) or 6D flat-foot
@@ -264,31 +261,6 @@ class RobotDescription:
     def create_pinocchio_data(self) -> pin.Data:
         """A new ``pin.Data`` for ``pinocchio_model``."""
         return self.pinocchio_model.createData()
-
-    # ----------------------------------------------------------------------------- MuJoCo side
-    def mujoco_spec(self, **options: Any) -> "mujoco.MjSpec":
-        """MjSpec of this robot, ready to be modified (terrain, patches) and compiled.
-
-        See :func:`robots.mujoco_model.build_mujoco_spec` for the options.
-        """
-        from robots.mujoco_model import build_mujoco_spec
-
-        return build_mujoco_spec(self, **options)
-
-    def mujoco_model(self, **options: Any) -> "mujoco.MjModel":
-        """Compiled ``mujoco.MjModel`` of this robot (same options as :meth:`mujoco_spec`).
-
-        Its qpos/qvel/ctrl follow the robot-only layout of :mod:`robots.conventions` (checked).
-        """
-        from robots.conventions import MujocoIndexMap
-
-        model = self.mujoco_spec(**options).compile()
-        if not MujocoIndexMap.from_model(self, model).is_identity:
-            raise ParameterError(
-                f"MuJoCo orders the joints of robot '{self.name}' differently from Pinocchio; "
-                "use robots.conventions.MujocoIndexMap to address its coordinates"
-            )
-        return model
 
     def __repr__(self) -> str:
         return (

@@ -30,12 +30,12 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from robots.conventions import FREE_JOINT_NAME, MujocoIndexMap
 from wbmpc.errors import ParameterError
 
 if TYPE_CHECKING:  # pragma: no cover
     from robots.description import RobotDescription
 
-FREE_JOINT_NAME = "root_joint"
 FLOOR_GEOM_NAME = "floor"
 TRACKING_CAMERA_NAME = "track"
 ROBOT_COLLISION_BITS = 1  # contype / conaffinity of the feet, floor and terrain
@@ -335,3 +335,17 @@ def add_box_geom(
         geom.friction = [float(friction), 0.005, 0.0001]
         geom.priority = 1
     return geom
+
+
+def compile_mujoco_model(robot: "RobotDescription", **options) -> mujoco.MjModel:
+    """Compiled ``mujoco.MjModel`` of ``robot`` (options of :func:`build_mujoco_spec`).
+
+    Its qpos/qvel/ctrl follow the robot-only layout of :mod:`robots.conventions` (checked).
+    """
+    model = build_mujoco_spec(robot, **options).compile()
+    if not MujocoIndexMap.from_model(robot, model).is_identity:
+        raise ParameterError(
+            f"MuJoCo orders the joints of robot '{robot.name}' differently from Pinocchio; "
+            "use robots.conventions.MujocoIndexMap to address its coordinates"
+        )
+    return model

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from sequencer.nominal import nominal_dcm_offset, nominal_step_width, stance_sign
+from wbmpc.config import read_toml
 from wbmpc.errors import ParameterError
-from wbmpc.toml_files import read_toml
 
 PRESET_DIR = Path(__file__).resolve().parent / "presets"
 

@@ -14,7 +14,6 @@ import numpy as np
 
 from wbmpc.errors import ParameterError
 
-
 SCHEDULE_ROUNDINGS = ("next", "nearest")
 
 

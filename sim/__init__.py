@@ -5,11 +5,11 @@
     log.metrics["velocity_error_x"]
 """
 
-from sim.controller import Controller, JointPDController, WalkingController, WalkingControllerConfig
 from sim.log import RunLog, load_run
-from sim.measurement import Measurement
 from sim.runner import RunnerOptions, run_scenario
 from sim.scenarios import Scenario, available_scenarios, make_scenario, register
+from wbmpc.walking.controller import Controller, JointPDController, WalkingController, WalkingControllerConfig
+from wbmpc.walking.measurement import Measurement
 
 __all__ = [
     "Controller",

@@ -95,7 +95,7 @@ class RunLog:
 
     def save(self, out_dir: str | os.PathLike) -> tuple[str, str]:
         """Write ``log.npz`` (compressed) and ``metrics.json`` into ``out_dir``; returns both paths."""
-        from wbmpc.cli import to_jsonable
+        from wbmpc.jsonable import to_jsonable
 
         os.makedirs(out_dir, exist_ok=True)
         arrays = {f"ticks/{k}": v for k, v in self.ticks.items()}

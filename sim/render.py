@@ -24,6 +24,7 @@ def render_run(log, path: str | os.PathLike, fps: int = 30, width: int = 640, he
     import mujoco
 
     from robots import load_robot
+    from robots.mujoco_model import build_mujoco_spec
     from sim.scenarios import make_scenario
 
     path = os.fspath(path)
@@ -36,7 +37,7 @@ def render_run(log, path: str | os.PathLike, fps: int = 30, width: int = 640, he
         raise ParameterError(f"fps={fps!r} must be an integer in [1, 120]")
 
     robot = load_robot(log.robot)
-    spec = robot.mujoco_spec(link_collisions=True)
+    spec = build_mujoco_spec(robot, link_collisions=True)
     scenario = make_scenario(log.scenario, **log.params["scenario"])
     scenario.modify_spec(spec, np.random.default_rng(log.seed))
     model = spec.compile()

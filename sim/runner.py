@@ -29,12 +29,12 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from sim.controller import GRAVITY, Controller, JointPDController, WalkingController, WalkingControllerConfig
 from sim.falls import ContactSensor, FallCriteria, detect_fall
 from sim.log import RunLog
-from sim.measurement import Measurement
 from sim.scenarios import make_scenario, scenario_class, scenario_parameters
 from wbmpc.errors import ParameterError
+from wbmpc.walking.controller import GRAVITY, Controller, JointPDController, WalkingController, WalkingControllerConfig
+from wbmpc.walking.measurement import Measurement
 
 CONTROLLERS = ("walking", "pd")
 
@@ -89,10 +89,10 @@ def run_scenario(
         seed: seed of every random choice (terrain, noise).
         out: directory for ``log.npz`` and ``metrics.json`` (None: nothing written).
         controller: "walking" (sequencer + MPC + Riccati feedback), "pd" (posture hold, falls), or
-            an object implementing :class:`sim.controller.Controller` (then ``params`` holds no
+            an object implementing :class:`wbmpc.walking.controller.Controller` (then ``params`` holds no
             controller options).
         **params: scenario parameters (e.g. ``speed``, ``force``), :class:`RunnerOptions` fields,
-            and controller options (:class:`sim.controller.WalkingControllerConfig` fields for
+            and controller options (:class:`wbmpc.walking.controller.WalkingControllerConfig` fields for
             "walking"; ``kp``, ``kd`` for "pd").
 
     Returns:
@@ -104,7 +104,7 @@ def run_scenario(
     scenario_cls = scenario_class(name)
     custom = not isinstance(controller, str)
     if custom and not isinstance(controller, Controller):
-        raise ParameterError(f"controller={controller!r} does not implement sim.controller.Controller")
+        raise ParameterError(f"controller={controller!r} does not implement wbmpc.walking.controller.Controller")
     if not custom and controller not in CONTROLLERS:
         raise ParameterError(f"controller={controller!r} must be one of {CONTROLLERS} or a Controller object")
     scenario_keys = set(scenario_parameters(name))
@@ -173,11 +173,12 @@ class _ClosedLoop:
 
         from robots import load_robot
         from robots.conventions import mujoco_to_pinocchio_state, pinocchio_to_mujoco_state
+        from robots.mujoco_model import build_mujoco_spec
 
         self.to_pinocchio = mujoco_to_pinocchio_state
         self.rng = np.random.default_rng(self.seed)
         self.robot = robot = load_robot(self.robot_name)
-        spec = robot.mujoco_spec(link_collisions=True)
+        spec = build_mujoco_spec(robot, link_collisions=True)
         self.scenario.modify_spec(spec, self.rng)
         self.mj_model = spec.compile()
         self.mj_data = mujoco.MjData(self.mj_model)

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from sequencer import SequencerParams
 from sim.campaigns import CampaignSpec, RandomSample, builtin_campaign, make_trials
 from sim.campaigns.trial import STIFF_TIMING_WEIGHT, measured_gait_phase, resolve_arguments, trial_key
-from sequencer import SequencerParams
 from wbmpc.errors import ParameterError
 
 
@@ -37,7 +37,7 @@ def test_trial_arguments_translate_force_components_phase_and_step_timing():
     arguments = resolve_arguments("push", "walking", 6.0, params)
     assert arguments["force"] == pytest.approx(5.0)
     assert arguments["direction"] == pytest.approx(math.degrees(math.atan2(4.0, -3.0)))
-    from sim.controller import default_sequencer_params
+    from wbmpc.walking.controller import default_sequencer_params
 
     base = default_sequencer_params()  # the walking controller's own parameters: 'adaptive' is the default controller
     assert arguments["push_time"] == pytest.approx(3.0 + 0.5 * base.t_nom)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import pytest
 
-from sim.campaigns import ResultStore, builtin_campaign, run_campaign, write_report
 from sequencer import SequencerParams
+from sim.campaigns import ResultStore, builtin_campaign, run_campaign, write_report
 
 
 @pytest.mark.slow

@@ -23,7 +23,7 @@ from robots.conventions import (
     write_mujoco_state,
     write_mujoco_torque,
 )
-from robots.mujoco_model import add_box_geom, foot_site_name
+from robots.mujoco_model import add_box_geom, build_mujoco_spec, compile_mujoco_model, foot_site_name
 from wbmpc.errors import ParameterError
 
 N_STATES = 25
@@ -42,7 +42,7 @@ def bolt():
 
 @pytest.fixture(scope="module")
 def mj_model(robot):
-    model = robot.mujoco_model(floor=False)
+    model = compile_mujoco_model(robot, floor=False)
     # free flight without joint-limit constraints: only the rigid-body dynamics are compared
     model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_LIMIT
     return model
@@ -141,7 +141,7 @@ def test_forward_dynamics_agree(robot, mj_model):
 
 
 def test_torque_order_and_clamping(bolt):
-    mj_model = bolt.mujoco_model(floor=False)
+    mj_model = compile_mujoco_model(bolt, floor=False)
     index_map = MujocoIndexMap.from_model(bolt, mj_model)
     assert index_map.is_identity
     assert [mj_model.actuator(i).name for i in index_map.actuators] == list(bolt.actuated_joint_names)
@@ -156,7 +156,7 @@ def test_torque_order_and_clamping(bolt):
 
 
 def test_index_map_with_an_extra_free_body(bolt):
-    spec = bolt.mujoco_spec()
+    spec = build_mujoco_spec(bolt)
     ball = spec.worldbody.add_body(name="ball", pos=[1.0, 0.0, 0.5])
     ball.add_freejoint(name="ball_joint")
     ball.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.05, 0, 0], mass=0.1)

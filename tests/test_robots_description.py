@@ -98,7 +98,7 @@ def test_g1_has_flat_6d_sole_contacts_on_the_floor():
     assert g1.contact_type == "flat6d" and dict(g1.foot_frames) == {"left": "left_sole", "right": "right_sole"}
     data = g1.create_pinocchio_data()
     pin.framesForwardKinematics(g1.pinocchio_model, data, g1.q_reference)
-    for side, frame_id in g1.foot_frame_ids.items():
+    for frame_id in g1.foot_frame_ids.values():
         placement = data.oMf[frame_id]
         assert placement.translation[2] == pytest.approx(0.0, abs=1e-12)
         np.testing.assert_allclose(placement.rotation, np.eye(3), atol=1e-12)  # soles flat

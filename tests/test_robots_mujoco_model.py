@@ -10,6 +10,8 @@ from robots.mujoco_model import (
     FLOOR_GEOM_NAME,
     TRACKING_CAMERA_NAME,
     add_box_geom,
+    build_mujoco_spec,
+    compile_mujoco_model,
     foot_geom_name,
     mujoco_urdf_text,
 )
@@ -23,7 +25,7 @@ def bolt():
 
 @pytest.fixture(scope="module")
 def mj_model(bolt):
-    return bolt.mujoco_model()
+    return compile_mujoco_model(bolt)
 
 
 def colliding_geoms(model):
@@ -55,7 +57,7 @@ def test_only_the_foot_spheres_and_the_floor_collide(bolt, mj_model):
         assert geom.friction[0] == 1.0 and geom.condim[0] == 3
     # visual meshes are kept (group 1), collision meshes of the links can be turned on
     assert sum(mj_model.geom_type == mujoco.mjtGeom.mjGEOM_MESH) == 9
-    with_links = bolt.mujoco_model(link_collisions=True)
+    with_links = compile_mujoco_model(bolt, link_collisions=True)
     assert len(colliding_geoms(with_links)) == 3 + 5  # + base, shoulders, upper legs
 
 
@@ -69,7 +71,7 @@ def test_reference_posture_rests_on_the_floor(bolt, mj_model):
 
 
 def test_box_geoms_with_their_own_friction_take_priority(bolt):
-    spec = bolt.mujoco_spec()
+    spec = build_mujoco_spec(bolt)
     add_box_geom(spec, "ice", [0.0, 0.0, 0.001], [0.2, 0.2, 0.001], friction=0.05)
     add_box_geom(spec, "block", [0.5, 0.0, 0.003], [0.01, 0.02, 0.003], yaw=0.3)
     model = spec.compile()
@@ -99,8 +101,8 @@ def test_urdf_text_only_gains_the_compiler_block_and_explicit_mesh_paths(bolt):
 
 def test_bad_options_are_rejected(bolt):
     with pytest.raises(ParameterError, match=r"timestep=0 s must be in \(0, 0.01\]"):
-        bolt.mujoco_spec(timestep=0)
+        build_mujoco_spec(bolt, timestep=0)
     with pytest.raises(ParameterError, match=r"integrator='leapfrog' must be one of"):
-        bolt.mujoco_spec(integrator="leapfrog")
+        build_mujoco_spec(bolt, integrator="leapfrog")
     with pytest.raises(ParameterError, match=r"foot_friction=0.0 must be > 0"):
-        bolt.mujoco_spec(foot_friction=0.0)
+        build_mujoco_spec(bolt, foot_friction=0.0)

@@ -4,13 +4,13 @@ import dataclasses
 
 import numpy as np
 import pytest
+from sequencer_instances import random_problems
 
 from sensitivity import DegenerateSensitivity, crosscheck, fiacco_sensitivity
 from sensitivity.casadi_ import casadi_sensitivity, solve_ipopt
 from sensitivity.crosscheck import finite_difference_jacobian, proxqp_backward_jacobian
 from sequencer import SequencerParams, StepProblem
 from sequencer.step_qp import ExactBackend
-from sequencer_instances import random_problems
 
 
 def table_i_problem(**overrides):

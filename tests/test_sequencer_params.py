@@ -27,6 +27,7 @@ def test_bolt_preset_is_narrower_than_table_i_and_uses_bolt_com_height():
     assert bolt.w_right_min < table.w_right_min
     # z_c is the CoM height of the robot description's standing pose (feet on the floor).
     import pinocchio as pin
+
     from robots import load_robot
 
     robot = load_robot("bolt")

@@ -2,11 +2,11 @@
 
 import numpy as np
 import pytest
+from sequencer_instances import random_problems
 
 from sequencer import InfeasibleStep, SequencerParams, StepProblem, StepQPError
 from sequencer.backends import make_backend
 from sequencer.step_qp import ExactBackend
-from sequencer_instances import random_problems
 from wbmpc.errors import ParameterError, SolverError
 
 

@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 
 from robots import load_robot
+from robots.mujoco_model import build_mujoco_spec
 from sim.log import RunLog
 from sim.metrics import compute_metrics, running_average
 from sim.scenarios import available_scenarios, make_scenario, scenario_parameters
-from sim.stance import StanceTracker
 from wbmpc.errors import ParameterError
+from wbmpc.walking.stance import StanceTracker
 
 
 def test_registry_has_the_paper_scenarios():
@@ -34,7 +35,7 @@ def test_terrain_boxes_follow_the_paper_distribution_and_the_seed():
     assert np.all((boxes[:, 5] >= 0.005) & (boxes[:, 5] <= 0.008))
     np.testing.assert_array_equal(boxes, terrain.sample_boxes(np.random.default_rng(0)))
     robot = load_robot("bolt")
-    spec = robot.mujoco_spec()
+    spec = build_mujoco_spec(robot)
     make_scenario("terrain", length=2.0).modify_spec(spec, np.random.default_rng(1))
     model = spec.compile()
     names = [model.geom(i).name for i in range(model.ngeom)]
@@ -45,7 +46,7 @@ def test_slip_patch_friction_is_the_one_used_in_contacts():
     from robots.conventions import pinocchio_to_mujoco_state
 
     robot = load_robot("bolt")
-    spec = robot.mujoco_spec()
+    spec = build_mujoco_spec(robot)
     left_y = robot.foot_positions(robot.q_reference)["left"][1]  # the standing left foot
     make_scenario("slip", friction=0.05, x_start=-0.2, length=0.4, track_y=left_y).modify_spec(
         spec, np.random.default_rng(0))
@@ -67,7 +68,7 @@ def test_slip_patch_lies_on_the_chosen_track(side, track_y):
     """By default on the side's foot track of the default walk gait; else centred on track_y."""
     from sim.scenarios.slip import Slip
 
-    spec = load_robot("bolt").mujoco_spec()
+    spec = build_mujoco_spec(load_robot("bolt"))
     make_scenario("slip", side=side, track_y=track_y).modify_spec(spec, np.random.default_rng(0))
     model = spec.compile()
     patch = model.geom("slip_patch")

@@ -7,9 +7,14 @@ import pytest
 
 from robots import load_robot
 from sim.campaigns.trial import resolve_arguments
-from sim.controller import MAX_STEP_WIDTH, WalkingController, WalkingControllerConfig, default_sequencer_params
-from sim.measurement import Measurement
 from wbmpc.errors import ParameterError
+from wbmpc.walking.controller import (
+    MAX_STEP_WIDTH,
+    WalkingController,
+    WalkingControllerConfig,
+    default_sequencer_params,
+)
+from wbmpc.walking.measurement import Measurement
 
 
 def fixed_timing(params):

@@ -11,9 +11,9 @@ import pytest
 
 from robots import load_robot
 from sim import WalkingController, WalkingControllerConfig, run_scenario
-from sim.controller import MPC_STATUS_CODES, _Reference
-from sim.measurement import Measurement
 from wbmpc.errors import ParameterError
+from wbmpc.walking.controller import MPC_STATUS_CODES, _Reference
+from wbmpc.walking.measurement import Measurement
 
 
 @pytest.fixture(scope="module")
@@ -158,7 +158,7 @@ def test_computation_delay_applies_a_new_solution_only_after_the_latency(control
 
 def test_a_due_touchdown_not_yet_measured_is_delayed_in_the_schedule():
     from sequencer import FootstepSequencer, SequencerParams
-    from sim.controller import TOUCHDOWN_WAIT_NODES, _wait_for_touchdown
+    from wbmpc.walking.controller import TOUCHDOWN_WAIT_NODES, _wait_for_touchdown
 
     plan = FootstepSequencer(SequencerParams.bolt_walking()).plan(
         t=0.0, stance_foot="left", stance_position=[0.0, 0.05], dcm_measured=[0.0, 0.0], t_stance_start=0.0
@@ -229,7 +229,7 @@ def test_a_step_whose_stance_foot_slid_is_not_used_for_the_lipm_corrections(cont
     """The swing drift is measured against the touchdown point: a slid stance foot is excluded."""
     from types import SimpleNamespace
 
-    from sim.controller import LIPM_CORRECTION_MAX_SLIDE
+    from wbmpc.walking.controller import LIPM_CORRECTION_MAX_SLIDE
 
     make, _, _, _ = controller_with_known_reference
     stance, landing = np.array([1.0, 0.05]), np.array([1.1, -0.05])

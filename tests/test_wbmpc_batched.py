@@ -6,14 +6,14 @@ import dataclasses
 
 import numpy as np
 import pytest
+from wbmpc_fixtures import alternating_schedule, random_state, standing_state
 
 from robots import load_robot
-from wbmpc.batched_problem import BatchedShootingProblem, batched_evaluation_support
 from wbmpc.errors import ParameterError
-from wbmpc.problem import ShootingProblem
-from wbmpc.solvers import SolverFDDP
-from wbmpc.walking import WalkingOCP, WalkingOCPConfig
-from wbmpc_fixtures import alternating_schedule, random_state, standing_state
+from wbmpc.ocp.batched_problem import BatchedShootingProblem, batched_evaluation_support
+from wbmpc.ocp.problem import ShootingProblem
+from wbmpc.ocp.solvers import SolverFDDP
+from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig
 
 # every term the batched pass supports, a Baumgarte position gain (moving contact references)
 BATCHED_TERMS = WalkingOCPConfig(foothold_weight=100.0, touchdown_height_weight=1e5, baumgarte_gains=(20.0, 40.0))

@@ -9,12 +9,13 @@ import pytest
 
 crocoddyl = pytest.importorskip("crocoddyl", reason="Crocoddyl (test extra) is the oracle of these comparisons")
 
+from wbmpc_fixtures import alternating_schedule, random_state, standing_state  # noqa: E402
+
 from bench.crocoddyl_mirror import CrocoddylMirror  # noqa: E402
 from robots import load_robot  # noqa: E402
-from wbmpc.mpc import WalkingMPC  # noqa: E402
-from wbmpc.solvers import SolverFDDP  # noqa: E402
-from wbmpc.walking import WalkingOCP, WalkingOCPConfig, quasi_static_controls  # noqa: E402
-from wbmpc_fixtures import alternating_schedule, random_state, standing_state  # noqa: E402
+from wbmpc.ocp.solvers import SolverFDDP  # noqa: E402
+from wbmpc.walking.mpc import WalkingMPC  # noqa: E402
+from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig, quasi_static_controls  # noqa: E402
 
 pytestmark = pytest.mark.crocoddyl
 ALL_TERMS = WalkingOCPConfig(foothold_weight=100.0, contact_force_weight=1e-2, friction_cone_weight=10.0,
@@ -145,8 +146,8 @@ def test_closed_loop_with_crocoddyl_as_the_solver_applies_the_same_torques():
     """The whole closed loop (sequencer, MPC, 1 kHz feedback, MuJoCo) with Crocoddyl's FDDP as the
     MPC solver (bench.crocoddyl_loop, the baseline of `wbmpc bench loop`) applies our torques."""
     from bench.crocoddyl_loop import CrocoddylWalkingController
-    from sim.controller import WalkingControllerConfig
     from sim.runner import run_scenario
+    from wbmpc.walking.controller import WalkingControllerConfig
 
     ours = run_scenario("walk", duration=0.4, seed=0, progress=False)
     controller = CrocoddylWalkingController(WalkingControllerConfig(velocity_command=(0.0, 0.0)))

@@ -6,13 +6,13 @@ import time
 
 import numpy as np
 import pytest
+from wbmpc_fixtures import alternating_schedule, standing_state
 
 from robots import load_robot
-from wbmpc import WalkingMPC, WalkingOCPConfig
 from wbmpc.errors import ParameterError
-from wbmpc.solvers import SolverFDDP
-from wbmpc.walking import WalkingOCP, quasi_static_controls
-from wbmpc_fixtures import alternating_schedule, standing_state
+from wbmpc.ocp.solvers import SolverFDDP
+from wbmpc.walking import WalkingMPC, WalkingOCPConfig
+from wbmpc.walking.ocp import WalkingOCP, quasi_static_controls
 
 N_NODES, DT = 30, 0.01
 

@@ -6,12 +6,12 @@ import dataclasses
 
 import numpy as np
 import pytest
+from wbmpc_fixtures import alternating_schedule, random_state, standing_state
 
 from robots import load_robot
-from wbmpc.activations import ActivationQuadraticBarrier, ActivationWeightedQuad
-from wbmpc.state import StateMultibody
-from wbmpc.walking import WalkingOCP, WalkingOCPConfig
-from wbmpc_fixtures import alternating_schedule, random_state, standing_state
+from wbmpc.ocp.activations import ActivationQuadraticBarrier, ActivationWeightedQuad
+from wbmpc.ocp.state import StateMultibody
+from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig
 
 EPS = 1e-7
 ALL_TERMS = WalkingOCPConfig(foothold_weight=100.0, contact_force_weight=1e-2, friction_cone_weight=10.0,

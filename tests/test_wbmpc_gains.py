@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from wbmpc_fixtures import alternating_schedule, standing_state
 
 from robots import load_robot
-from wbmpc.solvers import SolverFDDP
-from wbmpc.walking import WalkingOCP, WalkingOCPConfig, quasi_static_controls
-from wbmpc_fixtures import alternating_schedule, standing_state
+from wbmpc.ocp.solvers import SolverFDDP
+from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig, quasi_static_controls
 
 
 @pytest.fixture(scope="module")

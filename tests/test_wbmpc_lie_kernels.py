@@ -7,9 +7,9 @@ import pinocchio as pin
 import pytest
 
 from robots import load_robot
-from wbmpc.lie_kernels import (
-    free_flyer_dintegrate,
+from wbmpc.ocp.lie_kernels import (
     free_flyer_ddifference_second,
+    free_flyer_dintegrate,
     free_flyer_euler_step,
     free_flyer_integrate,
 )

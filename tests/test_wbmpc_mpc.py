@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from wbmpc_fixtures import alternating_schedule, standing_state
 
 from robots import load_robot
-from wbmpc import MPCSolution, WalkingMPC, WalkingOCPConfig
-from wbmpc.walking import swing_height_reference
-from wbmpc_fixtures import alternating_schedule, standing_state
+from wbmpc.ocp import MPCSolution
+from wbmpc.walking import WalkingMPC, WalkingOCPConfig
+from wbmpc.walking.ocp import swing_height_reference
 
 N_NODES, DT = 100, 0.01
 
@@ -149,7 +150,7 @@ def test_constructor_rejects_bad_parameters(bolt):
 def test_repeat_horizon_end_is_the_plain_shift(bolt, walking):
     """horizon_end="repeat" (the default): the last node's state and control repeated (the usual shift)."""
     mpc, ticks = walking
-    assert mpc.horizon_end == "repeat"
+    assert mpc.receding.horizon_end == "repeat"
     plain = WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=N_NODES, dt=DT, horizon_end="repeat")
     plain.last_good = ticks[-1]
     xs, us, _ = plain.warm_start(4 * DT, ticks[-1].xs[1])

@@ -6,11 +6,11 @@ import time
 
 import numpy as np
 import pytest
+from wbmpc_fixtures import alternating_schedule, standing_state
 
 from robots import load_robot
-from wbmpc import WalkingMPC, WalkingOCPConfig
 from wbmpc.errors import ParameterError
-from wbmpc_fixtures import alternating_schedule, standing_state
+from wbmpc.walking import WalkingMPC, WalkingOCPConfig
 
 N_NODES, DT = 40, 0.01
 COM_REF = np.array([0.3, 0.0, 0.3])

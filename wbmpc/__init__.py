@@ -1,37 +1,25 @@
 """wbmpc: whole-body model-predictive walking control on Pinocchio.
 
-The library is split in top-level packages, one concept each:
+The library is split in layers (held by import-linter contracts in pyproject.toml, see
+docs/architecture.md), from the bottom up:
 
-- ``sequencer``: DCM footstep sequencer (one QP per step, Algorithm 1 of Roux et al. 2024).
-- ``sensitivity``: Fiacco sensitivity of the footstep QP to DCM disturbances.
-- ``wbmpc``: the whole-body optimal control pipeline (state, actions, costs, FDDP, MPC).
-- ``robots``: robot descriptions shared by Pinocchio and MuJoCo.
-- ``sim``: MuJoCo closed loop, scenarios, metrics and plots.
+- ``wbmpc.errors``, ``wbmpc.config``, ``wbmpc.jsonable``: shared leaves (errors, TOML presets,
+  JSON conversion);
+- ``robots``: robot descriptions shared by Pinocchio and MuJoCo, state conventions;
+- ``wbmpc.ocp``: the generic optimal-control core (state, actuation, contacts, contact dynamics,
+  residuals, activations, costs, shooting problem and its evaluators, FDDP, receding-horizon MPC);
+  ``sequencer``: footstep planners (DCM step QP, Algorithm 1) and the contact-schedule types;
+- ``sensitivity``: sensitivities of the planners' solutions;
+- ``wbmpc.walking``: the walking application (OCP builder from a contact schedule, the
+  controller composed of planner + MPC + feedback + estimators, per-robot presets);
+- ``sim``: MuJoCo closed loop, scenarios, metrics, plots, campaigns;
+- ``bench``: benchmarks; ``wbmpc.cli``: the ``wbmpc`` command line, above all.
+
+Importing ``wbmpc`` itself loads only the error types (the planners use them).
 """
 
-from wbmpc.errors import WbmpcError
+from wbmpc.errors import ParameterError, SolverError, WbmpcError
 
 __version__ = "0.1.0"
 
-_LAZY = {
-    "WalkingOCPConfig": "wbmpc.walking",
-    "StateWeights": "wbmpc.walking",
-    "WalkingOCP": "wbmpc.walking",
-    "WalkingMPC": "wbmpc.mpc",
-    "MPCSolution": "wbmpc.mpc",
-    "ShootingProblem": "wbmpc.problem",
-    "SolverFDDP": "wbmpc.solvers.fddp",
-    "StateMultibody": "wbmpc.state",
-}
-
-
-def __getattr__(name: str):
-    """Import the heavy (Pinocchio) parts on first use, so ``import wbmpc`` stays light."""
-    if name in _LAZY:
-        import importlib
-
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'wbmpc' has no attribute {name!r}")
-
-
-__all__ = ["WbmpcError", "__version__", *_LAZY]
+__all__ = ["ParameterError", "SolverError", "WbmpcError", "__version__"]

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
 import proxsuite
 
 from sequencer.step_qp import InfeasibleStep, StepProblem, StepQPError, StepSolution, solution_from_solver

@@ -5,7 +5,7 @@
     run_campaign(spec, "runs/push-map", backend="local", workers=2)  # resume=True after a kill
     summary = write_report("runs/push-map")                          # summary.json + figures
 
-Command line: ``wbmpc campaign push-map|terrain|run FILE|report DIR`` (see ``sim.campaigns.cli``).
+Command line: ``wbmpc campaign push-map|terrain|run FILE|report DIR`` (see ``wbmpc.cli.campaign``).
 """
 
 from sim.campaigns.errors import BackendNotAvailable, CampaignDirectoryError, CampaignError

@@ -248,7 +248,7 @@ def write_report(directory: str | Path, plots: bool = True) -> dict[str, Any]:
         The summary, with ``files`` listing what was written.
     """
     from sim.campaigns.run import load_campaign
-    from wbmpc.cli import to_jsonable
+    from wbmpc.jsonable import to_jsonable
 
     directory = Path(directory)
     spec, records = load_campaign(directory)

@@ -81,8 +81,8 @@ def run_campaign(
         CampaignError: a worker process died (the records written so far stand).
         ParameterError: invalid spec parameters (checked for every trial before anything runs).
     """
-    from wbmpc.cli import to_jsonable
     from wbmpc.errors import ParameterError
+    from wbmpc.jsonable import to_jsonable
 
     if max_trials is not None and not (isinstance(max_trials, int) and max_trials >= 0):
         raise ParameterError(f"max_trials={max_trials!r} must be an integer >= 0")

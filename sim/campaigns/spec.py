@@ -51,8 +51,8 @@ from typing import Any
 
 import numpy as np
 
+from wbmpc.config import read_toml
 from wbmpc.errors import ParameterError
-from wbmpc.toml_files import read_toml
 
 CONTROLLERS = ("walking", "pd")
 DEFAULT_VARIANT = "default"

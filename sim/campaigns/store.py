@@ -89,7 +89,7 @@ class ResultStore:
 
     def append(self, record: dict[str, Any]) -> None:
         """Append one record as a JSON line, flushed and fsync'ed before returning."""
-        from wbmpc.cli import to_jsonable
+        from wbmpc.jsonable import to_jsonable
 
         line = json.dumps(to_jsonable(record), sort_keys=True)
         if "\n" in line:

@@ -126,9 +126,9 @@ def make_trials(spec) -> list[Trial]:
 
 
 def _allowed_names(scenario: str, controller: str) -> set[str]:
-    from sim.controller import WalkingControllerConfig
     from sim.runner import RunnerOptions
     from sim.scenarios import scenario_parameters
+    from wbmpc.walking.controller import WalkingControllerConfig
 
     names = set(scenario_parameters(scenario)) | {f.name for f in dataclasses.fields(RunnerOptions)}
     if controller == "walking":
@@ -201,7 +201,7 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
             f"the push ends at t = {events['push_end']:.3f} s, not before the end of the trial (duration={duration} s)"
         )
     if controller == "walking":
-        from sim.controller import WalkingControllerConfig
+        from wbmpc.walking.controller import WalkingControllerConfig
 
         config_names = {f.name for f in dataclasses.fields(WalkingControllerConfig)}
         WalkingControllerConfig(**{k: v for k, v in arguments.items() if k in config_names})
@@ -210,7 +210,7 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
 
 def _sequencer_params(step_timing: str, base: Any = None):
     """Sequencer parameters for ``step_timing`` from ``base`` (None: the walking controller's default)."""
-    from sim.controller import default_sequencer_params
+    from wbmpc.walking.controller import default_sequencer_params
 
     if step_timing not in STEP_TIMINGS:
         raise ParameterError(f"step_timing={step_timing!r} must be one of {STEP_TIMINGS}")
@@ -332,6 +332,6 @@ def measured_gait_phase(replans: dict[str, np.ndarray], t: float, t_nom: float |
 
 
 def _jsonable(value: Any) -> Any:
-    from wbmpc.cli import to_jsonable
+    from wbmpc.jsonable import to_jsonable
 
     return to_jsonable(value)

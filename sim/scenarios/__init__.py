@@ -1,5 +1,6 @@
 """Registered closed-loop scenarios, one per experiment of the paper (see ``sim.scenarios.base``)."""
 
+from sim.scenarios import push, slip, terrain, transition, walk  # noqa: F401  (registration)
 from sim.scenarios.base import (
     Scenario,
     available_scenarios,
@@ -8,7 +9,6 @@ from sim.scenarios.base import (
     scenario_class,
     scenario_parameters,
 )
-from sim.scenarios import push, slip, terrain, transition, walk  # noqa: F401  (registration)
 
 __all__ = [
     "Scenario",

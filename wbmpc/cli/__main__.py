@@ -1,0 +1,7 @@
+"""``python -m wbmpc.cli``: the ``wbmpc`` command line."""
+
+import sys
+
+from wbmpc.cli import main
+
+sys.exit(main())

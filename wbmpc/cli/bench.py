@@ -1,0 +1,43 @@
+"""``wbmpc bench TARGET``: run one benchmark and print its figures (``--json`` for a dict).
+
+Each target module (listed in ``BENCH_MODULES``) provides ``add_arguments(parser)`` and
+``run(args) -> dict``, and a ``format_report(result) -> str`` for the human-readable table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+
+from wbmpc.cli.output import add_output_arguments, print_json
+
+# target name -> module path (each module: add_arguments, run, format_report)
+BENCH_MODULES: dict[str, str] = {
+    "sequencer": "bench.sequencer",
+    "loop": "bench.loop",
+    "ddp": "bench.ddp",
+    "campaign": "bench.campaign",
+}
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser("bench", help="run a benchmark (ratios against an in-run baseline)")
+    targets = parser.add_subparsers(dest="target", metavar="TARGET", required=True)
+    for name, module_path in BENCH_MODULES.items():
+        module = importlib.import_module(module_path)
+        sub = targets.add_parser(name, help=(module.__doc__ or "").strip().splitlines()[0])
+        module.add_arguments(sub)
+        add_output_arguments(sub, plot=False)
+        sub.set_defaults(func=_runner(module))
+
+
+def _runner(module):
+    def run(args: argparse.Namespace) -> int:
+        result = module.run(args)
+        if args.json:
+            print_json(result)
+        else:
+            print(module.format_report(result))
+        return 0
+
+    return run

@@ -1,0 +1,136 @@
+"""``wbmpc plan``: run Algorithm 1 and print / plot the footstep plan (Fig. 3).
+
+Every SequencerParams field can be overridden from the command line (``--alpha1``, ``--z-c``,
+``--w-left-min``, ...; ``--vx``/``--vy`` are aliases of ``--v-x``/``--v-y``) on top of a preset
+(``--preset``) or a TOML file (``--params FILE``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+
+from sequencer.horizon import FootstepPlan, FootstepSequencer
+from sequencer.params import PRESET_DIR, SequencerParams
+from wbmpc.cli.output import add_output_arguments, print_json
+
+# Table I example state (p0, zeta_hat, t) used as the default initial condition.
+TABLE_I_STANCE_FOOT = "left"
+TABLE_I_STANCE_POSITION = (-0.12, 0.10)
+TABLE_I_DCM = (-0.12, -0.07)
+TABLE_I_ELAPSED = 0.229
+
+_ALIASES = {"v_x": ["--vx"], "v_y": ["--vy"]}
+_HELP = {
+    "alpha1": "weight of the step position error [-]",
+    "alpha2": "weight of the step timing error [-]",
+    "alpha3": "weight of the DCM offset error [-]",
+    "z_c": "CoM height of the LIPM [m]",
+    "gravity": "gravitational acceleration [m/s^2]",
+    "v_x": "commanded forward velocity [m/s] (l_nom = v_x t_nom)",
+    "v_y": "commanded lateral velocity [m/s]",
+    "l_min": "min step length [m]",
+    "l_max": "max step length [m]",
+    "pelvis_width": "nominal lateral distance between the feet l_p [m]",
+    "w_left_min": "min lateral step while the LEFT foot is in stance [m]",
+    "w_left_max": "max lateral step while the LEFT foot is in stance [m]",
+    "w_right_min": "min lateral step while the RIGHT foot is in stance [m]",
+    "w_right_max": "max lateral step while the RIGHT foot is in stance [m]",
+    "t_min": "min step duration [s]",
+    "t_nom": "nominal step duration [s]",
+    "t_max": "max step duration [s]",
+    "horizon": "H_u: plan until a touchdown at or after t + horizon [s]",
+    "swing_drift": "kappa: DCM gain over the LIPM per unit of step length (0 = the paper's LIPM) [-]",
+    "dcm_offset_bias": "measured minus planned sagittal DCM offset at touchdown, aimed off (0 = none) [m]",
+}
+
+
+def add_params_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add --preset, --params FILE and one --<field> option per SequencerParams field."""
+    presets = sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
+    group = parser.add_argument_group("sequencer parameters (defaults: the chosen preset)")
+    group.add_argument("--preset", choices=presets, default="table_i", help="named parameter set (default table_i)")
+    group.add_argument("--params", metavar="FILE", default=None, help="TOML parameter file (overrides --preset)")
+    for field in dataclasses.fields(SequencerParams):
+        if field.name == "name":
+            continue
+        flags = [f"--{field.name.replace('_', '-')}"] + _ALIASES.get(field.name, [])
+        group.add_argument(*flags, dest=f"param_{field.name}", type=float, default=None, metavar="VALUE",
+                           help=_HELP[field.name])
+
+
+def params_from_args(args: argparse.Namespace) -> SequencerParams:
+    """Build SequencerParams from --preset/--params and the per-field overrides."""
+    base = SequencerParams.from_toml(args.params) if args.params else SequencerParams.preset(args.preset)
+    overrides = {
+        field.name: getattr(args, f"param_{field.name}")
+        for field in dataclasses.fields(SequencerParams)
+        if field.name != "name" and getattr(args, f"param_{field.name}", None) is not None
+    }
+    return dataclasses.replace(base, **overrides) if overrides else base
+
+
+def add_state_arguments(parser: argparse.ArgumentParser, elapsed_name: str = "--t") -> None:
+    """Measured state: stance foot, its position, the measured DCM and the elapsed time."""
+    group = parser.add_argument_group("measured state (defaults: the Table I example)")
+    group.add_argument("--stance-foot", choices=("left", "right"), default=TABLE_I_STANCE_FOOT)
+    group.add_argument("--stance-position", nargs=2, type=float, metavar=("X", "Y"),
+                       default=list(TABLE_I_STANCE_POSITION), help="support foot p0 [m] (world)")
+    group.add_argument("--dcm", nargs=2, type=float, metavar=("X", "Y"), default=list(TABLE_I_DCM),
+                       help="measured DCM zeta_hat [m] (world)")
+    group.add_argument(elapsed_name, dest="elapsed", type=float, default=TABLE_I_ELAPSED,
+                       help="time elapsed since the stance began t [s]")
+
+
+def plan_table(plan: FootstepPlan) -> str:
+    """Human-readable table of a plan."""
+    lines = [
+        f"plan at t0={plan.t0:.3f} s: stance {plan.stance_foot} at ({plan.stance_position[0]:+.4f}, "
+        f"{plan.stance_position[1]:+.4f}) m, DCM ({plan.dcm_measured[0]:+.4f}, {plan.dcm_measured[1]:+.4f}) m",
+        f"{'#':>3} {'foot':>5} {'touchdown [s]':>13} {'T [s]':>7} {'p_T x [m]':>10} {'p_T y [m]':>10} "
+        f"{'b_T x [m]':>10} {'b_T y [m]':>10}  active",
+    ]
+    for k, s in enumerate(plan.steps):
+        lines.append(
+            f"{k + 1:>3} {s.foot:>5} {s.touchdown_time:>13.4f} {s.duration:>7.4f} {s.position[0]:>+10.4f} "
+            f"{s.position[1]:>+10.4f} {s.dcm_offset[0]:>+10.5f} {s.dcm_offset[1]:>+10.5f}  {','.join(s.active) or '-'}"
+        )
+    if len(plan.steps) >= 3:
+        v = plan.mean_velocity()
+        lines.append(f"mean foothold velocity: ({v[0]:+.4f}, {v[1]:+.4f}) m/s")
+    return "\n".join(lines)
+
+
+def run_plan(args: argparse.Namespace) -> int:
+    params = params_from_args(args)
+    sequencer = FootstepSequencer(params, backend=args.backend)
+    plan = sequencer.plan(
+        t=args.elapsed, stance_foot=args.stance_foot, stance_position=args.stance_position,
+        dcm_measured=args.dcm, t_stance_start=0.0,
+    )
+    if args.plot:
+        from sequencer.plots import plot_plan
+
+        plot_plan(plan, params, args.plot)
+    if args.json:
+        result = {"params": params.to_dict(), "backend": args.backend, "plan": plan}
+        if len(plan.steps) >= 3:
+            result["mean_velocity"] = plan.mean_velocity()
+        print_json(result)
+    else:
+        print(plan_table(plan))
+        if args.plot:
+            print(f"wrote {args.plot}")
+    return 0
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "plan", help="plan footsteps with the DCM sequencer (Algorithm 1) and draw Fig. 3",
+        description="Run Algorithm 1 from a measured state (default: the Table I example, t_stance_start = 0).",
+    )
+    add_params_arguments(parser)
+    add_state_arguments(parser)
+    parser.add_argument("--backend", choices=("exact", "osqp", "proxqp"), default="exact", help="QP backend")
+    add_output_arguments(parser, plot=True)
+    parser.set_defaults(func=run_plan)

@@ -1,0 +1,159 @@
+"""Named cost terms: cost = Σ_i weight_i · a_i(r_i(x, u)) (Crocoddyl's CostModelSum).
+
+Each term couples a residual (``wbmpc.ocp.residuals``) and an activation (``wbmpc.ocp.activations``);
+the weight stays outside the residual so logs and plots show every term by name::
+
+    costs = CostModelSum(state, nu)
+    costs.add("state_regularization", CostModelResidual(ResidualState(state, x_ref, nu),
+              ActivationWeightedQuad(w)), weight=1.0)
+
+Derivatives use the Gauss-Newton approximation: Lx = Rxᵀ Ar, Lxx = Rxᵀ diag(Arr) Rx. A node's
+terms are evaluated together: their residuals are rows of one vector/Jacobian and every
+activation is the row-wise dead-zone quadratic of :mod:`wbmpc.ocp.activations`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from wbmpc.errors import ParameterError
+from wbmpc.ocp.activations import ActivationQuad
+from wbmpc.ocp.kernels import cost_rows_derivatives, cost_rows_value
+from wbmpc.ocp.residuals.base import DataCollector
+from wbmpc.ocp.state import StateMultibody
+
+
+class CostModelResidual:
+    """One cost term a(r(x, u)); the activation defaults to ½‖r‖²."""
+
+    def __init__(self, residual, activation=None):
+        self.residual = residual
+        self.activation = ActivationQuad(residual.nr) if activation is None else activation
+        if self.activation.nr != residual.nr:
+            raise ParameterError(
+                f"activation dimension {self.activation.nr} does not match the residual dimension {residual.nr}"
+            )
+        self.nr = residual.nr
+
+    def createData(self) -> "CostDataResidual":
+        return CostDataResidual(self)
+
+
+class CostDataResidual:
+    def __init__(self, model: CostModelResidual):
+        self.residual = model.residual.createData()
+        self.activation = model.activation.createData()
+        self.cost = 0.0
+
+
+@dataclass
+class CostItem:
+    """A named, weighted term of a :class:`CostModelSum`; ``active`` switches it on and off."""
+
+    name: str
+    cost: CostModelResidual
+    weight: float
+    active: bool = True
+
+
+class CostModelSum:
+    """Sum of named weighted cost terms of a node.
+
+    Args:
+        state: the multibody state.
+        nu: control dimension.
+    """
+
+    def __init__(self, state: StateMultibody, nu: int):
+        self.state = state
+        self.nu = nu
+        self.costs: dict[str, CostItem] = {}
+
+    def add(self, name: str, cost: CostModelResidual, weight: float, active: bool = True) -> None:
+        """Add a term; ``weight`` ≥ 0. Names are unique within a node."""
+        if name in self.costs:
+            raise ParameterError(f"cost name {name!r} is already used in this node (terms: {list(self.costs)})")
+        if not (np.isfinite(weight) and weight >= 0):
+            raise ParameterError(f"weight={weight} of cost {name!r} must be finite and >= 0")
+        self.costs[name] = CostItem(name, cost, float(weight), active)
+
+    def changeCostStatus(self, name: str, active: bool) -> None:
+        if name not in self.costs:
+            raise ParameterError(f"unknown cost {name!r} (terms: {list(self.costs)})")
+        self.costs[name].active = bool(active)
+
+    def createData(self) -> "CostDataSum":
+        return CostDataSum(self)
+
+    def calc(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> float:
+        """Evaluate every active term; returns and stores the total cost (data.cost)."""
+        term_scale = data.term_scale
+        for j, item, residual, rdata in data.loop:
+            if item.active:
+                term_scale[j] = item.weight
+                residual.calc(rdata, x, u, shared)
+            else:
+                term_scale[j] = 0.0
+        data.cost = cost_rows_value(data.r, data.row_term, term_scale, data.w, data.lb, data.ub, data.term_cost)
+        return data.cost
+
+    def calcDiff(self, data: "CostDataSum", x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
+        """Fill data.Lx (ndx,), Lu (nu,), Lxx, Lxu, Luu (Gauss-Newton). Needs calc first.
+
+        The residual Jacobians of all terms are rows of one matrix R = [Rx Ru] (data.R), so the
+        gradient and Hessian come from one compiled pass over the rows.
+        """
+        for _, item, residual, rdata in data.loop:
+            if item.active:
+                residual.calcDiff(rdata, x, u, shared)
+        cost_rows_derivatives(data.r, data.R, data.row_term, data.term_scale, data.w, data.lb, data.ub,
+                              data.gradient, data.hessian)
+
+    def term_costs(self, data: "CostDataSum") -> dict[str, float]:
+        """Cost of every term by name after calc (inactive terms report 0)."""
+        return {name: float(data.term_cost[j]) for j, name in enumerate(self.costs)}
+
+
+class CostDataSum:
+    """Buffers of a cost sum; every term's residual Jacobians are row views of ``R`` (nr_total, ndx + nu)."""
+
+    def __init__(self, model: CostModelSum):
+        ndx, nu = model.state.ndx, model.nu
+        self.terms = {name: item.cost.createData() for name, item in model.costs.items()}
+        nr_total = sum(item.cost.nr for item in model.costs.values())
+        n_terms = len(model.costs)
+        self.r = np.zeros(nr_total)
+        self.R = np.zeros((nr_total, ndx + nu))
+        self.w = np.zeros(nr_total)
+        self.lb = np.zeros(nr_total)
+        self.ub = np.zeros(nr_total)
+        self.row_term = np.zeros(nr_total, dtype=np.int64)
+        self.term_scale = np.zeros(n_terms)
+        self.term_cost = np.zeros(n_terms)
+        self.rows: dict[str, slice] = {}
+        start = 0
+        for j, (name, item) in enumerate(model.costs.items()):
+            rows = slice(start, start + item.cost.nr)
+            rdata = self.terms[name].residual
+            self.R[rows, :ndx] = rdata.Rx
+            self.R[rows, ndx:] = rdata.Ru
+            rdata.r = self.r[rows]
+            rdata.Rx = self.R[rows, :ndx]
+            rdata.Ru = self.R[rows, ndx:]
+            self.w[rows], self.lb[rows], self.ub[rows] = item.cost.activation.row_parameters()
+            self.row_term[rows] = j
+            self.rows[name] = rows
+            start += item.cost.nr
+        # (term index, item, residual model, residual data) in order, for the evaluation loops
+        self.loop = [(j, item, item.cost.residual, self.terms[name].residual)
+                     for j, (name, item) in enumerate(model.costs.items())]
+        self.gradient = np.zeros(ndx + nu)
+        self.hessian = np.zeros((ndx + nu, ndx + nu))
+        self.cost = 0.0
+        self.Lx = self.gradient[:ndx]
+        self.Lu = self.gradient[ndx:]
+        self.Lxx = self.hessian[:ndx, :ndx]
+        self.Lxu = self.hessian[:ndx, ndx:]
+        self.Luu = self.hessian[ndx:, ndx:]

@@ -1,0 +1,319 @@
+"""Contact-constrained forward dynamics of a floating-base robot (Crocoddyl's
+DifferentialActionModelContactFwdDynamics), with its analytical derivatives.
+
+For the active contacts (stacked Jacobian Jc (nc, nv), drift a0 (nc,)), the acceleration a and
+contact forces λ solve the KKT system
+
+    [M  Jcᵀ] [ a ]   [τ − b]
+    [Jc  0 ] [−λ ] = [ −a0 ]
+
+where M includes the rotor armature (``model.armature``) and b the nonlinear effects.
+
+Two interchangeable backends compute it (they agree to ~1e-13, see the tests):
+
+- ``"pinocchio"`` (default): Pinocchio's ``constraintDynamics`` and
+  ``computeConstraintDynamicsDerivatives`` with ``RigidConstraintModel`` s carrying the same
+  Baumgarte gains: two binding calls per node, the fast path.
+- ``"kkt"``: Crocoddyl's formulas written out (``forwardDynamics``, KKT inverse, RNEA
+  derivatives with the contact forces as external forces, contact drift derivatives); also
+  the path for nodes without contacts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from wbmpc.errors import ParameterError
+from wbmpc.ocp.actuation import ActuationFloatingBase
+from wbmpc.ocp.costs import CostModelSum
+from wbmpc.ocp.residuals.base import DataCollector
+from wbmpc.ocp.state import StateMultibody
+
+
+def _symmetric_from_upper(M: np.ndarray) -> np.ndarray:
+    """CRBA fills the upper triangle of M only (the lower one may hold stale values)."""
+    return np.triu(M) + np.triu(M, 1).T
+
+
+class DifferentialActionModelContactFwdDynamics:
+    """Continuous-time node: a = f(x, u) under rigid contacts, and the node's running cost l(x, u).
+
+    Args:
+        state: the multibody state.
+        actuation: floating-base actuation (nu = nv − 6).
+        contacts: contact name -> contact model (:mod:`wbmpc.ocp.contacts`); kept sorted by name.
+        costs: named cost terms of the node.
+        active_contacts: names of the contacts enforced at this node (default: all).
+        backend: "pinocchio" (constraint dynamics and its derivatives, default) or "kkt"
+            (Crocoddyl's formulas); same results.
+    """
+
+    BACKENDS = ("pinocchio", "kkt")
+
+    def __init__(self, state: StateMultibody, actuation: ActuationFloatingBase, contacts: dict,
+                 costs: CostModelSum, active_contacts=None, backend: str = "pinocchio"):
+        if backend not in self.BACKENDS:
+            raise ParameterError(f"backend={backend!r} is not one of {self.BACKENDS}")
+        self.backend = backend
+        self.state = state
+        self.actuation = actuation
+        self.nu = actuation.nu
+        self.contacts = dict(sorted(contacts.items()))
+        self.costs = costs
+        if costs.nu != self.nu:
+            raise ParameterError(f"costs were built for nu={costs.nu}, the actuation has nu={self.nu}")
+        self._costs_use_force_derivatives = any(
+            getattr(item.cost.residual, "uses_contact_forces", False) for item in costs.costs.values())
+        self.constraint_models = {name: c.rigid_constraint_model() for name, c in self.contacts.items()}
+        self.proximal_settings = pin.ProximalSettings(1e-12, 0.0, 1)  # mu = 0: the exact KKT solve
+        names = list(self.contacts) if active_contacts is None else list(active_contacts)
+        self.set_active_contacts(names)
+
+    def set_active_contacts(self, names) -> None:
+        """Enforce exactly the contacts in ``names`` (between solves; never during one)."""
+        names = tuple(names)
+        if names == getattr(self, "active_key", None):
+            return  # unchanged: keep the cached constraint set (datas compare it by identity)
+        unknown = set(names) - set(self.contacts)
+        if unknown:
+            raise ParameterError(f"unknown contact(s) {sorted(unknown)}; known contacts: {list(self.contacts)}")
+        active = [name for name in self.contacts if name in set(names)]
+        if getattr(self, "active_key", None) == tuple(active):
+            return
+        self.active_contacts = active
+        self.active_key = tuple(self.active_contacts)
+        self.nc = sum(self.contacts[name].nc for name in self.active_contacts)
+        self.active_constraints = pin.StdVec_RigidConstraintModel()
+        self._active_rows = []  # (contact name, rows in the stacked force vector)
+        row = 0
+        for name in self.active_contacts:
+            self.active_constraints.append(self.constraint_models[name])
+            self._active_rows.append((name, slice(row, row + self.contacts[name].nc)))
+            row += self.contacts[name].nc
+        self._moving_references = [name for name in self.active_contacts if self.contacts[name].gains[0] != 0.0]
+
+    def createData(self) -> "DifferentialActionDataContactFwdDynamics":
+        return DifferentialActionDataContactFwdDynamics(self)
+
+    def calc(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Fill data.xout (nv,) accelerations [m/s², rad/s²], contact forces and data.cost.
+
+        With ``u=None`` (terminal node) only the kinematics and the state costs are computed.
+        """
+        model = self.state.pinocchio
+        nq = self.state.nq
+        q, v = x[:nq], x[nq:]
+        if u is not None and self.nc and self.backend == "pinocchio":
+            self._calc_constraint_dynamics(data, q, v, u)
+            data.cost = self.costs.calc(data.costs, x, u, data.shared)
+            return
+        pdata = data.select_pinocchio(None)
+        pin.computeAllTerms(model, pdata, q, v)
+        if u is None:
+            data.cost = self.costs.calc(data.costs, x, None, data.shared)
+            return
+        self.actuation.calc(data.tau, u)
+        nc = self.nc
+        if data.active_contacts is not self.active_contacts:
+            data.active_contacts = self.active_contacts
+            data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
+            data.Jc = data.Jc_all[:nc]
+            data.a0 = data.a0_all[:nc]
+        if len(self.active_contacts) == 1:  # one stance foot: its buffers are the stacked ones
+            name = self.active_contacts[0]
+            cdata = data.contacts[name]
+            self.contacts[name].calc(cdata, pdata)
+            data.Jc, data.a0 = cdata.Jc, cdata.a0
+        else:
+            row = 0
+            for name in self.active_contacts:
+                contact = self.contacts[name]
+                cdata = data.contacts[name]
+                contact.calc(cdata, pdata)
+                data.Jc[row:row + contact.nc] = cdata.Jc
+                data.a0[row:row + contact.nc] = cdata.a0
+                row += contact.nc
+        if nc:
+            data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc, data.a0, 0.0)
+            forces = pdata.lambda_c
+        else:
+            # no contact (flight): keep M⁻¹ of this point, RNEA derivatives overwrite data.M
+            data.Minv = np.linalg.inv(_symmetric_from_upper(pdata.M))
+            data.xout[:] = data.Minv @ (data.tau - pdata.nle)
+            forces = np.zeros(0)
+        row = 0
+        for name in self.active_contacts:
+            contact = self.contacts[name]
+            contact.update_force(data.contacts[name], pdata, forces[row:row + contact.nc])
+            row += contact.nc
+        data.cost = self.costs.calc(data.costs, x, u, data.shared)
+
+    def _calc_constraint_dynamics(self, data, q, v, u) -> None:
+        """Pinocchio backend of calc: constraintDynamics with the active RigidConstraintModels."""
+        pdata, constraint_datas = data.select_pinocchio(self)
+        for name in self._moving_references:  # the Baumgarte position reference may have moved
+            self.constraint_models[name].joint2_placement = self.contacts[name].reference_placement()
+        data.tau[6:] = u
+        data.xout[:] = pin.constraintDynamics(self.state.pinocchio, pdata, q, v, data.tau, self.active_constraints,
+                                              constraint_datas, self.proximal_settings)
+        forces = pdata.lambda_c
+        contacts = data.contacts
+        for name, rows in self._active_rows:
+            contacts[name].force[:] = forces[rows]
+        if data.active_contacts is not self.active_contacts:
+            data.active_contacts = self.active_contacts
+            data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
+
+    def _calc_diff_constraint_dynamics(self, data) -> None:
+        """Pinocchio backend of calcDiff: computeConstraintDynamicsDerivatives."""
+        model = self.state.pinocchio
+        nv = self.state.nv
+        pdata, constraint_datas = data.select_pinocchio(self)
+        ddq_dq, ddq_dv, ddq_dtau, dlambda_dq, dlambda_dv, dlambda_dtau = pin.computeConstraintDynamicsDerivatives(
+            model, pdata, self.active_constraints, constraint_datas, self.proximal_settings)
+        data.Fx[:, :nv] = ddq_dq
+        data.Fx[:, nv:] = ddq_dv
+        data.Fu[:] = ddq_dtau[:, 6:]
+        if not self._costs_use_force_derivatives:
+            return
+        for name, rows in self._active_rows:
+            cdata = data.contacts[name]
+            cdata.df_dx[:, :nv] = dlambda_dq[rows]
+            cdata.df_dx[:, nv:] = dlambda_dv[rows]
+            cdata.df_du[:] = dlambda_dtau[rows, 6:]
+
+    def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Fill data.Fx (nv, ndx), Fu (nv, nu), force derivatives and the cost derivatives.
+
+        Uses what :meth:`calc` stored (accelerations, forces, Jc); call calc first.
+        """
+        if u is None:
+            self.costs.calcDiff(data.costs, x, None, data.shared)
+            self._copy_cost_derivatives(data)
+            return
+        if self.nc and self.backend == "pinocchio":
+            self._calc_diff_constraint_dynamics(data)
+            self.costs.calcDiff(data.costs, x, u, data.shared)
+            self._copy_cost_derivatives(data)
+            return
+        model = self.state.pinocchio
+        pdata = data.pinocchio
+        nq, nv = self.state.nq, self.state.nv
+        q, v = x[:nq], x[nq:]
+        nc = self.nc
+        for joint in data.fext_joints:
+            data.fext[joint] = pin.Force.Zero()
+        data.fext_joints = []
+        for name in self.active_contacts:
+            contact = self.contacts[name]
+            cdata = data.contacts[name]
+            contact.force_derivative_terms(cdata, pdata)
+            data.fext[contact.joint_id] = cdata.fext
+            data.fext_joints.append(contact.joint_id)
+        pin.computeRNEADerivatives(model, pdata, q, v, data.xout, data.fext)
+        if nc:
+            Kinv = pin.getKKTContactDynamicMatrixInverse(model, pdata, data.Jc)
+        else:
+            Kinv = data.Minv
+        row = 0
+        da0_dx = data.da0_dx_all[:nc]
+        for name in self.active_contacts:
+            contact = self.contacts[name]
+            cdata = data.contacts[name]
+            contact.calcDiff(cdata, pdata)
+            da0_dx[row:row + contact.nc] = cdata.da0_dx
+            row += contact.nc
+        # [∂a/∂x; −∂λ/∂x] = −Kinv [∂τ/∂x (RNEA with contact forces); ∂a0/∂x]
+        D = data.D[: nv + nc]
+        D[:nv, :nv] = pdata.dtau_dq
+        for name in self.active_contacts:
+            extra = data.contacts[name].dtau_dq
+            if extra is not None:
+                D[:nv, :nv] += extra
+        D[:nv, nv:] = pdata.dtau_dv
+        D[nv:] = da0_dx
+        KD = Kinv @ D
+        np.negative(KD[:nv], out=data.Fx)
+        a_dtau = Kinv[:nv, :nv]
+        if nc:
+            df_dx = KD[nv:]
+            df_du = -Kinv[nv:, 6:nv]
+            row = 0
+            for name in self.active_contacts:
+                contact = self.contacts[name]
+                cdata = data.contacts[name]
+                cdata.df_dx[:] = df_dx[row:row + contact.nc]
+                cdata.df_du[:] = df_du[row:row + contact.nc]
+                row += contact.nc
+        data.Fu[:] = a_dtau[:, 6:]
+        self.costs.calcDiff(data.costs, x, u, data.shared)
+        self._copy_cost_derivatives(data)
+
+    @staticmethod
+    def _copy_cost_derivatives(data) -> None:
+        c = data.costs
+        data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu = c.Lx, c.Lu, c.Lxx, c.Lxu, c.Luu
+
+
+class DifferentialActionDataContactFwdDynamics:
+    """Per-node buffers of :class:`DifferentialActionModelContactFwdDynamics`."""
+
+    def __init__(self, model: DifferentialActionModelContactFwdDynamics):
+        state = model.state
+        nv, ndx, nu = state.nv, state.ndx, model.nu
+        nc_max = sum(c.nc for c in model.contacts.values())
+        self._model = state.pinocchio
+        self._plain_pinocchio = state.pinocchio.createData()
+        self._constraint_pinocchio = None  # created on the first constraint-dynamics evaluation
+        self.pinocchio = self._plain_pinocchio
+        self._constraint_key = None
+        self._constraint_datas = None
+        self.contacts = {name: c.createData(nu) for name, c in model.contacts.items()}
+        self.shared = DataCollector(self.pinocchio, {})
+        self.costs = model.costs.createData()
+        self.tau = np.zeros(nv)
+        self.xout = np.zeros(nv)
+        self.Jc_all = np.zeros((nc_max, nv))
+        self.a0_all = np.zeros(nc_max)
+        self.da0_dx_all = np.zeros((nc_max, ndx))
+        self.Jc = self.Jc_all[:0]
+        self.a0 = self.a0_all[:0]
+        self.D = np.zeros((nv + nc_max, ndx))
+        self.Minv = np.zeros((nv, nv))
+        self.active_contacts = None
+        self.fext_joints: list[int] = []
+        self.fext = pin.StdVec_Force()
+        for _ in range(state.pinocchio.njoints):
+            self.fext.append(pin.Force.Zero())
+        self.Fx = np.zeros((nv, ndx))
+        self.Fu = np.zeros((nv, nu))
+        self.cost = 0.0
+        c = self.costs
+        self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu = c.Lx, c.Lu, c.Lxx, c.Lxu, c.Luu
+
+    def select_pinocchio(self, model):
+        """Pinocchio data of the current evaluation, made current for the costs.
+
+        ``model=None`` (KKT path, flight and terminal nodes): a data never used by constraint
+        dynamics (after ``constraintDynamics`` a data gives wrong RNEA derivatives). Otherwise
+        the node's constraint-dynamics data and the RigidConstraintData of ``model``'s active
+        contact set, re-initialised only when the set changed (a few nodes per MPC tick).
+        """
+        if model is None:
+            pdata = self._plain_pinocchio
+        else:
+            pdata = self._constraint_pinocchio
+            if pdata is None:
+                pdata = self._constraint_pinocchio = self._model.createData()
+            if self._constraint_key != model.active_key:
+                constraint_datas = pin.StdVec_RigidConstraintData()
+                for constraint in model.active_constraints:
+                    constraint_datas.append(constraint.createData())
+                pin.initConstraintDynamics(self._model, pdata, model.active_constraints, constraint_datas)
+                self._constraint_datas = constraint_datas
+                self._constraint_key = model.active_key
+        if self.pinocchio is not pdata:
+            self.pinocchio = pdata
+            self.shared.pinocchio = pdata
+        return pdata if model is None else (pdata, self._constraint_datas)

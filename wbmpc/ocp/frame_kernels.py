@@ -1,0 +1,170 @@
+"""Compiled forward kinematics of chosen frames over a whole horizon: world positions [m] and
+LOCAL_WORLD_ALIGNED linear Jacobians (3, nv), for a free-flyer root followed by revolute joints.
+
+Pinocchio gives the same numbers frame by frame (``updateFramePlacement``, ``getFrameJacobian``),
+at a binding call each; the batched evaluation (:mod:`wbmpc.ocp.batched_problem`) needs them for the
+swing feet at every node, so it reads the kinematic tree once (:class:`FrameKinematics`) and
+evaluates all nodes in one compiled pass. Agreement with Pinocchio: ~1e-15
+(tests/test_wbmpc_frame_kernels.py).
+
+Conventions: joint i's world placement oMi = oM_parent · jointPlacement_i · exp(axis_i q_i); the
+free flyer's joint transform is (R(quaternion), p) with its velocity (v, ω) in its own frame, so
+a point p_f moving with the tree has ṗ_f = R₁ v + (R₁ ω) × (p_f − p₁) + Σ_j (R_j a_j) × (p_f − p_j) q̇_j
+over the revolute joints j supporting it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+from numba import njit
+
+from wbmpc.errors import ParameterError
+from wbmpc.ocp.kernels import _quaternion_matrix
+from wbmpc.ocp.small_linalg import mat3_mul, mat3_vec
+
+_AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "JointModelRZ": (0.0, 0.0, 1.0)}
+
+
+def frame_kinematics_support(model: pin.Model) -> str | None:
+    """None if :class:`FrameKinematics` handles ``model``, else the reason."""
+    if model.njoints < 2 or model.joints[1].shortname() != "JointModelFreeFlyer" or model.parents[1] != 0:
+        return "the root joint is not a free flyer"
+    for i in range(2, model.njoints):
+        name = model.joints[i].shortname()
+        if name not in _AXES and name != "JointModelRevoluteUnaligned":
+            return f"joint {model.names[i]!r} is a {name} (revolute joints only)"
+    return None
+
+
+class FrameKinematics:
+    """The kinematic tree of ``model`` and the frames ``frame_ids``, as arrays for the kernels.
+
+    Args:
+        model: Pinocchio model, free-flyer root followed by revolute joints (RX, RY, RZ,
+            unaligned); raises :class:`~wbmpc.errors.ParameterError` otherwise.
+        frame_ids: frames to evaluate; slot s of the outputs is ``frame_ids[s]``.
+    """
+
+    def __init__(self, model: pin.Model, frame_ids):
+        reason = frame_kinematics_support(model)
+        if reason is not None:
+            raise ParameterError(f"model {model.name!r} is not supported by the compiled frame kinematics: {reason}")
+        n = model.njoints
+        self.parents = np.array([model.parents[i] for i in range(n)], dtype=np.int64)
+        self.placement_rotation = np.array([model.jointPlacements[i].rotation for i in range(n)])
+        self.placement_translation = np.array([model.jointPlacements[i].translation for i in range(n)])
+        self.axes = np.zeros((n, 3))
+        for i in range(2, n):
+            joint = model.joints[i]
+            name = joint.shortname()
+            self.axes[i] = _AXES[name] if name in _AXES else np.asarray(joint.extract().axis, dtype=float)
+        self.idx_q = np.array([model.idx_qs[i] for i in range(n)], dtype=np.int64)
+        self.idx_v = np.array([model.idx_vs[i] for i in range(n)], dtype=np.int64)
+        self.frame_ids = [int(f) for f in frame_ids]
+        frames = [model.frames[f] for f in self.frame_ids]
+        self.frame_joint = np.array([f.parentJoint for f in frames], dtype=np.int64)
+        self.frame_rotation = np.array([f.placement.rotation for f in frames]).reshape(len(frames), 3, 3)
+        self.frame_translation = np.array([f.placement.translation for f in frames]).reshape(len(frames), 3)
+        self.support = np.zeros((len(frames), n), dtype=np.bool_)  # joints moving each frame
+        for s, f in enumerate(frames):
+            for j in model.supports[f.parentJoint]:
+                self.support[s, j] = True
+        self.nv = model.nv
+
+    def evaluate(self, qs: np.ndarray, needed: np.ndarray, positions: np.ndarray,
+                 jacobians: np.ndarray | None = None) -> None:
+        """Positions (T, n_frames, 3) and, if given, Jacobians (T, n_frames, 3, nv) of the frames
+        with ``needed[t, s]`` at the configurations ``qs`` (T, nq); other entries are untouched."""
+        frame_kinematics(qs, needed, self.parents, self.placement_rotation, self.placement_translation, self.axes,
+                         self.idx_q, self.idx_v, self.frame_joint, self.frame_rotation, self.frame_translation,
+                         self.support, positions, jacobians if jacobians is not None else np.zeros((0, 0, 3, 0)),
+                         jacobians is not None)
+
+
+@njit(cache=True)
+def _axis_rotation(axis, angle, out):
+    """Rotation by ``angle`` [rad] about the unit ``axis`` (Rodrigues)."""
+    c, s = np.cos(angle), np.sin(angle)
+    x, y, z = axis[0], axis[1], axis[2]
+    t = 1.0 - c
+    out[0, 0] = c + t * x * x
+    out[0, 1] = t * x * y - s * z
+    out[0, 2] = t * x * z + s * y
+    out[1, 0] = t * x * y + s * z
+    out[1, 1] = c + t * y * y
+    out[1, 2] = t * y * z - s * x
+    out[2, 0] = t * x * z - s * y
+    out[2, 1] = t * y * z + s * x
+    out[2, 2] = c + t * z * z
+
+
+@njit(cache=True)
+def frame_kinematics(qs, needed, parents, placement_rotation, placement_translation, axes, idx_q, idx_v, frame_joint,
+                     frame_rotation, frame_translation, support, positions, jacobians, with_jacobians):
+    """Kernel of :meth:`FrameKinematics.evaluate`."""
+    n_joints = parents.size
+    n_frames = frame_joint.size
+    R = np.zeros((n_joints, 3, 3))  # world rotation of each joint frame
+    p = np.zeros((n_joints, 3))  # world position of each joint origin
+    R[0] = np.eye(3)
+    local = np.empty((3, 3))
+    Rp = np.empty((3, 3))
+    offset = np.empty(3)
+    pf = np.empty(3)
+    w = np.empty(3)
+    for t in range(qs.shape[0]):
+        any_needed = False
+        for s in range(n_frames):
+            if needed[t, s]:
+                any_needed = True
+        if not any_needed:
+            continue
+        q = qs[t]
+        for i in range(1, n_joints):
+            parent = parents[i]
+            # parent · placement
+            mat3_mul(R[parent], placement_rotation[i], Rp)
+            mat3_vec(R[parent], placement_translation[i], offset)
+            if i == 1:  # free flyer: (R(quaternion), position)
+                _quaternion_matrix(q[3:7], local)
+                mat3_mul(Rp, local, R[i])
+                for a in range(3):
+                    p[i, a] = p[parent, a] + offset[a] + Rp[a, 0] * q[0] + Rp[a, 1] * q[1] + Rp[a, 2] * q[2]
+            else:
+                _axis_rotation(axes[i], q[idx_q[i]], local)
+                mat3_mul(Rp, local, R[i])
+                for a in range(3):
+                    p[i, a] = p[parent, a] + offset[a]
+        for s in range(n_frames):
+            if not needed[t, s]:
+                continue
+            j = frame_joint[s]
+            mat3_vec(R[j], frame_translation[s], pf)
+            for a in range(3):
+                pf[a] += p[j, a]
+                positions[t, s, a] = pf[a]
+            if not with_jacobians:
+                continue
+            J = jacobians[t, s]
+            J[:, :] = 0.0
+            for i in range(1, n_joints):
+                if not support[s, i]:
+                    continue
+                r0, r1, r2 = pf[0] - p[i, 0], pf[1] - p[i, 1], pf[2] - p[i, 2]
+                if i == 1:  # base: linear R₁, angular −[r]× R₁
+                    v0 = idx_v[i]
+                    for a in range(3):
+                        for b in range(3):
+                            J[a, v0 + b] = R[i, a, b]
+                    for b in range(3):
+                        w0, w1, w2 = R[i, 0, b], R[i, 1, b], R[i, 2, b]
+                        J[0, v0 + 3 + b] = w1 * r2 - w2 * r1
+                        J[1, v0 + 3 + b] = w2 * r0 - w0 * r2
+                        J[2, v0 + 3 + b] = w0 * r1 - w1 * r0
+                else:  # revolute: (R_i a_i) × (p_f − p_i)
+                    mat3_vec(R[i], axes[i], w)
+                    col = idx_v[i]
+                    J[0, col] = w[1] * r2 - w[2] * r1
+                    J[1, col] = w[2] * r0 - w[0] * r2
+                    J[2, col] = w[0] * r1 - w[1] * r0

@@ -1,0 +1,95 @@
+"""Explicit (semi-implicit) Euler integration of a differential action model.
+
+    v⁺ = v + a dt,   q⁺ = q ⊕ (v dt + a dt²),   l = dt · l_continuous(x, u)
+
+(Crocoddyl's IntegratedActionModelEuler). A node built with ``dt = 0`` is a terminal node: it
+is evaluated with ``u=None``, its cost is the differential model's cost unscaled and x⁺ = x.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from wbmpc.errors import ParameterError
+from wbmpc.ocp.kernels import euler_step_tangent, euler_transition_jacobians, scale_cost_derivatives
+
+
+class IntegratedActionModelEuler:
+    """Discrete node x⁺ = f(x, u) with cost l(x, u).
+
+    Args:
+        differential: continuous-time model (e.g. contact forward dynamics).
+        dt: time step [s], ≥ 0 (0 for a terminal node).
+    """
+
+    def __init__(self, differential, dt: float):
+        if not (np.isfinite(dt) and dt >= 0):
+            raise ParameterError(f"dt={dt} s must be finite and >= 0")
+        self.differential = differential
+        self.state = differential.state
+        self.nu = differential.nu
+        self.dt = float(dt)
+
+    def createData(self) -> "IntegratedActionDataEuler":
+        return IntegratedActionDataEuler(self)
+
+    def calc(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Fill data.xnext (nx,) and data.cost."""
+        diff = self.differential
+        dd = data.differential
+        diff.calc(dd, x, u)
+        if u is None:
+            data.dx[:] = 0.0
+            data.xnext[:] = x
+            data.cost = dd.cost
+            return
+        state = self.state
+        nq, nv = state.nq, state.nv
+        dt = self.dt
+        euler_step_tangent(x[nq:], dd.xout, dt, data.dx, data.xnext[nq:])
+        data.xnext[:nq] = pin.integrate(state.pinocchio, x[:nq], data.dx[:nv])
+        data.cost = dt * dd.cost
+
+    def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        """Fill data.Fx (ndx, ndx), Fu (ndx, nu), Lx, Lu, Lxx, Lxu, Luu. Needs calc first."""
+        diff = self.differential
+        dd = data.differential
+        diff.calcDiff(dd, x, u)
+        if u is None:
+            data.Fx[:] = 0.0
+            data.Fx[np.diag_indices(self.state.ndx)] = 1.0
+            data.Lx[:] = dd.Lx
+            data.Lxx[:] = dd.Lxx
+            return
+        state = self.state
+        nq, nv = state.nq, state.nv
+        model = state.pinocchio
+        dt = self.dt
+        q = x[:nq]
+        dq = data.dx[:nv]
+        J_dq = pin.dIntegrate(model, q, dq, pin.ARG1)
+        J_q = pin.dIntegrate(model, q, dq, pin.ARG0)
+        euler_transition_jacobians(dd.Fx, dd.Fu, J_q, J_dq, dt, data.Fx, data.Fu)
+        costs = dd.costs
+        scale_cost_derivatives(dt, costs.gradient, costs.hessian, state.ndx,
+                               data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu)
+
+
+class IntegratedActionDataEuler:
+    """Per-node buffers of :class:`IntegratedActionModelEuler`."""
+
+    def __init__(self, model: IntegratedActionModelEuler):
+        state = model.state
+        ndx, nu = state.ndx, model.nu
+        self.differential = model.differential.createData()
+        self.dx = np.zeros(ndx)
+        self.xnext = np.zeros(state.nx)
+        self.cost = 0.0
+        self.Fx = np.zeros((ndx, ndx))
+        self.Fu = np.zeros((ndx, nu))
+        self.Lx = np.zeros(ndx)
+        self.Lu = np.zeros(nu)
+        self.Lxx = np.zeros((ndx, ndx))
+        self.Lxu = np.zeros((ndx, nu))
+        self.Luu = np.zeros((nu, nu))

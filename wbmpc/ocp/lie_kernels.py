@@ -1,0 +1,324 @@
+"""Compiled Lie-group operations of a free-flyer root followed by 1-dof joints (nq = nv + 1).
+
+Pinocchio conventions: q = [p (3) world, quaternion (x, y, z, w), joint angles], tangent
+dq = [v (3), ω (3) in the base frame, joint increments]; q ⊕ dq = M(q) exp6(v, ω) on the base.
+These replace ``pin.integrate``, ``pin.dIntegrate`` and ``pin.dDifference`` in the batched
+evaluation (:mod:`wbmpc.ocp.batched_problem`), where a binding call per node costs more than the
+arithmetic. They agree with Pinocchio to rounding (see tests/test_wbmpc_lie_kernels.py).
+
+The SE(3) Jacobians follow Barfoot's closed forms (State Estimation for Robotics, sec. 7.1.5):
+exp6's right Jacobian J_r(ξ) = J_l(−ξ) = [[J3, Q], [0, J3]] with the SO(3) right Jacobian J3 and
+the coupling block Q; dDifference is its inverse at ξ = log6(M0⁻¹ M1).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from wbmpc.ocp.kernels import _quaternion_matrix, free_flyer_difference, free_flyer_feedback_control
+from wbmpc.ocp.small_linalg import mat3_mul, mat3_vec, skew_into
+
+# [rad] below it the coefficients come from their Taylor series (terms up to θ¹²): the closed
+# forms of the higher ones cancel catastrophically (c3's numerator is ~θ⁵/60).
+SERIES_ANGLE = 0.5
+
+
+def _series_coefficients(offset: int, weight_step: float) -> np.ndarray:
+    """Coefficients c_n = (−1)ⁿ (1 + weight_step·n) / (2n + offset)! of θ²ⁿ, n = 0..6."""
+    return np.array([(-1.0) ** n * (1.0 + weight_step * n) / math.factorial(2 * n + offset) for n in range(7)])
+
+
+# Taylor coefficients (in θ²) of sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³ and of the coupling
+# block's c2 and c3 (constants of the compiled code)
+_SIN_OVER = _series_coefficients(1, 0.0)
+_ONE_MINUS_COS = _series_coefficients(2, 0.0)
+_THETA_MINUS_SIN = _series_coefficients(3, 0.0)
+_COUPLING_2 = _series_coefficients(4, 0.0)
+_COUPLING_3 = _series_coefficients(5, 1.0)
+
+
+@njit(cache=True, inline="always")
+def _series(t2, coefficients):
+    """Σ_n coefficients[n] θ²ⁿ (Horner)."""
+    total = coefficients[6]
+    for n in range(5, -1, -1):
+        total = total * t2 + coefficients[n]
+    return total
+
+
+@njit(cache=True)
+def _so3_coefficients(theta):
+    """(sin θ/θ, (1 − cos θ)/θ², (θ − sin θ)/θ³)."""
+    t2 = theta * theta
+    if theta < SERIES_ANGLE:
+        return _series(t2, _SIN_OVER), _series(t2, _ONE_MINUS_COS), _series(t2, _THETA_MINUS_SIN)
+    s, c = np.sin(theta), np.cos(theta)
+    return s / theta, (1.0 - c) / t2, (theta - s) / (t2 * theta)
+
+
+@njit(cache=True, inline="always")
+def _so3_polynomial(w, s1, s2, out):
+    """out (3, 3) = I + s1 [w]× + s2 [w]×², with [w]×² = w wᵀ − |w|² I."""
+    w0, w1, w2 = w[0], w[1], w[2]
+    t2 = w0 * w0 + w1 * w1 + w2 * w2
+    out[0, 0] = 1.0 + s2 * (w0 * w0 - t2)
+    out[1, 1] = 1.0 + s2 * (w1 * w1 - t2)
+    out[2, 2] = 1.0 + s2 * (w2 * w2 - t2)
+    out[0, 1] = -s1 * w2 + s2 * w0 * w1
+    out[1, 0] = s1 * w2 + s2 * w0 * w1
+    out[0, 2] = s1 * w1 + s2 * w0 * w2
+    out[2, 0] = -s1 * w1 + s2 * w0 * w2
+    out[1, 2] = -s1 * w0 + s2 * w1 * w2
+    out[2, 1] = s1 * w0 + s2 * w1 * w2
+
+
+@njit(cache=True)
+def _matrix_quaternion(R, out):
+    """Unit quaternion (x, y, z, w) of a rotation matrix (Eigen's branch on the largest term)."""
+    trace = R[0, 0] + R[1, 1] + R[2, 2]
+    if trace > 0.0:
+        t = np.sqrt(trace + 1.0)
+        out[3] = 0.5 * t
+        t = 0.5 / t
+        out[0] = (R[2, 1] - R[1, 2]) * t
+        out[1] = (R[0, 2] - R[2, 0]) * t
+        out[2] = (R[1, 0] - R[0, 1]) * t
+        return
+    i = 0
+    if R[1, 1] > R[0, 0]:
+        i = 1
+    if R[2, 2] > R[i, i]:
+        i = 2
+    j = (i + 1) % 3
+    k = (j + 1) % 3
+    t = np.sqrt(R[i, i] - R[j, j] - R[k, k] + 1.0)
+    out[i] = 0.5 * t
+    t = 0.5 / t
+    out[3] = (R[k, j] - R[j, k]) * t
+    out[j] = (R[j, i] + R[i, j]) * t
+    out[k] = (R[k, i] + R[i, k]) * t
+
+
+@njit(cache=True)
+def se3_exp(xi):
+    """exp6 of ξ = (v, ω): rotation R = I + (sin θ/θ)[ω]× + ((1 − cos θ)/θ²)[ω]×² and
+    translation p = (I + ((1 − cos θ)/θ²)[ω]× + ((θ − sin θ)/θ³)[ω]×²) v."""
+    w = xi[3:6]
+    theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    a, b, c = _so3_coefficients(theta)
+    R = np.empty((3, 3))
+    V = np.empty((3, 3))
+    p = np.empty(3)
+    _so3_polynomial(w, a, b, R)
+    _so3_polynomial(w, b, c, V)
+    mat3_vec(V, xi[:3], p)
+    return R, p
+
+
+@njit(cache=True)
+def free_flyer_integrate(q, dq, out):
+    """out (nq,) = q ⊕ dq: base M(q) exp6(dq[:6]), joints q + dq (Pinocchio's integrate)."""
+    nq = q.size
+    R_exp, p_exp = se3_exp(dq[:6])
+    R0 = np.empty((3, 3))
+    _quaternion_matrix(q[3:7], R0)
+    p1 = np.empty(3)
+    mat3_vec(R0, p_exp, p1)
+    for i in range(3):
+        out[i] = q[i] + p1[i]
+    R1 = np.empty((3, 3))
+    mat3_mul(R0, R_exp, R1)
+    quat = np.empty(4)
+    _matrix_quaternion(R1, quat)
+    dot = quat[0] * q[3] + quat[1] * q[4] + quat[2] * q[5] + quat[3] * q[6]
+    sign = -1.0 if dot < 0.0 else 1.0  # same hemisphere as q's quaternion
+    norm2 = quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]
+    scale = sign * (3.0 - norm2) / 2.0  # first-order renormalisation
+    for i in range(4):
+        out[3 + i] = scale * quat[i]
+    for i in range(7, nq):
+        out[i] = q[i] + dq[i - 1]
+
+
+@njit(cache=True)
+def _so3_right_jacobian(w, J):
+    """J (3, 3) = I − (1 − cos θ)/θ² [ω]× + (θ − sin θ)/θ³ [ω]×², θ = |ω|."""
+    theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    _, b, c = _so3_coefficients(theta)
+    _so3_polynomial(w, -b, c, J)
+
+
+@njit(cache=True)
+def _se3_left_coupling(rho, phi, Q):
+    """Barfoot's Q(ρ, φ) (3, 3), the off-diagonal block of SE(3)'s left Jacobian."""
+    theta = np.sqrt(phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2])
+    t2 = theta * theta
+    if theta < SERIES_ANGLE:
+        c1 = _series(t2, _THETA_MINUS_SIN)
+        c2 = _series(t2, _COUPLING_2)
+        c3 = _series(t2, _COUPLING_3)
+    else:
+        s, c = np.sin(theta), np.cos(theta)
+        c1 = (theta - s) / (t2 * theta)
+        c2 = (t2 + 2.0 * c - 2.0) / (2.0 * t2 * t2)
+        c3 = (2.0 * theta - 3.0 * s + theta * c) / (2.0 * t2 * t2 * theta)
+    P = np.empty((3, 3))
+    Rh = np.empty((3, 3))
+    skew_into(phi, P)
+    skew_into(rho, Rh)
+    PR = np.empty((3, 3))
+    RP = np.empty((3, 3))
+    PRP = np.empty((3, 3))
+    PPR = np.empty((3, 3))
+    RPP = np.empty((3, 3))
+    PRPP = np.empty((3, 3))
+    PPRP = np.empty((3, 3))
+    mat3_mul(P, Rh, PR)
+    mat3_mul(Rh, P, RP)
+    mat3_mul(PR, P, PRP)
+    mat3_mul(P, PR, PPR)
+    mat3_mul(RP, P, RPP)
+    mat3_mul(PRP, P, PRPP)
+    mat3_mul(P, PRP, PPRP)
+    for i in range(3):
+        for j in range(3):
+            Q[i, j] = (0.5 * Rh[i, j] + c1 * (PR[i, j] + RP[i, j] + PRP[i, j])
+                       + c2 * (PPR[i, j] + RPP[i, j] - 3.0 * PRP[i, j]) + c3 * (PRPP[i, j] + PPRP[i, j]))
+
+
+@njit(cache=True)
+def se3_right_jacobian(xi, J):
+    """J (6, 6): Pinocchio's Jexp6 at ξ = (v, ω), the right Jacobian of exp6."""
+    J[:, :] = 0.0
+    J3 = np.empty((3, 3))
+    _so3_right_jacobian(xi[3:6], J3)
+    Q = np.empty((3, 3))
+    _se3_left_coupling(-xi[:3], -xi[3:6], Q)
+    J[:3, :3] = J3
+    J[3:, 3:] = J3
+    J[:3, 3:] = Q
+
+
+@njit(cache=True, inline="always")
+def _write_base_block(J, A, C):
+    """J[:6, :6] = [[A, −C], [0, A]] (the lower-left block is left as it is)."""
+    for i in range(3):
+        for j in range(3):
+            J[i, j] = A[i, j]
+            J[3 + i, 3 + j] = A[i, j]
+            J[i, 3 + j] = -C[i, j]
+
+
+@njit(cache=True)
+def free_flyer_dintegrate(q, dq, J_q, J_dq):
+    """Jacobians (nv, nv) of q ⊕ dq with respect to q (J_q) and dq (J_dq) (Pinocchio's
+    dIntegrate ARG0 and ARG1): the base blocks are Ad(exp6(dq)⁻¹) and Jexp6(dq); joints identity."""
+    nv = J_q.shape[0]
+    J_q[:, :] = 0.0
+    J_dq[:, :] = 0.0
+    for i in range(6, nv):
+        J_q[i, i] = 1.0
+        J_dq[i, i] = 1.0
+    R, p = se3_exp(dq[:6])
+    S = np.empty((3, 3))
+    skew_into(p, S)
+    RT = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            RT[i, j] = R[j, i]
+    RTS = np.empty((3, 3))
+    mat3_mul(RT, S, RTS)
+    _write_base_block(J_q, RT, RTS)
+    J6 = np.empty((6, 6))
+    se3_right_jacobian(dq[:6], J6)
+    J_dq[:6, :6] = J6
+
+
+@njit(cache=True)
+def free_flyer_ddifference_second(q0, q1, J):
+    """J (nv, nv) = ∂(q1 ⊖ q0)/∂q1 (Pinocchio's dDifference ARG1): the base block is Jlog6 of
+    M0⁻¹ M1 (inverse of Jexp6 at the difference), joints identity. False near a half turn (the
+    caller then uses Pinocchio)."""
+    nv = J.shape[0]
+    xi = np.empty(nv)
+    if not free_flyer_difference(q0, q1, q0.size, xi):
+        return False
+    J[:, :] = 0.0
+    for i in range(6, nv):
+        J[i, i] = 1.0
+    w = xi[3:6]
+    theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    # inverse of the SO(3) right Jacobian: I + ½[ω]× + (1/θ² − (1 + cos θ)/(2θ sin θ)) [ω]×²
+    if theta < 0.1:  # series of the closed form below (cancellation ~ eps/θ²)
+        t2 = theta * theta
+        d = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0 + t2 * t2 * t2 / 1209600.0
+    else:
+        d = 1.0 / (theta * theta) - (1.0 + np.cos(theta)) / (2.0 * theta * np.sin(theta))
+    A_inv = np.empty((3, 3))
+    _so3_polynomial(w, 0.5, d, A_inv)
+    Q = np.empty((3, 3))
+    _se3_left_coupling(-xi[:3], -xi[3:6], Q)
+    AQ = np.empty((3, 3))
+    AQA = np.empty((3, 3))
+    mat3_mul(A_inv, Q, AQ)
+    mat3_mul(AQ, A_inv, AQA)
+    _write_base_block(J, A_inv, AQA)
+    return True
+
+
+@njit(cache=True)
+def free_flyer_euler_step(x, a, dt, dx, x_next):
+    """Semi-implicit Euler step of a free-flyer state: dx = [v dt + a dt², a dt] (2 nv,) and
+    x⁺ = [q ⊕ dx[:nv], v + a dt] (nx,)."""
+    nv = a.size
+    nq = x.size - nv
+    dt2 = dt * dt
+    for i in range(nv):
+        v = x[nq + i]
+        dx[i] = v * dt + a[i] * dt2
+        dx[nv + i] = a[i] * dt
+        x_next[nq + i] = v + a[i] * dt
+    free_flyer_integrate(x[:nq], dx[:nv], x_next[:nq])
+
+
+@njit(cache=True)
+def free_flyer_state_jacobians(references, xs, scale, out, ok):
+    """out[k] = ∂(xs[k] ⊖ references[k])/∂q (nv, nv) where scale[k] != 0; ok[k] False where
+    Pinocchio must take over (half turn); returns True if none did."""
+    all_ok = True
+    nq = xs.shape[1] - out.shape[1]
+    for k in range(out.shape[0]):
+        ok[k] = True
+        if scale[k] == 0.0:
+            continue
+        if not free_flyer_ddifference_second(references[k, :nq], xs[k, :nq], out[k]):
+            ok[k] = False
+            all_ok = False
+    return all_ok
+
+
+@njit(cache=True)
+def rollout_node_start(t, x_prev, fs, alpha, closing, xs, us, k, K, x_try, dx, u_try, tau):
+    """One node of the FDDP rollout before its dynamics: x_try = x_prev ⊕ (α − 1) fs[t] when
+    closing gaps (else x_prev), dx[t] = x_try ⊖ xs[t], u_try[t] = us[t] − α k[t] − K[t] dx[t]
+    (Crocoddyl's sign) and the joint torques tau[6:] = u_try[t]. Returns 0 on success, 1 when the
+    difference needs Pinocchio (half turn; x_try is written, not dx, u_try, tau), 2 when the
+    control is not finite."""
+    nv = dx.shape[1] // 2
+    nq = x_try.size - nv
+    if closing:
+        step = (alpha - 1.0) * fs[t]
+        free_flyer_integrate(x_prev[:nq], step[:nv], x_try[:nq])
+        for i in range(nv):
+            x_try[nq + i] = x_prev[nq + i] + step[nv + i]
+    else:
+        x_try[:] = x_prev
+    code = free_flyer_feedback_control(xs[t], x_try, us[t], k[t], K[t], alpha, nq, dx[t], u_try[t])
+    if code != 0:
+        return code
+    for i in range(u_try.shape[1]):
+        tau[6 + i] = u_try[t, i]
+    return 0

@@ -1,0 +1,296 @@
+"""Receding-horizon MPC over a shooting problem: shift, warm start, a few solver iterations,
+keep the last good plan.
+
+The caller owns the problem's models and updates them (contact sets, references) before each
+:meth:`RecedingHorizonMPC.update`; the MPC knows nothing of what the problem means (walking,
+manipulation). The solver is injected through the constructor (ours, or Crocoddyl's behind an
+adapter in the benchmarks): anything with :class:`MPCSolver`'s interface.
+
+    mpc = RecedingHorizonMPC(problem, dt=0.01, initial_controls=lambda x: u_static)
+    sol = mpc.update(t, x_measured)                                     # never raises
+    tau = sol.u(1) + sol.K(1) @ state_difference(sol.x(1), x_hat)       # eq. (25), node 1
+
+Gain convention: ``K`` is ∂u*/∂x (the paper's eq. 26, plus sign); apply it to x̂ ⊖ x_k, the
+tangent-space difference (pin.difference on q, plain on v), size ndx = 2 nv.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Callable, Protocol
+
+import numpy as np
+
+from wbmpc.errors import ParameterError
+from wbmpc.ocp.solvers.fddp import SolverFDDP
+
+
+class MPCSolver(Protocol):
+    """What :class:`RecedingHorizonMPC` needs of a solver (``SolverFDDP`` has it).
+
+    Attributes after a solve: ``xs`` (N + 1, nx), ``us`` (N, nu), ``K`` (N, nu, ndx) with the
+    library's sign (u = u_k + K_k (x ⊖ x_k)), ``cost``, ``preg`` (regularisation reached),
+    ``reg_max``, ``deadline_hit`` (the deadline cut the solve), ``log`` (one entry per
+    iteration), optionally ``rollouts`` (nonlinear rollouts of the last solve).
+    """
+
+    reg_max: float
+    deadline_hit: bool
+
+    def solve(self, init_xs, init_us, maxiter: int = 100, is_feasible: bool = False,
+              deadline: float | None = None) -> bool:
+        """Solve from the guess; True when converged."""
+
+class GainSequence(np.ndarray):
+    """Feedback gains (N, nu, ndx), an ndarray that is also callable: ``K(k)`` is ``K[k]``."""
+
+    def __call__(self, k: int) -> np.ndarray:
+        return np.asarray(self[k])
+
+
+@dataclass(frozen=True)
+class MPCSolution:
+    """One MPC update.
+
+    Attributes:
+        ok: False when this update failed (then xs, us, K are the last good solution shifted to t).
+        status: "converged", "max_iter", "deadline" (the time budget stopped the iterations; xs,
+            us, K are a valid iterate and its gains) or "failed: <reason>".
+        iterations: FDDP iterations run by this update.
+        cost: total cost of the returned trajectory (NaN if there is none).
+        solve_time: wall time of the update [s].
+        t: time of node 0 [s].
+        xs: (N + 1, nx) predicted states, Pinocchio convention.
+        us: (N, nu) torques [N·m].
+        K: (N, nu, ndx) feedback gains ∂u/∂x, library sign (u = u_k + K_k (x̂ ⊖ x_k)); also
+            callable, ``K(k)`` = ``K[k]``, like the accessors ``u(k)`` and ``x(k)``.
+    """
+
+    ok: bool
+    status: str
+    iterations: int
+    cost: float
+    solve_time: float
+    t: float
+    xs: np.ndarray
+    us: np.ndarray
+    K: np.ndarray
+
+    def u(self, k: int) -> np.ndarray:
+        """Torque of node k (nu,) [N·m]."""
+        return self.us[k]
+
+    def x(self, k: int) -> np.ndarray:
+        """Predicted state of node k (nx,)."""
+        return self.xs[k]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "K", np.asarray(self.K, dtype=float).view(GainSequence))
+
+
+def _shift(array: np.ndarray, nodes: int) -> np.ndarray:
+    """Drop the first ``nodes`` rows and repeat the last row to keep the shape."""
+    if nodes <= 0:
+        return array.copy()
+    nodes = min(nodes, array.shape[0] - 1)
+    return np.concatenate([array[nodes:], np.repeat(array[-1:], nodes, axis=0)])
+
+
+HORIZON_ENDS = ("rollout", "repeat")
+"""Warm-start fills of the nodes entering at the end of the horizon (``RecedingHorizonMPC(horizon_end=)``)."""
+
+
+class RecedingHorizonMPC:
+    """Receding-horizon solves of a shooting problem whose models the caller keeps up to date.
+
+    Args:
+        problem: the shooting problem (``ShootingProblem`` or ``BatchedShootingProblem``); the
+            caller updates its models before each :meth:`update`.
+        dt: node spacing [s] (the shift of the warm start is round(elapsed / dt) nodes).
+        initial_controls: callable x (nx,) -> u (nu,), the guess of the first (cold) update,
+            held over the horizon with the state x; None = zero controls.
+        solver: an :class:`MPCSolver` on ``problem``; None = ``SolverFDDP(problem)``.
+        max_iterations: solver iterations per update (the paper runs 1).
+        cold_start_iterations: iterations of the first update (no warm start yet).
+        horizon_end: how the warm start fills the node(s) entering at the end of the shifted
+            horizon: "repeat" (default: the last state and control repeated, the usual shift;
+            leaves a gap at the end) or "rollout" (the control of the latest node with the same
+            contact set, the state rolled out through the node's dynamics: no gap, see
+            :meth:`_extend_horizon_end`). "rollout" is what lets Bolt's closed loop run one
+            iteration per update (its controller's default); it needs a plan whose end is
+            stable: on the G1 benchmark problem, whose cold start ends on a diverging tail, each
+            rolled-out node extended the divergence and the MPC failed after 13 ticks.
+        time_budget: wall time [s] an update may take, counted from its call (a real-time tick's
+            deadline, e.g. 0.009 for a 100 Hz loop with 1 ms to spare), or None (no limit). The
+            solver starts no iteration or line-search trial that would end after it (see
+            ``SolverFDDP.solve``'s ``deadline``); such an update returns status "deadline". The
+            cold start (first update) has no budget.
+    """
+
+    def __init__(self, problem, dt: float, initial_controls: Callable[[np.ndarray], np.ndarray] | None = None,
+                 solver: MPCSolver | None = None, max_iterations: int = 1, cold_start_iterations: int = 20,
+                 horizon_end: str = "repeat", time_budget: float | None = None):
+        if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or max_iterations < 1:
+            raise ParameterError(f"max_iterations={max_iterations!r} must be an integer >= 1")
+        if int(cold_start_iterations) != cold_start_iterations or cold_start_iterations < 1:
+            raise ParameterError(f"cold_start_iterations={cold_start_iterations!r} must be an integer >= 1")
+        if horizon_end not in HORIZON_ENDS:
+            raise ParameterError(f"horizon_end={horizon_end!r} must be one of {HORIZON_ENDS}")
+        if time_budget is not None and (isinstance(time_budget, bool) or not isinstance(time_budget, (int, float))
+                                        or not 0 < time_budget < 1e3):
+            raise ParameterError(f"time_budget={time_budget!r} must be None or a number of seconds in (0, 1000)")
+        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
+            raise ParameterError(f"dt={dt!r} s must be a finite positive number")
+        self.problem = problem
+        self.solver = SolverFDDP(problem) if solver is None else solver
+        self.initial_controls = initial_controls
+        self.max_iterations = int(max_iterations)
+        self.cold_start_iterations = int(cold_start_iterations)
+        self.horizon_end = horizon_end
+        self.time_budget = None if time_budget is None else float(time_budget)
+        self.n_nodes = problem.T
+        self.dt = float(dt)
+        self.nx, self.ndx, self.nu = problem.nx, problem.ndx, problem.nu
+        self.last_good: MPCSolution | None = None
+
+    def warm_start(self, t: float, x_measured: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+        """Initial guess at time t: the last good solution shifted by round((t − t_last)/dt)
+        nodes, with x_measured as node 0, and the nodes that enter at the end filled as
+        ``horizon_end`` says; a quasi-static guess if there is none. Call after the OCP's update
+        (the "rollout" fill reads the new contact sets). Returns (xs_init, us_init, cold)."""
+        last = self.last_good
+        if last is None:
+            xs = np.repeat(x_measured[None, :], self.n_nodes + 1, axis=0)
+            u0 = np.zeros(self.nu) if self.initial_controls is None else self.initial_controls(x_measured)
+            us = np.repeat(u0[None, :], self.n_nodes, axis=0)
+            return xs, us, True
+        nodes = int(round((t - last.t) / self.dt))
+        xs = _shift(last.xs, nodes)
+        us = _shift(last.us, nodes)
+        xs[0] = x_measured
+        if self.horizon_end == "rollout":
+            self._extend_horizon_end(xs, us, min(nodes, self.n_nodes - 1))
+        return xs, us, False
+
+    def _contact_keys(self) -> list[tuple]:
+        return [model.differential.active_key for model in self.problem.running_models]
+
+    def _extend_horizon_end(self, xs: np.ndarray, us: np.ndarray, nodes: int) -> None:
+        """Fill the last ``nodes`` running nodes of a shifted guess (in place): each takes the
+        control of the latest earlier node with the same contact set (the last node's when there
+        is none) and its successor state is rolled out through the node's dynamics.
+
+        Repeating the last state and control instead leaves a gap at the end of the horizon (one
+        step of motion, ~1-3 in velocity units on Bolt) and, when the new node's contact set
+        differs (a stance torque on a swinging leg), a gap of ~30 rad/s; FDDP's full step then
+        fails its line search: on the Bolt benchmark loop 23 of 300 first steps were rejected
+        with repetition, 14 with this extension (docs/ocp.md). A rollout that does not stay
+        finite keeps the repeated guess.
+        """
+        if nodes <= 0:
+            return
+        models, datas = self.problem.running_models, self.problem.running_datas
+        keys = self._contact_keys()
+        N = self.n_nodes
+        for j in range(N - nodes, N):
+            same = next((i for i in range(j - 1, -1, -1) if keys[i] == keys[j]), None)
+            u = us[same] if same is not None else us[j]
+            models[j].calc(datas[j], xs[j], u)
+            if not np.all(np.isfinite(datas[j].xnext)):
+                return
+            us[j] = u
+            xs[j + 1] = datas[j].xnext
+
+    def prepare(self, deadline: float | None = None) -> int:
+        """Between two updates: compute ahead what the next update's FDDP iteration needs and can
+        know before the measurement, the contact dynamics and their derivatives at nodes 1..N−1
+        of the guess it will make (the last good solution shifted by one node, the contact sets
+        shifted with it). The next :meth:`update` takes them where its guess and contact sets
+        match exactly (the same torques to the last bit, tested) and computes the rest: node 0
+        (the measured state), re-timed contact switches, the entering node, or everything when
+        the next update comes later than one node or after a failure.
+
+        This moves about two thirds of the derivative work (~2 ms of a ~6 ms Bolt update,
+        N = 100) out of the time between measurement and torque; the total work per cycle is
+        unchanged. Call it after handing the solution over and before the next measurement.
+
+        Args:
+            deadline: ``time.perf_counter()`` value [s] at which to stop preparing (e.g. shortly
+                before the next measurement is due), or None. Preparing fewer nodes is always
+                valid: the next update computes the rest, so a real-time loop can give the
+                preparation just the slack of its period.
+
+        Returns:
+            Nodes prepared (0 before the first good update, or when the problem is not batched).
+        """
+        if deadline is not None and not math.isfinite(deadline):
+            raise ParameterError(f"deadline={deadline} must be a finite time.perf_counter() value or None")
+        last = self.last_good
+        prepare = getattr(self.problem, "prepare_dynamics", None)
+        if last is None or prepare is None:
+            return 0
+        N = self.n_nodes
+        keys = self._contact_keys()
+        xs = np.empty((N, self.nx))
+        us = np.empty((N, self.nu))
+        xs[0], us[0] = last.xs[0], last.us[0]  # node 0 will be the measurement: not prepared
+        xs[1:] = last.xs[2:]
+        us[1:N - 1] = last.us[2:]
+        us[N - 1] = last.us[N - 1]  # the entering node as "repeat" fills it (a mismatch is recomputed)
+        return prepare(xs, us, [None] + keys[2:] + [keys[N - 1]], deadline=deadline)
+
+    def update(self, t: float, x_measured: np.ndarray,
+               update_problem: Callable[[np.ndarray], None] | None = None) -> MPCSolution:
+        """Re-solve from the measured state; never raises (failures come back with ok=False).
+
+        Args:
+            t: time of the measurement, node 0 [s].
+            x_measured: measured state (nx,).
+            update_problem: called with the checked state before the warm start, to set the
+                problem's models for this update (contacts, references); an exception it raises
+                is a failed update like a solver failure (the last good plan is kept).
+        """
+        tic = time.perf_counter()
+        try:
+            x = self.problem.state.check_state("x_measured", x_measured)
+            if update_problem is not None:
+                update_problem(x)
+            else:
+                self.problem.set_x0(x)
+            xs_init, us_init, cold = self.warm_start(float(t), x)
+            iterations = self.cold_start_iterations if cold else self.max_iterations
+            deadline = None if cold or self.time_budget is None else tic + self.time_budget
+            converged = self.solver.solve(xs_init, us_init, maxiter=iterations, is_feasible=False, deadline=deadline)
+            solver = self.solver
+            K = solver.K
+            finite = (np.isfinite(solver.cost) and np.all(np.isfinite(solver.xs)) and np.all(np.isfinite(solver.us))
+                      and np.all(np.isfinite(K)))
+            if not finite:
+                raise FloatingPointError("the solution is not finite")
+            if not converged and solver.preg >= solver.reg_max:
+                raise FloatingPointError(f"regularisation reached reg_max={solver.reg_max} (no descent)")
+            solution = MPCSolution(
+                ok=True, status="converged" if converged else "deadline" if solver.deadline_hit else "max_iter",
+                iterations=len(solver.log),
+                cost=float(solver.cost), solve_time=time.perf_counter() - tic, t=float(t),
+                xs=solver.xs.copy(), us=solver.us.copy(), K=K,
+            )
+            self.last_good = solution
+            return solution
+        except Exception as err:  # the control loop must go on: report and keep the last good plan
+            return self._failed(float(t), x_measured, f"failed: {type(err).__name__}: {err}", tic)
+
+    def _failed(self, t: float, x_measured, status: str, tic: float) -> MPCSolution:
+        last = self.last_good
+        nx, ndx, nu, N = self.nx, self.ndx, self.nu, self.n_nodes
+        if last is None:
+            x = np.asarray(x_measured, dtype=float).reshape(-1)
+            xs = np.repeat(x[None, :], N + 1, axis=0) if x.shape == (nx,) else np.full((N + 1, nx), np.nan)
+            return MPCSolution(False, status, len(self.solver.log), float("nan"), time.perf_counter() - tic, t,
+                               xs, np.zeros((N, nu)), np.zeros((N, nu, ndx)))
+        nodes = int(round((t - last.t) / self.dt))
+        return MPCSolution(False, status, len(self.solver.log), last.cost, time.perf_counter() - tic,
+                           last.t + max(nodes, 0) * self.dt,
+                           _shift(last.xs, nodes), _shift(last.us, nodes), _shift(last.K, nodes))

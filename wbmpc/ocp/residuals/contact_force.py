@@ -1,0 +1,42 @@
+"""Contact force residual r = f − f_ref (3 or 6,) [N, N·m]: contact-force regularisation."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wbmpc.ocp.residuals.base import DataCollector, ResidualData
+from wbmpc.ocp.state import StateMultibody
+
+
+class ResidualContactForce:
+    """r = f_contact − f_reference in the contact's own frame (see :mod:`wbmpc.ocp.contacts`).
+
+    Rx and Ru are the rows of ∂f/∂x and ∂f/∂u that the dynamics computes for this contact.
+
+    Args:
+        state: the multibody state.
+        contact_name: name of the contact in the node's contact set.
+        force_reference: reference force (nc,), 3 for point contacts, 6 (linear, angular) for
+            flat contacts; mutable through ``reference``.
+        nu: control dimension.
+    """
+
+    uses_contact_forces = True  # reads the force derivatives the dynamics computes
+
+    def __init__(self, state: StateMultibody, contact_name: str, force_reference: np.ndarray, nu: int):
+        self.state = state
+        self.contact_name = contact_name
+        self.reference = np.asarray(force_reference, dtype=float).ravel().copy()
+        self.nr = self.reference.size
+        self.nu = nu
+
+    def calc(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
+        np.subtract(shared.contacts[self.contact_name].force, self.reference, out=data.r)
+
+    def calcDiff(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
+        contact = shared.contacts[self.contact_name]
+        data.Rx[:] = contact.df_dx
+        data.Ru[:] = contact.df_du
+
+    def createData(self) -> ResidualData:
+        return ResidualData(self.nr, self.state.ndx, self.nu)

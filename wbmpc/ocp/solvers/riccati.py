@@ -1,0 +1,119 @@
+"""Riccati backward pass of FDDP, compiled with numba over the stacked node derivatives.
+
+Crocoddyl's sign inside (δu = −k − K δx); :class:`wbmpc.ocp.solvers.fddp.SolverFDDP` exposes the
+library sign. The Cholesky factor L of Quu is written out (nu is small) and inverted, so the gains
+come from one product [K | k] = L⁻ᵀ L⁻¹ [Qxuᵀ | Qu]; every product goes to BLAS through
+``np.dot`` into preallocated buffers.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def _cholesky_in_place(A):
+    """Lower Cholesky factor of A (n, n) written in its lower triangle; False if not PD."""
+    n = A.shape[0]
+    for j in range(n):
+        s = A[j, j]
+        for p in range(j):
+            s -= A[j, p] * A[j, p]
+        if not (s > 0.0):
+            return False
+        d = np.sqrt(s)
+        A[j, j] = d
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for p in range(j):
+                s -= A[i, p] * A[j, p]
+            A[i, j] = s / d
+    return True
+
+
+@njit(cache=True)
+def _lower_triangular_inverse(L, Linv):
+    """Linv = L⁻¹ for a lower-triangular L (n, n) with a positive diagonal (lower triangle only)."""
+    n = L.shape[0]
+    Linv[:, :] = 0.0
+    for j in range(n):
+        Linv[j, j] = 1.0 / L[j, j]
+        for i in range(j + 1, n):
+            s = 0.0
+            for p in range(j, i):
+                s -= L[i, p] * Linv[p, j]
+            Linv[i, j] = s / L[i, i]
+
+
+@njit(cache=True)
+def riccati_backward(Fx, Fu, Lx, Lu, Lxx, Lxu, Luu, fs, preg, is_feasible, Vx, Vxx, Qu, Quu, Quuk, k, K):
+    """Fill Vx (N+1, ndx), Vxx (N+1, ndx, ndx), Qu, Quu, Quuk, k (N, nu), K (N, nu, ndx).
+
+    Returns -1 on success, else the node index where Quu was not positive definite or the
+    value function was not finite.
+    """
+    N = Fx.shape[0]
+    ndx = Fx.shape[1]
+    nu = Fu.shape[2]
+    Vxx[N] = Lxx[N]
+    for i in range(ndx):
+        Vxx[N, i, i] += preg
+    Vx[N] = Lx[N]
+    if not is_feasible:
+        Vx[N] += np.dot(Vxx[N], fs[N])
+    L = np.empty((nu, nu))
+    Linv = np.empty((nu, nu))
+    rhs = np.empty((nu, ndx + 1))  # [Qxuᵀ | Qu]
+    FxT = np.empty((ndx, ndx))
+    FuT = np.empty((nu, ndx))
+    FxTVxx = np.empty((ndx, ndx))
+    FuTVxx = np.empty((nu, ndx))
+    Qxx = np.empty((ndx, ndx))
+    Qxu = np.empty((ndx, nu))
+    Qx = np.empty(ndx)
+    QuuInv = np.empty((nu, nu))
+    Kk = np.empty((nu, ndx + 1))
+    QxuK = np.empty((ndx, ndx))
+    for t in range(N - 1, -1, -1):
+        FxT[:, :] = Fx[t].T
+        FuT[:, :] = Fu[t].T
+        np.dot(FxT, Vxx[t + 1], FxTVxx)
+        np.dot(FuT, Vxx[t + 1], FuTVxx)
+        Qx[:] = Lx[t] + np.dot(FxT, Vx[t + 1])
+        np.dot(FxTVxx, Fx[t], Qxx)
+        Qxx += Lxx[t]
+        Qu[t] = Lu[t] + np.dot(FuT, Vx[t + 1])
+        np.dot(FuTVxx, Fu[t], Quu[t])
+        Quu[t] += Luu[t]
+        np.dot(FxTVxx, Fu[t], Qxu)
+        Qxu += Lxu[t]
+        for i in range(nu):
+            Quu[t, i, i] += preg
+        L[:, :] = Quu[t]
+        if not _cholesky_in_place(L):
+            return t
+        # Quu⁻¹ = L⁻ᵀ L⁻¹, then [K | k] = Quu⁻¹ [Qxuᵀ | Qu] in one BLAS product
+        _lower_triangular_inverse(L, Linv)
+        np.dot(Linv.T, Linv, QuuInv)
+        rhs[:, :ndx] = Qxu.T
+        rhs[:, ndx] = Qu[t]
+        np.dot(QuuInv, rhs, Kk)
+        K[t] = Kk[:, :ndx]
+        k[t] = Kk[:, ndx]
+        Quuk[t] = np.dot(Quu[t], k[t])
+        Kt = K[t]
+        Vx_t = Qx - np.dot(Kt.T, Qu[t])
+        np.dot(Qxu, Kt, QxuK)
+        for i in range(ndx):
+            for j in range(i, ndx):
+                s = 0.5 * (Qxx[i, j] - QxuK[i, j] + Qxx[j, i] - QxuK[j, i])
+                Vxx[t, i, j] = s
+                Vxx[t, j, i] = s
+            Vxx[t, i, i] += preg
+        if not is_feasible:
+            Vx_t = Vx_t + np.dot(Vxx[t], fs[t])
+        Vx[t] = Vx_t
+        if not (np.all(np.isfinite(Vx_t)) and np.all(np.isfinite(Vxx[t]))):
+            return t
+    return -1

@@ -1,0 +1,408 @@
+"""Walking OCP builder: the paper's whole-body problem (section III, eqs. 17-24) from a contact
+schedule.
+
+Per running node k (time t0 + k dt), with the feet in contact given by the schedule:
+
+- dynamics: contact forward dynamics with the stance feet as rigid contacts (Baumgarte gains),
+  explicit Euler over dt;
+- ``{foot}_height``: swing-foot height tracking, eq. (18), reference eq. (19)
+  z*(s) = z_ground + 16 H s² (1 − s)², s = swing phase in [0, 1], apex H at s = ½;
+- ``{foot}_touchdown_height``: the same residual at the last swing node with a larger weight, so
+  the foot lands on the ground (the contact that follows freezes its height);
+- ``{foot}_touchdown_velocity``: foot linear velocity at the first stance node (no bounce at
+  touchdown). These two touchdown terms are optional additions to the paper's list (off by
+  default): they bring the planned stance feet from 3-5 mm to 1-2 mm above the ground, but in
+  the MuJoCo closed loop (one iteration per tick, foothold tracking) Bolt fell at 1.6 s with
+  them (weights 1e5 / 1e3) and walked without them;
+- ``control_regularization``: ‖u‖², eq. (20);
+- ``state_regularization``: ‖x ⊖ x*‖²_W around the reference posture, eq. (21);
+- ``control_bounds``: quadratic barrier outside the robot's torque limits, eq. (22);
+- optional ``{foot}_foothold`` (track the planned touchdown xy at the last swing node; off by
+  default: footholds emerge, the paper's choice), ``{foot}_contact_force`` (regularise the
+  stance forces towards m g / n_stance) and ``{foot}_friction_cone`` (point feet).
+
+The terminal node has the state costs (state regularisation, swing-foot height) and
+``com_position``, eq. (23), towards the caller's reference (eq. 24).
+
+Every term follows Crocoddyl's convention: cost = weight · ½ ‖r‖²_activation, running costs are
+integrated (× dt), the terminal cost is not.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from wbmpc.errors import ParameterError, check_finite
+from wbmpc.ocp.activations import ActivationQuadraticBarrier, ActivationWeightedQuad
+from wbmpc.ocp.actuation import ActuationFloatingBase
+from wbmpc.ocp.batched_problem import BatchedShootingProblem, batched_evaluation_support
+from wbmpc.ocp.contacts import ContactModel3D, ContactModel6D
+from wbmpc.ocp.costs import CostModelResidual, CostModelSum
+from wbmpc.ocp.dynamics import DifferentialActionModelContactFwdDynamics
+from wbmpc.ocp.integrator import IntegratedActionModelEuler
+from wbmpc.ocp.problem import ShootingProblem
+from wbmpc.ocp.residuals import (
+    ResidualCoMPosition,
+    ResidualContactForce,
+    ResidualControl,
+    ResidualFrameHeight,
+    ResidualFrameTranslation,
+    ResidualFrameVelocity,
+    ResidualFrictionCone,
+    ResidualState,
+)
+from wbmpc.ocp.state import StateMultibody
+
+GRAVITY = 9.81  # [m/s²]
+
+
+@dataclass(frozen=True)
+class StateWeights:
+    """Diagonal weights of the state regularisation (eq. 21), per component of x ⊖ x*.
+
+    Base position and orientation errors are in the world/base tangent space
+    (pin.difference); velocities in the base frame. Base x, y (and yaw) are free by default:
+    walking moves them.
+    """
+
+    base_position: tuple[float, float, float] = (0.0, 0.0, 10.0)
+    base_orientation: tuple[float, float, float] = (10.0, 10.0, 1.0)
+    joint_position: float = 1.0
+    base_linear_velocity: tuple[float, float, float] = (0.1, 0.1, 1.0)
+    base_angular_velocity: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    joint_velocity: float = 0.1
+
+    def vector(self, nv: int) -> np.ndarray:
+        """Weights as a vector (2 nv,) for a floating-base robot."""
+        nj = nv - 6
+        w = np.concatenate([
+            self.base_position, self.base_orientation, np.full(nj, self.joint_position),
+            self.base_linear_velocity, self.base_angular_velocity, np.full(nj, self.joint_velocity),
+        ]).astype(float)
+        if np.any(w < 0) or not np.all(np.isfinite(w)):
+            raise ParameterError(f"state weights must be finite and >= 0, got {w}")
+        return w
+
+
+@dataclass(frozen=True)
+class WalkingOCPConfig:
+    """Weights and options of the walking OCP (defaults tuned for Bolt at dt = 10 ms, N = 100).
+
+    Attributes:
+        swing_apex_height: H of eq. (19), swing-foot apex above the ground [m].
+        foot_height_weight: w_track of eq. (18).
+        touchdown_height_weight: extra weight on the ground height at the last swing node (the
+            contact then holds the foot where it landed: without it the plan lands a few mm above
+            the ground); 0 = off (default, see the module docstring).
+        touchdown_velocity_weight: weight on the foot's linear velocity at the first
+            stance node, so it lands without the bounce a velocity-level contact allows (the
+            Baumgarte Kd term only damps it afterwards); 0 = off.
+        state_weight: global factor of the state regularisation (eq. 21).
+        state_weights: per-component state weights (see :class:`StateWeights`).
+        control_weight: w_u of eq. (20) [1/(N·m)²].
+        control_bound_weight: w_bu of eq. (22).
+        control_bound_fraction: the barrier starts at this fraction of the torque limit, (0, 1].
+        com_terminal_weight: w_CoM of eq. (23) (terminal node).
+        foothold_weight: planned-foothold xy tracking at the last swing node; 0 = footholds
+            emerge (the paper's choice).
+        contact_force_weight: stance-force regularisation towards m g / n_stance; 0 = off.
+        friction_cone_weight: linearised friction-cone barrier (point feet); 0 = off.
+        friction_coefficient: μ of the friction cone.
+        baumgarte_gains: (Kp [1/s²], Kd [1/s]) of the contact constraints.
+        dynamics_backend: "pinocchio" (constraintDynamics and its derivatives, fast) or "kkt"
+            (Crocoddyl's formulas written out); same results (see :mod:`wbmpc.ocp.dynamics`).
+        evaluation: how the horizon is evaluated, same results: "batched" (the Pinocchio calls
+            node by node, everything else in one compiled pass, see :mod:`wbmpc.ocp.batched_problem`),
+            "nodes" (every node model's calc/calcDiff, the reference pipeline), or "auto"
+            (default: batched when the problem's terms allow it, else nodes).
+        max_line_search_trials: FDDP line-search steps tried (1, ½, …).
+        reg_min, reg_max: FDDP regularisation bounds.
+        th_stop: FDDP stopping threshold.
+    """
+
+    swing_apex_height: float = 0.05
+    foot_height_weight: float = 1e4
+    touchdown_height_weight: float = 0.0
+    touchdown_velocity_weight: float = 0.0
+    state_weight: float = 1.0
+    state_weights: StateWeights = field(default_factory=StateWeights)
+    control_weight: float = 1e-1
+    control_bound_weight: float = 1e4
+    control_bound_fraction: float = 1.0
+    com_terminal_weight: float = 1e3
+    foothold_weight: float = 0.0
+    contact_force_weight: float = 0.0
+    friction_cone_weight: float = 0.0
+    friction_coefficient: float = 0.7
+    baumgarte_gains: tuple[float, float] = (0.0, 50.0)
+    dynamics_backend: str = "pinocchio"
+    evaluation: str = "auto"
+    max_line_search_trials: int = 10
+    reg_min: float = 1e-9
+    reg_max: float = 1e9
+    th_stop: float = 1e-9
+
+    def __post_init__(self) -> None:
+        for name in ("foot_height_weight", "touchdown_height_weight", "touchdown_velocity_weight", "state_weight",
+                     "control_weight", "control_bound_weight",
+                     "com_terminal_weight", "foothold_weight", "contact_force_weight", "friction_cone_weight"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0):
+                raise ParameterError(f"{name}={value} must be finite and >= 0")
+        if not (np.isfinite(self.swing_apex_height) and self.swing_apex_height >= 0):
+            raise ParameterError(f"swing_apex_height={self.swing_apex_height} m must be finite and >= 0")
+        if not (0 < self.control_bound_fraction <= 1):
+            raise ParameterError(f"control_bound_fraction={self.control_bound_fraction} must be in (0, 1]")
+        if not (np.isfinite(self.friction_coefficient) and self.friction_coefficient > 0):
+            raise ParameterError(f"friction_coefficient={self.friction_coefficient} must be > 0")
+        if len(self.baumgarte_gains) != 2 or min(self.baumgarte_gains) < 0:
+            raise ParameterError(f"baumgarte_gains={self.baumgarte_gains} must be (Kp >= 0, Kd >= 0)")
+        if int(self.max_line_search_trials) != self.max_line_search_trials or self.max_line_search_trials < 1:
+            raise ParameterError(f"max_line_search_trials={self.max_line_search_trials} must be an integer >= 1")
+        if self.dynamics_backend not in ("pinocchio", "kkt"):
+            raise ParameterError(f"dynamics_backend={self.dynamics_backend!r} must be 'pinocchio' or 'kkt'")
+        if self.evaluation not in ("auto", "batched", "nodes"):
+            raise ParameterError(f"evaluation={self.evaluation!r} must be 'auto', 'batched' or 'nodes'")
+        if not (0 < self.reg_min <= self.reg_max):
+            raise ParameterError(f"need 0 < reg_min={self.reg_min} <= reg_max={self.reg_max}")
+
+
+def swing_height_reference(phase, apex_height: float):
+    """Eq. (19) in terms of the swing phase s = t / t_f: 16 H s² (1 − s)² [m] above the ground."""
+    s = np.asarray(phase, dtype=float)
+    return 16.0 * apex_height * s**2 * (1.0 - s) ** 2
+
+
+class WalkingOCP:
+    """The walking OCP of a robot on a fixed grid; :meth:`update` sets it from a contact schedule.
+
+    The node models are built once (every foot has a contact model and a height cost at every
+    node); an update switches contacts and costs on and off and writes the references, so a
+    receding-horizon loop allocates nothing.
+
+    Args:
+        robot: a ``robots.RobotDescription`` (pinocchio_model with armature and torque limits,
+            foot_frames, contact_type, q_reference, torque_limit, contact_frame_height).
+        config: weights and options.
+        n_nodes: number of running nodes N, ≥ 1.
+        dt: node spacing [s], > 0.
+    """
+
+    def __init__(self, robot, config: WalkingOCPConfig, n_nodes: int, dt: float):
+        if isinstance(n_nodes, bool) or int(n_nodes) != n_nodes or n_nodes < 1:
+            raise ParameterError(f"n_nodes={n_nodes!r} must be an integer >= 1")
+        if not (np.isfinite(dt) and dt > 0):
+            raise ParameterError(f"dt={dt} s must be a finite positive number")
+        self.robot = robot
+        self.config = config
+        self.n_nodes = int(n_nodes)
+        self.dt = float(dt)
+        model = robot.pinocchio_model
+        self.state = StateMultibody(model)
+        self.actuation = ActuationFloatingBase(self.state)
+        self.nu = self.actuation.nu
+        self.feet = tuple(robot.foot_frames.keys())
+        self.foot_frame_ids = {foot: model.getFrameId(name) for foot, name in robot.foot_frames.items()}
+        if robot.contact_type not in ("point3d", "flat6d"):
+            raise ParameterError(f"contact_type={robot.contact_type!r} must be 'point3d' or 'flat6d'")
+        self.contact_type = robot.contact_type
+        self.ground_height = float(robot.contact_frame_height)
+        torque_limit = np.asarray(robot.torque_limit, dtype=float)
+        if torque_limit.shape != (self.nu,):
+            raise ParameterError(f"robot.torque_limit has shape {torque_limit.shape}, expected ({self.nu},)")
+        self.torque_limit = torque_limit
+        self.mass = float(sum(inertia.mass for inertia in model.inertias))
+        self.x_reference = np.concatenate([np.asarray(robot.q_reference, dtype=float), np.zeros(model.nv)])
+        pdata = model.createData()
+        pin.framesForwardKinematics(model, pdata, self.x_reference[: model.nq])
+        self._reference_placements = {foot: pin.SE3(pdata.oMf[fid]) for foot, fid in self.foot_frame_ids.items()}
+        running = [self._node(terminal=False) for _ in range(self.n_nodes)]
+        terminal = self._node(terminal=True)
+        # per node: (differential model, per foot (height, touchdown height, touchdown velocity,
+        # foothold, contact force, friction cone) cost items, None where the term is absent)
+        self._node_terms = []
+        for model in running + [terminal]:
+            items = model.differential.costs.costs
+            self._node_terms.append((model.differential, [
+                tuple(items.get(f"{foot}_{term}") for term in (
+                    "height", "touchdown_height", "touchdown_velocity", "foothold", "contact_force", "friction_cone"))
+                for foot in self.feet]))
+        self.problem = ShootingProblem(self.x_reference, running, terminal)
+        #: "batched" or "nodes" (see WalkingOCPConfig.evaluation); evaluation_note says why nodes
+        self.evaluation, self.evaluation_note = "nodes", ""
+        if config.evaluation != "nodes":
+            reason = batched_evaluation_support(self.problem)
+            if reason is None:
+                self.problem = BatchedShootingProblem(self.x_reference, running, terminal)
+                self.evaluation = "batched"
+            elif config.evaluation == "batched":
+                raise ParameterError(f"evaluation='batched' is not possible for this problem: {reason}")
+            else:
+                self.evaluation_note = f"node-wise evaluation: {reason}"
+
+    # ------------------------------------------------------------------ construction
+    def _contact(self, foot: str):
+        fid = self.foot_frame_ids[foot]
+        gains = self.config.baumgarte_gains
+        if self.contact_type == "point3d":
+            return ContactModel3D(self.state, fid, self._reference_placements[foot].translation, gains)
+        return ContactModel6D(self.state, fid, self._reference_placements[foot], gains)
+
+    def _node(self, terminal: bool) -> IntegratedActionModelEuler:
+        cfg = self.config
+        state, nu = self.state, self.nu
+        costs = CostModelSum(state, nu)
+        w_state = cfg.state_weights.vector(state.nv)
+        costs.add("state_regularization",
+                  CostModelResidual(ResidualState(state, self.x_reference, nu), ActivationWeightedQuad(w_state)),
+                  cfg.state_weight)
+        if not terminal:
+            costs.add("control_regularization", CostModelResidual(ResidualControl(state, nu)), cfg.control_weight)
+            limit = cfg.control_bound_fraction * self.torque_limit
+            costs.add("control_bounds",
+                      CostModelResidual(ResidualControl(state, nu), ActivationQuadraticBarrier(-limit, limit)),
+                      cfg.control_bound_weight)
+        for foot in self.feet:
+            fid = self.foot_frame_ids[foot]
+            costs.add(f"{foot}_height",
+                      CostModelResidual(ResidualFrameHeight(state, fid, self.ground_height, nu)),
+                      cfg.foot_height_weight, active=False)
+            if not terminal and cfg.touchdown_height_weight > 0:
+                costs.add(f"{foot}_touchdown_height",
+                          CostModelResidual(ResidualFrameHeight(state, fid, self.ground_height, nu)),
+                          cfg.touchdown_height_weight, active=False)
+            if not terminal and cfg.touchdown_velocity_weight > 0:
+                costs.add(f"{foot}_touchdown_velocity",
+                          CostModelResidual(ResidualFrameVelocity(state, fid, nu),
+                                            ActivationWeightedQuad(np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0]))),
+                          cfg.touchdown_velocity_weight, active=False)
+            if not terminal and cfg.foothold_weight > 0:
+                residual = ResidualFrameTranslation(state, fid, self._reference_placements[foot].translation, nu)
+                costs.add(f"{foot}_foothold",
+                          CostModelResidual(residual, ActivationWeightedQuad(np.array([1.0, 1.0, 0.0]))),
+                          cfg.foothold_weight, active=False)
+            if not terminal and cfg.contact_force_weight > 0:
+                nc = 3 if self.contact_type == "point3d" else 6
+                costs.add(f"{foot}_contact_force",
+                          CostModelResidual(ResidualContactForce(state, foot, np.zeros(nc), nu)),
+                          cfg.contact_force_weight, active=False)
+            if not terminal and cfg.friction_cone_weight > 0 and self.contact_type == "point3d":
+                residual = ResidualFrictionCone(state, foot, cfg.friction_coefficient, nu)
+                costs.add(f"{foot}_friction_cone",
+                          CostModelResidual(residual, ActivationQuadraticBarrier(residual.lower_bounds,
+                                                                                 residual.upper_bounds)),
+                          cfg.friction_cone_weight, active=False)
+        if terminal:
+            costs.add("com_position",
+                      CostModelResidual(ResidualCoMPosition(state, np.zeros(3), nu)), cfg.com_terminal_weight)
+        contacts = {foot: self._contact(foot) for foot in self.feet}
+        dam = DifferentialActionModelContactFwdDynamics(state, self.actuation, contacts, costs,
+                                                        backend=cfg.dynamics_backend)
+        return IntegratedActionModelEuler(dam, 0.0 if terminal else self.dt)
+
+    # ------------------------------------------------------------------ update
+    def update(self, x0: np.ndarray, schedule, com_terminal_reference: np.ndarray) -> None:
+        """Set the initial state, the per-node contacts and references from a schedule.
+
+        Args:
+            x0: initial state (nx,), Pinocchio convention.
+            schedule: ``sequencer.schedule.ContactSchedule`` with n_nodes rows + 1 on this grid.
+            com_terminal_reference: CoM reference at the end of the horizon (3,) [m], world.
+        """
+        self.problem.set_x0(x0)
+        if schedule.n_nodes != self.n_nodes:
+            raise ParameterError(f"schedule has n_nodes={schedule.n_nodes}, the OCP has {self.n_nodes}")
+        if abs(schedule.dt - self.dt) > 1e-9:
+            raise ParameterError(f"schedule dt={schedule.dt} s differs from the OCP dt={self.dt} s")
+        missing = set(self.feet) - set(schedule.feet)
+        if missing:
+            raise ParameterError(f"schedule feet {schedule.feet} lack the robot's feet {sorted(missing)}")
+        com_ref = np.asarray(com_terminal_reference, dtype=float)
+        if com_ref.shape != (3,):
+            raise ParameterError(f"com_terminal_reference has shape {com_ref.shape}, expected (3,)")
+        check_finite("com_terminal_reference", com_ref)
+        cfg = self.config
+        columns = [schedule.feet.index(foot) for foot in self.feet]
+        in_contact = np.asarray(schedule.in_contact, dtype=bool)[:, columns]
+        phase = np.asarray(schedule.swing_phase, dtype=float)[:, columns]
+        touchdown = np.asarray(schedule.touchdown_position, dtype=float)[:, columns]
+        heights = self.ground_height + swing_height_reference(np.nan_to_num(phase), cfg.swing_apex_height)
+        n_stance = np.maximum(in_contact.sum(axis=1), 1)
+        last_swing = np.zeros_like(in_contact)
+        last_swing[:-1] = ~in_contact[:-1] & in_contact[1:]
+        first_stance = np.zeros_like(in_contact)
+        first_stance[1:] = in_contact[1:] & ~in_contact[:-1]
+        stance_names = [tuple(foot for j, foot in enumerate(self.feet) if row[j]) for row in in_contact.tolist()]
+        swing_rows, last_rows, first_rows = (~in_contact).tolist(), last_swing.tolist(), first_stance.tolist()
+        heights_rows = heights.tolist()
+        force_reference = (self.mass * GRAVITY / n_stance).tolist()
+        for k, (dam, feet_terms) in enumerate(self._node_terms):
+            terminal = k == self.n_nodes
+            if not terminal:
+                dam.set_active_contacts(stance_names[k])
+            for j, (height, touchdown_height, touchdown_velocity, foothold, force, cone) in enumerate(feet_terms):
+                swing = swing_rows[k][j]
+                height.active = swing
+                if swing:
+                    height.cost.residual.reference = heights_rows[k][j]
+                if terminal:
+                    continue
+                if touchdown_height is not None:
+                    touchdown_height.active = last_rows[k][j]
+                if touchdown_velocity is not None:
+                    touchdown_velocity.active = first_rows[k][j]
+                if foothold is not None:
+                    foothold.active = last_rows[k][j]
+                    if last_rows[k][j]:
+                        foothold.cost.residual.reference[:] = (touchdown[k, j, 0], touchdown[k, j, 1],
+                                                                self.ground_height)
+                if force is not None:
+                    force.active = not swing
+                    force.cost.residual.reference[2] = force_reference[k]
+                if cone is not None:
+                    cone.active = not swing
+        self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
+        if self.evaluation == "batched":  # the same arrays, written over the horizon at once
+            self.problem.sync_contacts()
+            self.problem.set_term_columns(self._frame_term_columns(in_contact, heights, last_swing, touchdown))
+
+    def _frame_term_columns(self, in_contact, heights, last_swing, touchdown) -> dict:
+        """The frame terms' (weight where active, reference) over the running nodes, as the update
+        wrote them into the node models (BatchedShootingProblem.set_term_columns)."""
+        N = self.n_nodes
+        items = self.problem.running_models[0].differential.costs.costs
+        columns = {}
+        for j, foot in enumerate(self.feet):
+            swing, last = ~in_contact[:N, j], last_swing[:N, j]
+            columns[f"{foot}_height"] = (items[f"{foot}_height"].weight * swing, heights[:N, j])
+            if f"{foot}_touchdown_height" in items:
+                columns[f"{foot}_touchdown_height"] = (items[f"{foot}_touchdown_height"].weight * last,
+                                                       np.full(N, self.ground_height))
+            if f"{foot}_foothold" in items:
+                foothold = np.zeros((N, 3))
+                foothold[last, :2] = touchdown[:N, j][last]
+                foothold[:, 2] = self.ground_height
+                columns[f"{foot}_foothold"] = (items[f"{foot}_foothold"].weight * last, foothold)
+        return columns
+
+
+def quasi_static_controls(ocp: WalkingOCP, x: np.ndarray) -> np.ndarray:
+    """Torques (nu,) [N·m] holding the configuration of x still on the node-0 stance feet
+    (least squares over torques and contact forces of the gravity torque)."""
+    model = ocp.state.pinocchio
+    pdata = model.createData()
+    q = x[: model.nq]
+    gravity = pin.computeGeneralizedGravity(model, pdata, q)
+    pin.computeJointJacobians(model, pdata, q)
+    pin.updateFramePlacements(model, pdata)
+    dam = ocp.problem.running_models[0].differential
+    columns = [np.vstack([np.zeros((6, ocp.nu)), np.eye(ocp.nu)])]
+    for name in dam.active_contacts:
+        contact = dam.contacts[name]
+        J = pin.getFrameJacobian(model, pdata, contact.frame_id, pin.LOCAL_WORLD_ALIGNED if contact.nc == 3 else pin.LOCAL)
+        columns.append(J[: contact.nc].T)
+    A = np.hstack(columns)
+    return (np.linalg.pinv(A) @ gravity)[: ocp.nu]

@@ -1,0 +1,77 @@
+"""One whole-body walking OCP from a standing start: plan footsteps, sample the schedule, solve.
+
+This is what ``wbmpc ocp`` prints and draws; it is also the shortest path from a robot to a
+solved walking problem in Python::
+
+    from wbmpc.walking.standing_start import solve_walking_ocp
+    result = solve_walking_ocp("bolt", speed=0.33)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+
+def solve_walking_ocp(robot_name: str = "bolt", speed: float | None = None, n_nodes: int = 100, dt: float = 0.01,
+                      iterations: int = 100, foothold_weight: float = 0.0) -> dict:
+    """Plan footsteps from a standing start, solve the walking OCP, summarise the solution.
+
+    Returns a dict with the solver log, term costs, swing apex heights [m] above the ground,
+    CoM displacement [m], peak torque [N·m], and the trajectories (times [s], xs, us, foot
+    heights (N + 1, 2) [m], CoM (N + 1, 3) [m]).
+    """
+    import pinocchio as pin
+
+    from robots import load_robot
+    from sequencer import FootstepSequencer, SequencerParams, contact_schedule
+    from wbmpc.errors import ParameterError
+    from wbmpc.ocp.solvers import SolverFDDP
+    from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig, quasi_static_controls
+
+    if int(iterations) != iterations or iterations < 1:
+        raise ParameterError(f"iterations={iterations} must be an integer >= 1")
+    robot = load_robot(robot_name)
+    model = robot.pinocchio_model
+    data = model.createData()
+    x0 = np.concatenate([robot.q_reference, np.zeros(model.nv)])
+    q0 = x0[: model.nq]
+    pin.framesForwardKinematics(model, data, q0)
+    com0 = pin.centerOfMass(model, data, q0).copy()
+    feet = {foot: data.oMf[model.getFrameId(name)].translation.copy() for foot, name in robot.foot_frames.items()}
+    params = SequencerParams.bolt_walking()
+    if speed is not None:
+        params = dataclasses.replace(params, v_x=float(speed))
+    plan = FootstepSequencer(params).plan(t=0.0, stance_foot="left", stance_position=feet["left"][:2],
+                                          dcm_measured=com0[:2], t_stance_start=0.0)
+    schedule = contact_schedule(plan, 0.0, dt, n_nodes)
+    com_terminal = np.append(plan.lipm_com_at(n_nodes * dt, com0[:2]), com0[2])
+    ocp = WalkingOCP(robot, WalkingOCPConfig(foothold_weight=foothold_weight), n_nodes=n_nodes, dt=dt)
+    ocp.update(x0, schedule, com_terminal)
+    solver = SolverFDDP(ocp.problem)
+    u0 = quasi_static_controls(ocp, x0)
+    converged = solver.solve([x0] * (n_nodes + 1), [u0] * n_nodes, maxiter=iterations)
+    ocp.problem.calc(solver.xs, solver.us)
+    heights = np.zeros((n_nodes + 1, len(feet)))
+    coms = np.zeros((n_nodes + 1, 3))
+    for k, x in enumerate(solver.xs):
+        q = x[: model.nq]
+        pin.framesForwardKinematics(model, data, q)
+        coms[k] = pin.centerOfMass(model, data, q)
+        for j, name in enumerate(robot.foot_frames.values()):
+            heights[k, j] = data.oMf[model.getFrameId(name)].translation[2] - robot.contact_frame_height
+    in_contact = np.asarray(schedule.in_contact)
+    apex = {foot: float(np.max(np.where(in_contact[:, j], -np.inf, heights[:, j]), initial=0.0))
+            for j, foot in enumerate(feet)}
+    return {
+        "robot": robot_name, "n_nodes": n_nodes, "dt_s": dt, "converged": bool(converged),
+        "iterations": len(solver.log), "cost": float(solver.cost),
+        "log": [dataclasses.asdict(entry) for entry in solver.log],
+        "term_costs": ocp.problem.term_costs(),
+        "swing_apex_height_m": apex, "swing_apex_reference_m": ocp.config.swing_apex_height,
+        "com_displacement_m": (coms[-1] - coms[0]).tolist(), "com_terminal_reference_m": com_terminal.tolist(),
+        "peak_torque_Nm": float(np.max(np.abs(solver.us))), "torque_limit_Nm": float(np.max(robot.torque_limit)),
+        "times_s": (dt * np.arange(n_nodes + 1)).tolist(), "foot_heights_m": heights, "com_m": coms,
+        "feet": list(feet), "xs": solver.xs, "us": solver.us,
+    }
