@@ -2,8 +2,9 @@
 
 A run counts as a fall when the base gets too low, tilts too much, or any part of the robot other
 than a foot touches the ground. Ground geoms are those attached to the world body (floor, terrain
-boxes, patches); a contact belongs to a foot when its point lies within the foot sphere (radius +
-``foot_contact_margin``) of a foot frame, so the test does not depend on geom names.
+boxes, patches); a contact belongs to a foot when the robot's geom in it is one of that foot's
+collision geoms (``robot.mujoco_foot_geoms``: Bolt's sphere, the G1's sole spheres), so every
+robot's foot geometry is known, whatever its size.
 """
 
 from __future__ import annotations
@@ -11,8 +12,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
+from robots.mujoco_model import foot_geom_name
 from wbmpc.errors import ParameterError
 
 
@@ -23,14 +26,11 @@ class FallCriteria:
     Attributes:
         min_base_height: base height below which the robot has fallen [m] (Bolt stands at 0.34 m).
         max_tilt: largest angle between the base z axis and the world vertical [rad].
-        foot_contact_margin: distance beyond the foot radius within which a ground contact is still
-            attributed to the foot [m].
         detect_non_foot_contact: treat a ground contact away from the feet as a fall.
     """
 
     min_base_height: float = 0.18
     max_tilt: float = np.deg2rad(50.0)
-    foot_contact_margin: float = 0.01
     detect_non_foot_contact: bool = True
 
     def __post_init__(self) -> None:
@@ -38,58 +38,54 @@ class FallCriteria:
             raise ParameterError(f"min_base_height={self.min_base_height} m must be >= 0")
         if not (0.0 < self.max_tilt <= np.pi):
             raise ParameterError(f"max_tilt={self.max_tilt} rad must be in (0, pi]")
-        if not self.foot_contact_margin >= 0.0:
-            raise ParameterError(f"foot_contact_margin={self.foot_contact_margin} m must be >= 0")
 
 
 class ContactSensor:
     """Classifies MuJoCo contacts between the robot and the ground.
 
     Args:
-        model: compiled ``mujoco.MjModel``.
-        foot_radius: radius of the foot spheres [m].
-        margin: see :attr:`FallCriteria.foot_contact_margin`.
+        model: compiled ``mujoco.MjModel`` built by ``robots.mujoco_model.build_mujoco_spec``.
+        robot: its ``robots.RobotDescription`` (foot order and foot geoms).
     """
 
-    def __init__(self, model, foot_radius: float, margin: float) -> None:
-        self.ground_geom = np.asarray(model.geom_bodyid) == 0
-        self.ground_geom_list = self.ground_geom.tolist()
-        self.reach = float(foot_radius) + float(margin)
+    def __init__(self, model, robot) -> None:
+        self.ground_geom_list = (np.asarray(model.geom_bodyid) == 0).tolist()
+        self.n_feet = len(robot.foot_frames)
+        self.foot_of_geom: dict[int, int] = {}
+        for index, side in enumerate(robot.foot_frames):
+            for k in range(len(robot.mujoco_foot_geoms[side])):
+                geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, foot_geom_name(side, k))
+                if geom < 0:
+                    raise ParameterError(f"the MuJoCo model has no foot geom {foot_geom_name(side, k)!r}")
+                self.foot_of_geom[geom] = index
         self.model = model
 
-    def classify(self, data, feet_position_world: np.ndarray) -> tuple[np.ndarray, str | None]:
+    def classify(self, data) -> tuple[np.ndarray, str | None]:
         """Feet touching the ground and the first non-foot ground contact.
 
         Args:
             data: ``mujoco.MjData`` after a step (contacts computed).
-            feet_position_world: shape (n_feet, 3), foot frame positions [m].
 
         Returns:
             (foot_in_contact (n_feet,) bool, description of a non-foot ground contact or None).
         """
-        n_feet = len(feet_position_world)
-        in_contact = np.zeros(n_feet, dtype=bool)
+        in_contact = np.zeros(self.n_feet, dtype=bool)
         if data.ncon == 0:
             return in_contact, None
         # plain Python over the few contacts: faster than numpy on arrays this small (1 kHz path)
         contacts = data.contact
         ground = self.ground_geom_list
-        feet = feet_position_world.tolist()
-        reach2 = self.reach * self.reach
+        feet = self.foot_of_geom
         other = None
         for g1, g2, point in zip(contacts.geom1.tolist(), contacts.geom2.tolist(), contacts.pos.tolist()):
             ground1, ground2 = ground[g1], ground[g2]
             if ground1 == ground2:
                 continue
-            nearest, nearest_d2 = 0, float("inf")
-            for f, foot in enumerate(feet):
-                d2 = (point[0] - foot[0]) ** 2 + (point[1] - foot[1]) ** 2 + (point[2] - foot[2]) ** 2
-                if d2 < nearest_d2:
-                    nearest, nearest_d2 = f, d2
-            if nearest_d2 <= reach2:
-                in_contact[nearest] = True
+            robot_geom = g2 if ground1 else g1
+            foot = feet.get(robot_geom)
+            if foot is not None:
+                in_contact[foot] = True
             elif other is None:
-                robot_geom = g2 if ground1 else g1
                 body = self.model.body(self.model.geom_bodyid[robot_geom]).name
                 other = f"ground contact of body {body!r} at {np.round(point, 3).tolist()} m"
         return in_contact, other

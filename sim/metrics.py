@@ -5,6 +5,10 @@ Definitions (all times in s, velocities in m/s, world frame):
 - ``velocity_error_x/y``: |mean base velocity - command| over the steady window, the paper's
   epsilon_V = |V_bar - V*| (paper, walk at 0.33 m/s: (5.2, 1.1) mm/s). The steady window starts
   ``steady_start`` after the beginning of the run or the last command change, whichever is later.
+  The command is in the heading frame: these compare it with world velocities, as long as the
+  heading stays near 0 (straight walks along x).
+- ``mean_yaw_rate``: mean base yaw rate over the steady window [rad/s] (yaw change / time);
+  ``yaw_rate_error``: |mean_yaw_rate - commanded yaw rate|.
 - ``rise_time`` (scenarios with a ``speed_switch`` event): time from the switch until the running average of the
   base x velocity (window ``AVERAGE_WINDOW``) first reaches 90 % of the step in command
   (paper, transition 0 -> 0.3 m/s: 4.35 s).
@@ -33,6 +37,12 @@ PAPER_FIGURES = {
     "velocity_error_y": 1.1e-3,  # [m/s]
     "rise_time": 4.35,  # [s], transition 0 -> 0.3 m/s at t = 5 s (section IV.D)
 }
+
+
+def base_yaw_angles(quaternions_xyzw: np.ndarray) -> np.ndarray:
+    """Yaw [rad] of base orientations (n, 4), Pinocchio's (x, y, z, w) order, in (-pi, pi]."""
+    x, y, z, w = quaternions_xyzw.T
+    return np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 def running_average(t: np.ndarray, signal: np.ndarray, window: float = AVERAGE_WINDOW) -> np.ndarray:
@@ -97,9 +107,13 @@ def compute_metrics(log) -> dict[str, Any]:
     metrics["steady_window"] = [float(start), float(t[-1])] if window.any() else None
     if window.sum() > 1:
         mean_velocity = velocity[window, :2].mean(axis=0)
-        error = np.abs(mean_velocity - command[window][-1])
+        error = np.abs(mean_velocity - command[window][-1, :2])
         metrics["mean_velocity_x"], metrics["mean_velocity_y"] = float(mean_velocity[0]), float(mean_velocity[1])
         metrics["velocity_error_x"], metrics["velocity_error_y"] = float(error[0]), float(error[1])
+        yaw = np.unwrap(base_yaw_angles(ticks["x"][window, 3:7]))
+        span = t[window][-1] - t[window][0]
+        metrics["mean_yaw_rate"] = float((yaw[-1] - yaw[0]) / span)
+        metrics["yaw_rate_error"] = float(abs(metrics["mean_yaw_rate"] - command[window][-1, 2]))
 
     # Rise time after a step in the command (scenarios with a "speed_switch" event).
     events = log.params.get("events", {})

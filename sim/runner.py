@@ -29,12 +29,16 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from sequencer.planner import VelocityCommand
 from sim.falls import ContactSensor, FallCriteria, detect_fall
 from sim.log import RunLog
 from sim.scenarios import make_scenario, scenario_class, scenario_parameters
 from wbmpc.errors import ParameterError
-from wbmpc.walking.controller import GRAVITY, Controller, JointPDController, WalkingController, WalkingControllerConfig
+from wbmpc.walking.controller import WalkingController
+from wbmpc.walking.interface import Controller
 from wbmpc.walking.measurement import Measurement
+from wbmpc.walking.pd import JointPDController
+from wbmpc.walking.preset import WalkingPreset, available_walking_presets, is_preset_override, load_walking_preset
 
 CONTROLLERS = ("walking", "pd")
 
@@ -47,16 +51,17 @@ class RunnerOptions:
         noise_q: standard deviation of the configuration measurement noise, applied in the tangent
             space (base position [m], base orientation [rad], joints [rad]); 0 = exact.
         noise_v: standard deviation of the velocity measurement noise [m/s, rad/s]; 0 = exact.
-        min_base_height: see :class:`sim.falls.FallCriteria` [m].
-        max_tilt_deg: largest base tilt before a fall is declared [deg].
+        min_base_height: see :class:`sim.falls.FallCriteria` [m]; None = the robot's walking
+            preset's (``[fall]``), or half the base's standing height for a robot without one.
+        max_tilt_deg: largest base tilt before a fall is declared [deg]; None = the preset's, or 50.
         stop_on_fall: end the run at the first fall (otherwise only record it).
         progress: show a progress bar of simulated time (None: on runs > 3 s when stderr is a TTY).
     """
 
     noise_q: float = 0.0
     noise_v: float = 0.0
-    min_base_height: float = 0.18
-    max_tilt_deg: float = 50.0
+    min_base_height: float | None = None
+    max_tilt_deg: float | None = None
     stop_on_fall: bool = True
     progress: bool | None = None
 
@@ -66,9 +71,16 @@ class RunnerOptions:
             if not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f"{name}={value} must be a finite number >= 0")
 
-    @property
-    def fall_criteria(self) -> FallCriteria:
-        return FallCriteria(min_base_height=self.min_base_height, max_tilt=np.deg2rad(self.max_tilt_deg))
+    def fall_criteria(self, robot, preset: WalkingPreset | None) -> FallCriteria:
+        """The fall thresholds of this run: the options', else the preset's (see the attributes)."""
+        height = self.min_base_height
+        tilt = self.max_tilt_deg
+        if preset is not None:
+            height = preset.fall.min_base_height if height is None else height
+            tilt = preset.fall.max_tilt_deg if tilt is None else tilt
+        height = 0.5 * float(robot.q_reference[2]) if height is None else height
+        tilt = 50.0 if tilt is None else tilt
+        return FallCriteria(min_base_height=height, max_tilt=np.deg2rad(tilt))
 
 
 def run_scenario(
@@ -78,6 +90,7 @@ def run_scenario(
     seed: int = 0,
     out: str | None = None,
     controller: "str | Controller" = "walking",
+    velocity_command: Any = None,
     **params: Any,
 ) -> RunLog:
     """Run scenario ``name`` in closed loop and return its log (metrics included).
@@ -91,9 +104,14 @@ def run_scenario(
         controller: "walking" (sequencer + MPC + Riccati feedback), "pd" (posture hold, falls), or
             an object implementing :class:`wbmpc.walking.controller.Controller` (then ``params`` holds no
             controller options).
+        velocity_command: (v_x [m/s], v_y [m/s], yaw_rate [rad/s]) in the heading frame, the
+            scenario's command after its ramp (sets its ``speed``, ``lateral_speed``, ``yaw_rate``);
+            None = the scenario's. Checked before the run against the robot's command range.
         **params: scenario parameters (e.g. ``speed``, ``force``), :class:`RunnerOptions` fields,
-            and controller options (:class:`wbmpc.walking.controller.WalkingControllerConfig` fields for
-            "walking"; ``kp``, ``kd`` for "pd").
+            and for "walking" overrides of the robot's walking preset
+            (:func:`wbmpc.walking.preset.load_walking_preset`: controller fields by name,
+            ``"planner.l_max"``-style keys, whole sections ``planner=``/``ocp=``; the legacy
+            ``sequencer_params=`` is the ``planner`` section); ``kp``, ``kd`` for "pd".
 
     Returns:
         The :class:`RunLog`; ``status`` tells whether the run completed or fell.
@@ -109,34 +127,51 @@ def run_scenario(
         raise ParameterError(f"controller={controller!r} must be one of {CONTROLLERS} or a Controller object")
     scenario_keys = set(scenario_parameters(name))
     runner_keys = {f.name for f in dataclasses.fields(RunnerOptions)}
+    params = dict(params)
+    if "sequencer_params" in params:  # the planner section, whole
+        params["planner"] = params.pop("sequencer_params")
+    if velocity_command is not None:
+        command = VelocityCommand.from_tuple(velocity_command)
+        clash = sorted({"speed", "lateral_speed", "yaw_rate"} & set(params))
+        if clash:
+            raise ParameterError(f"velocity_command={velocity_command!r} and {clash} both set the command: give one")
+        params.update(speed=command.v_x, lateral_speed=command.v_y, yaw_rate=command.yaw_rate)
     if custom:
-        controller_keys: set[str] = set()
+        is_controller_key = lambda key: False  # noqa: E731
     elif controller == "walking":
-        controller_keys = {f.name for f in dataclasses.fields(WalkingControllerConfig)}
+        is_controller_key = is_preset_override
     else:
-        controller_keys = {"kp", "kd"}
-    unknown = sorted(set(params) - scenario_keys - runner_keys - controller_keys)
+        is_controller_key = {"kp", "kd"}.__contains__
+    unknown = sorted(k for k in params if k not in scenario_keys and k not in runner_keys and not is_controller_key(k))
     if unknown:
+        allowed = ("walking preset overrides: controller fields or 'section.field' "
+                   "(sections planner, ocp, controller, fall, command)" if controller == "walking" else
+                   "controller ['kd', 'kp']" if controller == "pd" else "no controller options (custom controller)")
         raise ParameterError(
             f"run_scenario({name!r}): unknown parameter(s) {unknown}; allowed: scenario {sorted(scenario_keys)}, "
-            f"runner {sorted(runner_keys)}, controller {sorted(controller_keys)}"
+            f"runner {sorted(runner_keys)}, {allowed}"
         )
     scenario = make_scenario(name, **{k: v for k, v in params.items() if k in scenario_keys})
     options = RunnerOptions(**{k: v for k, v in params.items() if k in runner_keys})
-    controller_options = {k: v for k, v in params.items() if k in controller_keys}
+    controller_options = {k: v for k, v in params.items()
+                          if k not in scenario_keys and k not in runner_keys and is_controller_key(k)}
     duration = float(scenario_cls.default_duration if duration is None else duration)
     if not (np.isfinite(duration) and duration > 0):
         raise ParameterError(f"duration={duration} s must be a finite positive number")
+    preset = None
     if custom:
         ctrl: Controller = controller
     elif controller == "walking":
-        for key in ("mpc_failure_times",):
-            if key in controller_options:
-                controller_options[key] = tuple(float(t) for t in np.atleast_1d(controller_options[key]))
-        controller_options.setdefault("velocity_command", scenario.velocity_command(0.0))
-        ctrl = WalkingController(WalkingControllerConfig(**controller_options))
+        if "mpc_failure_times" in controller_options:
+            controller_options["mpc_failure_times"] = tuple(
+                float(t) for t in np.atleast_1d(controller_options["mpc_failure_times"]))
+        preset = load_walking_preset(robot, controller_options)
+        ctrl = WalkingController(preset)
+        check_commands(preset, scenario)
     else:
         ctrl = JointPDController(**controller_options)
+    if preset is None and robot in available_walking_presets():
+        preset = load_walking_preset(robot)  # the robot's fall thresholds
 
     log = RunLog(
         scenario=name,
@@ -152,7 +187,19 @@ def run_scenario(
             "steady_start": scenario_cls.steady_start,
         },
     )
-    return _ClosedLoop(scenario, ctrl, options, robot, duration, int(seed), log, out).run()
+    return _ClosedLoop(scenario, ctrl, options, robot, duration, int(seed), log, out, preset).run()
+
+
+def check_commands(preset: WalkingPreset, scenario) -> None:
+    """Refuse, before the first tick, a scenario command the robot's walking preset cannot follow:
+    outside the preset's ``[command]`` range or outside what its planner can plan."""
+    from sequencer.dcm_planner import DcmFootstepPlanner
+
+    planner = DcmFootstepPlanner(preset.planner)
+    for value in scenario.commands():
+        command = VelocityCommand.from_tuple(value)
+        preset.command.check(command, preset.robot)
+        planner.check_command(command)
 
 
 def _jsonable_param(value: Any) -> Any:
@@ -164,8 +211,8 @@ def _jsonable_param(value: Any) -> Any:
 class _ClosedLoop:
     """One run's simulation state (built and used by :func:`run_scenario` only)."""
 
-    def __init__(self, scenario, controller, options, robot_name, duration, seed, log, out) -> None:
-        self.scenario, self.controller, self.options = scenario, controller, options
+    def __init__(self, scenario, controller, options, robot_name, duration, seed, log, out, preset) -> None:
+        self.scenario, self.controller, self.options, self.preset = scenario, controller, options, preset
         self.robot_name, self.duration, self.seed, self.log, self.out = robot_name, duration, seed, log, out
 
     def _build(self) -> None:
@@ -196,10 +243,8 @@ class _ClosedLoop:
         self.feet = tuple(robot.foot_frames.keys())
         self.frame_ids = [self.model.getFrameId(robot.foot_frames[f]) for f in self.feet]
         self.torque_limit = np.asarray(robot.torque_limit, dtype=float)
-        self.criteria = self.options.fall_criteria
-        self.contacts = ContactSensor(self.mj_model, robot.foot_radius, self.criteria.foot_contact_margin)
-        com_reference = pin.centerOfMass(self.model, self.data, np.asarray(robot.q_reference))
-        self.omega = float(np.sqrt(GRAVITY / com_reference[2]))
+        self.criteria = self.options.fall_criteria(robot, self.preset)
+        self.contacts = ContactSensor(self.mj_model, robot)
         self.dt = float(self.mj_model.opt.timestep)
         self.n_ticks = int(round(self.duration / self.dt))
         period = self.controller.replan_period / self.dt
@@ -221,11 +266,10 @@ class _ClosedLoop:
             "tau": np.zeros((n, self.nu)),
             "com": np.zeros((n, 3)),
             "com_velocity": np.zeros((n, 3)),
-            "dcm": np.zeros((n, 2)),
             "feet": np.zeros((n, n_feet, 3)),
             "foot_contact": np.zeros((n, n_feet), dtype=bool),
             "base_velocity_world": np.zeros((n, 3)),
-            "velocity_command": np.zeros((n, 2)),
+            "velocity_command": np.zeros((n, 3)),
         }
 
     def _measure_noise(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -268,7 +312,7 @@ class _ClosedLoop:
                 com_velocity = self.data.vcom[0]
                 pin.updateFramePlacements(self.model, self.data)
                 feet = np.array([self.data.oMf[f].translation for f in self.frame_ids])
-                foot_contact, other_contact = self.contacts.classify(data, feet)
+                foot_contact, other_contact = self.contacts.classify(data)
                 command = self.scenario.velocity_command(t)
                 ticks["t"][i] = t
                 ticks["qpos"][i] = data.qpos
@@ -277,7 +321,6 @@ class _ClosedLoop:
                 ticks["x"][i, self.nq :] = v
                 ticks["com"][i] = com
                 ticks["com_velocity"][i] = com_velocity
-                ticks["dcm"][i] = com[:2] + com_velocity[:2] / self.omega
                 ticks["feet"][i] = feet
                 ticks["foot_contact"][i] = foot_contact
                 ticks["base_velocity_world"][i] = data.qvel[:3]
@@ -299,8 +342,7 @@ class _ClosedLoop:
                     timing["setup"] += time.perf_counter() - tic
                 if i % self.replan_every == 0:
                     tic = time.perf_counter()
-                    if hasattr(self.controller, "set_velocity_command"):
-                        self.controller.set_velocity_command(*command)
+                    self.controller.set_velocity_command(command)
                     record = self.controller.replan(t, measurement)
                     replan_rows.append({"t": t, **record})
                     timing["replan"] += time.perf_counter() - tic
@@ -339,6 +381,10 @@ class _ClosedLoop:
 
         log = self.log
         log.ticks = {k: v[:ticks_done].copy() for k, v in ticks.items()}
+        if "com" in log.ticks:  # the DCM with the controller's omega (the planner's): one omega per run
+            omega = float(self.controller.omega)
+            log.ticks["dcm"] = log.ticks["com"][:, :2] + log.ticks["com_velocity"][:, :2] / omega
+            log.params["omega"] = omega
         keys = sorted({k for row in replan_rows for k in row})
         log.replans = {k: np.array([row.get(k, np.nan) for row in replan_rows], dtype=float) for k in keys}
         timers = getattr(self.controller, "timers", None)

@@ -6,7 +6,8 @@ A scenario is a dataclass of parameters (with units) that shapes one experiment 
 - ``initialize_episode(model, data, rng)``: set the initial state (default: reference posture
   lowered until the feet touch the ground, both feet on the ground as in the paper);
 - ``before_step(t, model, data)``: act on the simulation before each step (pushes);
-- ``velocity_command(t)``: the walking command (v_x, v_y) [m/s] at time t.
+- ``velocity_command(t)``: the walking command (v_x [m/s], v_y [m/s], yaw_rate [rad/s]) at time t,
+  in the robot's heading frame.
 
 All randomness comes from the ``rng`` the runner derives from the run's seed.
 """
@@ -65,17 +66,22 @@ def make_scenario(name: str, **params: Any) -> "Scenario":
 
 @dataclass(frozen=True)
 class Scenario:
-    """Base scenario: flat ground, constant velocity command ``speed`` along x."""
+    """Base scenario: flat ground, constant velocity command (``speed``, ``lateral_speed``,
+    ``yaw_rate``) in the heading frame, reached by a linear ramp from standing."""
 
     name: ClassVar[str] = "base"
     default_duration: ClassVar[float] = 10.0  # [s]
     steady_start: ClassVar[float] = 3.0  # [s] after the last command change: start of the steady part
 
-    speed: float = 0.33  # [m/s], forward velocity command
-    ramp_time: float = 2.0  # [s], the command rises linearly from 0 to ``speed`` over this time
+    speed: float = 0.33  # [m/s], forward velocity command v_x
+    ramp_time: float = 2.0  # [s], the command rises linearly from 0 to its value over this time
+    lateral_speed: float = 0.0  # [m/s], lateral velocity command v_y (to the left)
+    yaw_rate: float = 0.0  # [rad/s], yaw-rate command (counter-clockwise)
 
     def __post_init__(self) -> None:
-        _check_range("speed", self.speed, -1.0, 1.0, "m/s")
+        _check_range("speed", self.speed, -2.0, 2.0, "m/s")
+        _check_range("lateral_speed", self.lateral_speed, -2.0, 2.0, "m/s")
+        _check_range("yaw_rate", self.yaw_rate, -3.0, 3.0, "rad/s")
         _check_range("ramp_time", self.ramp_time, 0.0, 100.0, "s")
 
     def modify_spec(self, spec: Any, rng: np.random.Generator) -> None:
@@ -87,11 +93,16 @@ class Scenario:
     def before_step(self, t: float, model: Any, data: Any) -> None:
         """Act on the simulation before the step at time ``t`` [s] (default: nothing)."""
 
-    def velocity_command(self, t: float) -> tuple[float, float]:
-        """Walking command (v_x, v_y) [m/s], world frame, at time ``t`` [s] (after the ramp: ``speed``)."""
+    def velocity_command(self, t: float) -> tuple[float, float, float]:
+        """Walking command (v_x [m/s], v_y [m/s], yaw_rate [rad/s]), heading frame, at time ``t`` [s]."""
+        command = (self.speed, self.lateral_speed, self.yaw_rate)
         if self.ramp_time > 0.0 and t < self.ramp_time:
-            return (self.speed * t / self.ramp_time, 0.0)
-        return (self.speed, 0.0)
+            return tuple(value * t / self.ramp_time for value in command)
+        return command
+
+    def commands(self) -> list[tuple[float, float, float]]:
+        """The commands the scenario holds after its ramps (checked against the robot's range before a run)."""
+        return [(self.speed, self.lateral_speed, self.yaw_rate)]
 
     def events(self) -> dict[str, float]:
         """Times [s] of the scenario's events (push start, speed change...) for metrics and plots."""

@@ -20,11 +20,14 @@ class Transition(Scenario):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        _check_range("speed_before", self.speed_before, -1.0, 1.0, "m/s")
+        _check_range("speed_before", self.speed_before, -2.0, 2.0, "m/s")
         _check_range("switch_time", self.switch_time, 0.0, 1e4, "s")
 
-    def velocity_command(self, t: float) -> tuple[float, float]:
-        return (self.speed_before if t < self.switch_time else self.speed, 0.0)
+    def velocity_command(self, t: float) -> tuple[float, float, float]:
+        return (self.speed_before if t < self.switch_time else self.speed, self.lateral_speed, self.yaw_rate)
+
+    def commands(self) -> list[tuple[float, float, float]]:
+        return [(self.speed_before, self.lateral_speed, self.yaw_rate), (self.speed, self.lateral_speed, self.yaw_rate)]
 
     def events(self) -> dict[str, float]:
         return {"speed_switch": self.switch_time}

@@ -20,22 +20,15 @@ it has slid ``WalkingControllerConfig.stance_slide_follow`` away from it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
+from typing import Any
 
 import numpy as np
 
+from sequencer.planner import StanceState
 from wbmpc.errors import ParameterError
 
 TOUCHDOWN_DETECTIONS = ("plan", "contact")
-
-
-@dataclass
-class StanceState:
-    """Current stance: foot name, measured position (world xy [m]) and touchdown time [s]."""
-
-    foot: str
-    position: np.ndarray
-    t_start: float
 
 
 class StanceTracker:
@@ -61,11 +54,12 @@ class StanceTracker:
         self.state: StanceState | None = None
         self.n_switches = 0
 
-    def reset(self, foot: str, position_xy: np.ndarray, t_start: float) -> None:
-        """Start with ``foot`` in stance at ``position_xy`` (world, m) since ``t_start`` [s]."""
+    def reset(self, foot: str, position_xy: np.ndarray, t_start: float, yaw: float = 0.0) -> None:
+        """Start with ``foot`` in stance at ``position_xy`` (world, m) since ``t_start`` [s], heading
+        ``yaw`` [rad]."""
         if foot not in self.feet:
             raise ParameterError(f"stance foot {foot!r} must be one of {self.feet}")
-        self.state = StanceState(foot, np.array(position_xy[:2], dtype=float), float(t_start))
+        self.state = StanceState(foot, np.array(position_xy[:2], dtype=float), float(yaw), float(t_start))
         self.n_switches = 0
         self.due_since: float | None = None  # first time the current swing's touchdown was due
 
@@ -77,6 +71,7 @@ class StanceTracker:
         swing_start_time: float | None,
         feet_position_world: np.ndarray,
         foot_in_contact: np.ndarray,
+        next_touchdown_yaw: float = 0.0,
     ) -> bool:
         """Switch the stance if the swing foot has touched down; returns True on a switch.
 
@@ -87,6 +82,7 @@ class StanceTracker:
             swing_start_time: when its swing began [s] (the current stance's start).
             feet_position_world: shape (n_feet, 3), measured foot positions [m], world frame.
             foot_in_contact: shape (n_feet,), measured contacts.
+            next_touchdown_yaw: planned heading of the landing foot [rad] (the new stance's yaw).
         """
         if self.state is None:
             raise RuntimeError("StanceTracker.update() called before reset()")
@@ -108,7 +104,37 @@ class StanceTracker:
             t_switch = t
         if not touched:
             return False
-        self.state = StanceState(next_touchdown_foot, np.array(feet_position_world[index, :2]), t_switch)
+        self.state = StanceState(next_touchdown_foot, np.array(feet_position_world[index, :2]),
+                                 float(next_touchdown_yaw), t_switch)
         self.n_switches += 1
         self.due_since = None
         return True
+
+
+def delay_to_touchdown(plan: Any, t: float, swing_foot_in_contact: bool, node_dt: float,
+                       wait_nodes: int) -> tuple[Any, float]:
+    """The plan shifted in time so that a due but not yet measured touchdown lies ahead.
+
+    The planner re-plans a late touchdown to "now"; sampled as is, the OCP would hold the swing
+    foot as a rigid contact wherever it is in the air (3-7 cm above the ground were seen on
+    Bolt), and the next solutions ask for large torques. Instead the whole sequence is delayed
+    so that the swing ends ``wait_nodes`` nodes from now, its height reference reaching the
+    ground there.
+
+    Args:
+        plan: ``sequencer.FootstepPlan``.
+        t: now [s].
+        swing_foot_in_contact: the foot of the plan's first step is measured on the ground.
+        node_dt: OCP node spacing [s].
+        wait_nodes: nodes from now at which the delayed swing ends.
+
+    Returns:
+        (plan to sample, delay applied [s], 0 when none).
+    """
+    first = plan.steps[0]
+    target = t + wait_nodes * node_dt
+    if swing_foot_in_contact or first.touchdown_time >= target:
+        return plan, 0.0
+    delay = target - first.touchdown_time
+    steps = tuple(dataclasses.replace(s, touchdown_time=s.touchdown_time + delay) for s in plan.steps)
+    return dataclasses.replace(plan, steps=steps), delay

@@ -1,0 +1,207 @@
+"""Options of the walking controller: horizon, rates, delays, touchdown handling, estimator gains.
+
+Every tuned value of a robot is in its walking preset (``wbmpc/walking/presets/<robot>.toml``,
+section ``[controller]``, loaded by :func:`wbmpc.walking.preset.load_walking_preset`); the defaults
+here are Bolt's, the robot the paper's pipeline was tuned on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from wbmpc.errors import ParameterError
+from wbmpc.ocp.mpc import HORIZON_ENDS
+from wbmpc.walking.stance import TOUCHDOWN_DETECTIONS
+
+
+@dataclass(frozen=True)
+class WalkingControllerConfig:
+    """Options of the walking controller (defaults: the paper's pipeline).
+
+    Attributes:
+        n_nodes: MPC horizon length N (nodes), 100 (H_u = 1 s, three 0.3 s steps). The paper
+            gives the node spacing (~10 ms) but not N. Shorter horizons walk worse (20 s walk,
+            seed 0: N = 80 speed error 12 mm/s, 70 34 mm/s, 60 falls at 1.7 s, 50 0.15 m/s;
+            100: 4 mm/s; docs/closed_loop.md).
+        node_dt: MPC node spacing [s], paper: ~0.01.
+        replan_period: period of the sequencer + MPC update [s], paper: 0.01 (100 Hz).
+        max_iterations: FDDP iterations per MPC update, paper and default: 1. Until the warm start
+            filled the end of the horizon by a rollout (``mpc_horizon_end``), one iteration fell
+            (after 2.1 s on terrain, 10.5 s in the transition) and the closed loop ran 3, 2.5x
+            slower (docs/closed_loop.md). Three recover more pushes (push map 27.1 % against
+            21.4 %, docs/campaigns.md).
+        mpc_horizon_end: how the MPC's warm start fills the node entering at the end of the
+            horizon: "rollout" (default) or "repeat" (see ``wbmpc.walking.WalkingMPC``). With "repeat",
+            1 iteration per update falls (see ``max_iterations``).
+        mpc_prepare: after each update, compute the next update's contact dynamics derivatives
+            ahead (``WalkingMPC.prepare``): the same torques, ~2 ms less between measurement and
+            torque (the ``mpc_tick_time`` metric), the same work per cycle (``mpc_prepare_time``).
+        mpc_time_budget: wall time [s] an MPC update may take (``WalkingMPC(time_budget=)``: no
+            FDDP iteration or line-search trial starts that would end after it; status
+            "deadline"), or None (default). Set, it makes the run depend on the machine's speed:
+            the same seed no longer gives the same log.
+        delay_nodes: 1 applies node 1 of each solution as soon as it is computed (the paper's
+            pipeline: its solver needs about one node, 10 ms, so node 1 is "now" when the solution
+            arrives); 0 applies node 0.
+        computation_delay: simulated solver latency [s]: a solution computed from the state at t
+            is applied from t + computation_delay on (its node index still counts from t). 0 (default)
+            makes it available at once. ``delay_nodes=0, computation_delay=0.01`` emulates the real
+            system the paper's delay model stands for: node 1 applied from t + 10 ms.
+        interpolate: interpolate u and x between nodes k and k+1 at 1 kHz (otherwise zero-order hold).
+        feedback: apply the Riccati gains (False: feed-forward u_k only, to show what K buys).
+        touchdown_detection: "contact" (switch the stance on the measured touchdown, default) or
+            "plan" (at the planned time); see ``wbmpc.walking.stance``.
+        touchdown_wait_nodes: with contact detection, a swing foot still in the air when its
+            touchdown is due is kept swinging (and driven down by the height cost) for this many
+            more nodes in the OCP's schedule (see ``wbmpc.walking.stance.delay_to_touchdown``).
+        first_stance_foot: stance foot at t0 (both feet are on the ground at start; the other one
+            takes the first step).
+        velocity_integral_gain: integral action on the forward speed [1/s] (0 = off, the default and
+            the paper's pipeline): the sequencer is given v*_x + k ∫ (v*_x − v̄_x) dt, v̄ the CoM
+            velocity low-passed over ``velocity_filter_time``, the correction bounded by
+            ``velocity_correction_max`` (and the integral clamped accordingly: anti-windup). It was
+            on (k = 1) while Bolt settled at 0.6 m/s for 0.33 m/s; that bias came from hovering
+            touchdowns and the LIPM's missing swing drift (fixed, see the preset's ``[ocp]`` touchdown terms and
+            ``lipm_correction_gain``), and with k = 1 the 20 s walk now overshoots to 0.48 m/s
+            during the ramp and ends with a larger mean error (8.5 against 6.7 mm/s).
+        velocity_correction_max: bound of that correction [m/s].
+        velocity_filter_time: time constant of the low-pass filter on the measured speed [s].
+        lipm_correction_gain: per-step gain in [0, 1] of two corrections of the sequencer's LIPM,
+            identified after every step from the measured DCM (0 = off: the paper's pure LIPM and
+            the parameters' own ``swing_drift``, ``dcm_offset_bias``). (1) Swing drift
+            (``SequencerParams.swing_drift``): the DCM's gain over the LIPM during the stance that
+            just ended, d = zeta_T - p - (zeta_0 - p) exp(omega T) (zeta_0, zeta_T measured at its
+            touchdown and at the next one, p the stance foot), per unit of the step taken,
+            kappa_k = d / L (steps of at least ``LIPM_CORRECTION_MIN_STEP``). (2) Touchdown offset
+            bias (``SequencerParams.dcm_offset_bias``): measured DCM offset at the touchdown minus
+            the offset the plan aimed at. Each estimate moves by this fraction towards the step's
+            value. On Bolt the swing leg (the legs are half of the robot's mass) makes the DCM
+            outrun the LIPM by ~0.22 L per step and the touchdowns end ~2.5 mm ahead of the plan:
+            uncorrected, the sequencer answers with long, quick steps (0.12 m/s too fast with the
+            touchdown fixes, docs/closed_loop.md).
+        lipm_correction_min_step: shortest step [m] from which the LIPM corrections are identified
+            (stepping in place: little swing drift and too little signal).
+        lipm_correction_max_error: largest difference [m] (x and y) between the measured and the
+            planned DCM offset at a touchdown for the step to count in the LIPM corrections (steady
+            walking: 2-5 mm; after the paper's push: cm).
+        lipm_correction_max_slide: largest slide [m] of the stance foot from its touchdown point
+            for the step to count in the LIPM corrections (the point foot rolls 5-7 mm in
+            undisturbed steps).
+        swing_drift_max: bound of each step's kappa_k and of the estimate, in [0, 0.9].
+        dcm_offset_bias_max: bound of each step's touchdown offset bias and of the estimate [m].
+        stance_slide_follow: slide [m] of the stance foot from its touchdown point beyond which the
+            sequencer plans from the foot's measured position (updated at every replan while the foot
+            is in contact) instead of the touchdown point; None = the touchdown point for the whole
+            stance. A sliding foot then shows up in the plan at once: the DCM runs away from the
+            foot and the sequencer brings the next touchdown forward. With the touchdown point kept,
+            the slip scenario at friction 0.15 fell at 4.68 s (the left foot slid 0.36 m outwards,
+            the sequencer kept the next touchdown at its nominal time); with 0.02 m the right foot
+            landed 50 ms earlier (4.38 instead of 4.43 s), the slide stopped at 0.21 m and Bolt
+            walked on (docs/closed_loop.md). The default 0.02 m lies above the 5-11 mm the point
+            foot rolls in undisturbed steps, so that walking on good ground is unchanged.
+        mpc_failure_times: injected failures [s]: the MPC update at the first replan at or after
+            each time is discarded as if the solver had failed (the last good solution is kept).
+        sequencer_params_from: None, or (t_switch [s], ``SequencerParams``): from the first
+            touchdown at or after t_switch on, the sequencer uses these parameters instead (the
+            current velocity command, integral correction included, and the identified LIPM
+            corrections carry over). At a touchdown, not in the middle of a step: switching to
+            fixed timing mid-step moved the current touchdown by up to T_nom - T (58 ms were seen)
+            at once. Used to compare gaits after a common start, e.g. fixed step timing from
+            t_switch (a start from standing with fixed timing falls).
+        planner_backend: QP backend of the DCM planner: "exact" (closed-form solution of the same
+            QP, verified against OSQP in the sequencer tests, fastest), "osqp" (the paper's) or
+            "proxqp".
+    """
+
+    n_nodes: int = 100
+    node_dt: float = 0.01
+    replan_period: float = 0.01
+    max_iterations: int = 1
+    mpc_horizon_end: str = "rollout"
+    mpc_prepare: bool = True
+    mpc_time_budget: float | None = None
+    delay_nodes: int = 1
+    computation_delay: float = 0.0
+    interpolate: bool = False
+    feedback: bool = True
+    touchdown_detection: str = "contact"
+    touchdown_wait_nodes: int = 2
+    first_stance_foot: str = "left"
+    velocity_integral_gain: float = 0.0
+    velocity_correction_max: float = 0.3
+    velocity_filter_time: float = 1.0
+    lipm_correction_gain: float = 0.2
+    lipm_correction_min_step: float = 0.03
+    lipm_correction_max_error: float = 0.015
+    lipm_correction_max_slide: float = 0.01
+    swing_drift_max: float = 0.5
+    dcm_offset_bias_max: float = 0.01
+    stance_slide_follow: float | None = 0.02
+    mpc_failure_times: tuple[float, ...] = ()
+    sequencer_params_from: tuple[float, Any] | None = None
+    planner_backend: str = "exact"
+
+    def __post_init__(self) -> None:
+        for name in ("mpc_prepare", "interpolate", "feedback"):
+            value = getattr(self, name)
+            if not isinstance(value, (bool, np.bool_)):
+                raise ParameterError(f"{name}={value!r} must be True or False")
+        if not (isinstance(self.n_nodes, int) and self.n_nodes >= 2):
+            raise ParameterError(f"n_nodes={self.n_nodes!r} must be an integer >= 2")
+        for name in ("node_dt", "replan_period"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise ParameterError(f"{name}={value} s must be a finite positive number")
+        budget = self.mpc_time_budget
+        if budget is not None and (isinstance(budget, bool) or not isinstance(budget, (int, float))
+                                   or not 0.0 < budget < 1.0):
+            raise ParameterError(f"mpc_time_budget={budget!r} must be None or a number of seconds in (0, 1)")
+        if not (np.isfinite(self.computation_delay) and 0.0 <= self.computation_delay <= 0.1):
+            raise ParameterError(f"computation_delay={self.computation_delay} s must be in [0, 0.1] s")
+        if not (np.isfinite(self.velocity_integral_gain) and self.velocity_integral_gain >= 0):
+            raise ParameterError(f"velocity_integral_gain={self.velocity_integral_gain} 1/s must be >= 0")
+        if not (np.isfinite(self.velocity_filter_time) and self.velocity_filter_time > 0):
+            raise ParameterError(f"velocity_filter_time={self.velocity_filter_time} s must be > 0")
+        if not (np.isfinite(self.lipm_correction_gain) and 0.0 <= self.lipm_correction_gain <= 1.0):
+            raise ParameterError(f"lipm_correction_gain={self.lipm_correction_gain} must be in [0, 1]")
+        if not (np.isfinite(self.dcm_offset_bias_max) and 0.0 <= self.dcm_offset_bias_max <= 0.05):
+            raise ParameterError(f"dcm_offset_bias_max={self.dcm_offset_bias_max} m must be in [0, 0.05] m")
+        if not (np.isfinite(self.swing_drift_max) and 0.0 <= self.swing_drift_max <= 0.9):
+            raise ParameterError(f"swing_drift_max={self.swing_drift_max} must be in [0, 0.9]")
+        if self.stance_slide_follow is not None and not (
+            np.isfinite(self.stance_slide_follow) and self.stance_slide_follow > 0
+        ):
+            raise ParameterError(f"stance_slide_follow={self.stance_slide_follow} m must be None or > 0")
+        if not (np.isfinite(self.velocity_correction_max) and self.velocity_correction_max >= 0):
+            raise ParameterError(f"velocity_correction_max={self.velocity_correction_max} m/s must be >= 0")
+        if self.delay_nodes not in (0, 1):
+            raise ParameterError(f"delay_nodes={self.delay_nodes!r} must be 0 (no delay) or 1 (paper)")
+        if self.touchdown_detection not in TOUCHDOWN_DETECTIONS:
+            raise ParameterError(
+                f"touchdown_detection={self.touchdown_detection!r} must be one of {TOUCHDOWN_DETECTIONS}"
+            )
+        if isinstance(self.touchdown_wait_nodes, bool) or not isinstance(self.touchdown_wait_nodes, int) \
+                or not 0 <= self.touchdown_wait_nodes <= 10:
+            raise ParameterError(f"touchdown_wait_nodes={self.touchdown_wait_nodes!r} must be an integer in [0, 10]")
+        for name, high in (("lipm_correction_min_step", 0.5), ("lipm_correction_max_error", 0.1),
+                           ("lipm_correction_max_slide", 0.1)):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and 0.0 <= value <= high):
+                raise ParameterError(f"{name}={value} m must be in [0, {high}] m")
+        if self.planner_backend not in ("exact", "osqp", "proxqp"):
+            raise ParameterError(f"planner_backend={self.planner_backend!r} must be 'exact', 'osqp' or 'proxqp'")
+        if self.first_stance_foot not in ("left", "right"):
+            raise ParameterError(f"first_stance_foot={self.first_stance_foot!r} must be 'left' or 'right'")
+        if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
+            raise ParameterError(f"max_iterations={self.max_iterations!r} must be an integer >= 1")
+        if self.mpc_horizon_end not in HORIZON_ENDS:
+            raise ParameterError(f"mpc_horizon_end={self.mpc_horizon_end!r} must be one of {HORIZON_ENDS}")
+        if self.sequencer_params_from is not None:
+            switch = self.sequencer_params_from
+            if not (isinstance(switch, tuple) and len(switch) == 2 and np.isfinite(switch[0]) and switch[0] >= 0):
+                raise ParameterError(
+                    f"sequencer_params_from={switch!r} must be None or (t_switch >= 0 [s], SequencerParams)"
+                )

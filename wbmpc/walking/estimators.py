@@ -1,0 +1,178 @@
+"""Online estimates of the walking controller: state objects it updates from measurements.
+
+None of them writes into the frozen planner parameters: the velocity correction is added to the
+command handed to the planner, the LIPM corrections live in the planner's
+:class:`sequencer.dcm_planner.LipmCorrections` object (read at each plan), the stance slide
+decides the stance position handed to the planner.
+
+- :class:`VelocityIntegral`: integral action on the forward speed, with anti-windup;
+- :class:`LipmCorrectionEstimator`: the swing drift κ and the touchdown offset bias of the DCM
+  planner's LIPM, identified after every undisturbed step;
+- :class:`StanceSlide`: how far the stance foot slid from its touchdown point, and the position
+  the planner should plan from.
+
+Frames: world frame unless said; "heading frame" = world rotated about z by the stance yaw.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from sequencer.dcm_planner import LipmCorrections
+
+
+def rotate_xy(vector_xy: np.ndarray, yaw: float) -> np.ndarray:
+    """``vector_xy`` (2,) rotated by ``yaw`` [rad] about z (heading -> world for a heading yaw)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array((c * vector_xy[0] - s * vector_xy[1], s * vector_xy[0] + c * vector_xy[1]))
+
+
+class VelocityIntegral:
+    """Integral action on the forward speed: the planner is given v*_x + k ∫ (v*_x − v̄_x) dt.
+
+    v̄ is the measured CoM velocity in the heading frame, low-passed with time constant
+    ``filter_time``; the correction is bounded by ``correction_max`` and the integral clamped
+    accordingly (anti-windup). Gain 0 turns it off (the paper's pipeline).
+
+    Args:
+        gain: k [1/s], >= 0.
+        correction_max: bound of the correction [m/s].
+        filter_time: low-pass time constant [s], > 0.
+        period: update period [s] (the replan period).
+    """
+
+    def __init__(self, gain: float, correction_max: float, filter_time: float, period: float) -> None:
+        self.gain, self.correction_max = float(gain), float(correction_max)
+        self._alpha = period / (filter_time + period)
+        self.period = float(period)
+        self.filtered = np.zeros(2)  # [m/s] heading frame; the robot starts at rest
+        self.integral = 0.0  # [m]
+
+    def update(self, commanded_v_x: float, velocity_heading_xy: np.ndarray) -> None:
+        """One replan: filter the measured velocity (2,) [m/s, heading frame], integrate the error."""
+        if self.gain <= 0.0:
+            return
+        self.filtered += self._alpha * (np.asarray(velocity_heading_xy, dtype=float) - self.filtered)
+        # forward speed only: a lateral correction would shift the planner's nominal step widths
+        self.integral += (commanded_v_x - self.filtered[0]) * self.period
+        bound = self.correction_max / self.gain
+        self.integral = min(max(self.integral, -bound), bound)
+
+    @property
+    def correction(self) -> float:
+        """Forward-speed correction [m/s] added to the command."""
+        if self.gain <= 0.0:
+            return 0.0
+        return min(max(self.gain * self.integral, -self.correction_max), self.correction_max)
+
+
+@dataclass(frozen=True)
+class _StanceRecord:
+    t: float  # touchdown time [s]
+    dcm: np.ndarray  # DCM at the touchdown (2,) [m]
+    foot: np.ndarray  # touchdown point (2,) [m]
+    yaw: float  # heading of the stance [rad]
+    steady: bool  # the DCM was where the plan had put it
+
+
+class LipmCorrectionEstimator:
+    """Identifies, after each step, two corrections of the DCM planner's LIPM.
+
+    (1) Swing drift κ: the DCM's gain over the LIPM during the stance that just ended,
+    d = ζ_T − p − (ζ_0 − p) exp(ω T) (ζ_0, ζ_T measured at its touchdown and at the next one,
+    p the stance foot, along the stance's heading), per unit of the step taken, κ_k = d / L.
+    (2) Touchdown offset bias: the measured DCM offset at the touchdown minus the offset the
+    plan aimed at (heading x). Each estimate moves by ``gain`` towards the step's value.
+
+    Only undisturbed steps count: the DCM at both touchdowns within ``max_error`` of the plan,
+    the stance foot within ``max_slide`` of its touchdown point, a step of at least ``min_step``.
+    On Bolt the swing leg (half of the robot's mass) makes the DCM outrun the LIPM by ~0.22 L per
+    step and the touchdowns end ~2.5 mm ahead of the plan (docs/closed_loop.md).
+
+    Args:
+        corrections: the planner's corrections object, written in place.
+        omega: the run's pendulum frequency [1/s].
+        gain: per-step gain in [0, 1] (0 = off).
+        swing_drift_max: bound of κ_k and of the estimate.
+        offset_bias_max: bound of each step's offset error and of the estimate [m].
+        min_step, max_error, max_slide: see above [m].
+    """
+
+    def __init__(self, corrections: LipmCorrections, omega: float, gain: float, swing_drift_max: float,
+                 offset_bias_max: float, min_step: float, max_error: float, max_slide: float) -> None:
+        self.corrections = corrections
+        self.omega = float(omega)
+        self.gain = float(gain)
+        self.swing_drift_max, self.offset_bias_max = float(swing_drift_max), float(offset_bias_max)
+        self.min_step, self.max_error, self.max_slide = float(min_step), float(max_error), float(max_slide)
+        self._previous: _StanceRecord | None = None
+        #: (touchdown time [s], κ of the stance that ended, touchdown offset error [m]) of every step used
+        self.steps: list[tuple[float, float, float]] = []
+
+    def touchdown(self, t: float, dcm: np.ndarray, foot: np.ndarray, yaw: float,
+                  planned_offset: np.ndarray | None, ended_slide: float) -> bool:
+        """A new stance began at ``t`` on ``foot`` (2,) with heading ``yaw``; ``dcm`` (2,) is the
+        measured DCM, ``planned_offset`` (2,) the DCM offset the plan aimed at for this touchdown
+        (world frame; None when the landed foot was not the planned one), ``ended_slide`` the
+        largest slide [m] of the stance that just ended. Returns True when the step was used."""
+        dcm, foot = np.asarray(dcm, dtype=float), np.asarray(foot, dtype=float)
+        previous = self._previous
+        if planned_offset is None:
+            error = np.full(2, np.inf)
+        else:
+            error = rotate_xy((dcm - foot) - np.asarray(planned_offset, dtype=float), -yaw)
+        steady = bool(np.all(np.abs(error) <= self.max_error))
+        self._previous = _StanceRecord(float(t), dcm.copy(), foot.copy(), float(yaw), steady)
+        # the first stance includes the start from standing; a stance foot that slid moved the pivot
+        if previous is None or self.gain <= 0.0 or not (steady and previous.steady) or ended_slide > self.max_slide:
+            return False
+        heading = previous.yaw
+        step = rotate_xy(foot - previous.foot, -heading)[0]
+        if abs(step) < self.min_step:
+            return False
+        growth = math.exp(self.omega * (t - previous.t))
+        excess = rotate_xy((dcm - previous.foot) - (previous.dcm - previous.foot) * growth, -heading)[0]
+        kappa = float(np.clip(excess / step, 0.0, self.swing_drift_max))
+        offset_error = float(np.clip(error[0], -self.offset_bias_max, self.offset_bias_max))
+        c = self.corrections
+        c.swing_drift = float(np.clip(c.swing_drift + self.gain * (kappa - c.swing_drift), 0.0, self.swing_drift_max))
+        c.dcm_offset_bias = float(np.clip(c.dcm_offset_bias + self.gain * (offset_error - c.dcm_offset_bias),
+                                          -self.offset_bias_max, self.offset_bias_max))
+        self.steps.append((float(t), kappa, offset_error))
+        return True
+
+
+class StanceSlide:
+    """How far the stance foot slid from its touchdown point, and where the planner plans from.
+
+    Past ``follow`` [m] of slide (None = never), the planner is given the sliding foot's
+    measured position (while it is in contact) instead of the touchdown point: a sliding foot
+    then shows up in the plan at once (the DCM runs away from the foot and the planner brings the
+    next touchdown forward). With the touchdown point kept, the slip scenario at friction 0.15 fell
+    at 4.68 s; with 0.02 m Bolt walked on (docs/closed_loop.md). 0.02 m lies above the 5-11 mm the
+    point foot rolls in undisturbed steps, so walking on good ground is unchanged.
+    """
+
+    def __init__(self, follow: float | None) -> None:
+        self.follow = follow
+        self.slide = 0.0  # [m], largest distance of the stance foot from its touchdown point so far
+        self.plan_position = np.zeros(2)  # [m], stance position given to the planner
+
+    def reset(self, touchdown_xy: np.ndarray) -> None:
+        """A stance begins at ``touchdown_xy`` (2,) [m]."""
+        self.slide = 0.0
+        self.plan_position = np.array(touchdown_xy[:2], dtype=float)
+
+    def measure(self, touchdown_xy: np.ndarray, foot_xy: np.ndarray) -> float:
+        """Distance [m] of the stance foot ``foot_xy`` from ``touchdown_xy`` (kept as the maximum)."""
+        slide = math.hypot(foot_xy[0] - touchdown_xy[0], foot_xy[1] - touchdown_xy[1])
+        self.slide = max(self.slide, slide)
+        return slide
+
+    def follow_if_sliding(self, slide: float, foot_xy: np.ndarray, in_contact: bool) -> None:
+        """Plan from the foot's measured position once it slid past ``follow`` while in contact."""
+        if self.follow is not None and slide > self.follow and in_contact:
+            self.plan_position = np.array(foot_xy[:2], dtype=float)

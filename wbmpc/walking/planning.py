@@ -1,0 +1,185 @@
+"""The planning stage of the walking controller: measured state -> footstep plan, every replan.
+
+At each replan it measures the reduced state (CoM, CoM velocity, DCM with the planner's ω; the
+feet), switches the stance on a touchdown (:class:`~wbmpc.walking.stance.StanceTracker`),
+updates the online estimates (:mod:`wbmpc.walking.estimators`) and asks the footstep planner
+for a plan from the current stance with the velocity command (plus the speed integral's
+correction). A planner failure (:class:`wbmpc.errors.SolverError`, e.g. an infeasible step QP)
+keeps the previous plan and is reported in the record; it never stops the loop.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from sequencer.dcm_planner import DcmFootstepPlanner
+from sequencer.planner import FootstepPlanner, ReducedState, VelocityCommand
+from wbmpc.errors import ParameterError, SolverError
+from wbmpc.walking.controller_config import WalkingControllerConfig
+from wbmpc.walking.estimators import LipmCorrectionEstimator, StanceSlide, VelocityIntegral, rotate_xy
+from wbmpc.walking.stance import StanceTracker
+
+
+def base_yaw(q: np.ndarray) -> float:
+    """Yaw [rad] of the floating base from q[3:7] = (x, y, z, w) (Pinocchio convention)."""
+    x, y, z, w = (float(v) for v in q[3:7])
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+class PlanningStage:
+    """Footstep planning from measurements (see the module docstring).
+
+    Args:
+        robot: ``robots.RobotDescription`` (Pinocchio model, foot frames).
+        planner: the footstep planner.
+        config: the controller's options (touchdown detection, estimator gains, ...).
+        planner_after: None or (t_switch [s], planner): from the first touchdown at or after
+            t_switch on, plan with this planner (same feet and ω; the LIPM corrections carry over).
+    """
+
+    def __init__(self, robot: Any, planner: FootstepPlanner, config: WalkingControllerConfig,
+                 planner_after: tuple[float, FootstepPlanner] | None = None) -> None:
+        self.model = robot.pinocchio_model
+        self.data = self.model.createData()
+        self.nq = self.model.nq
+        self.feet = tuple(robot.foot_frames.keys())
+        if tuple(planner.feet) != self.feet:
+            raise ParameterError(f"the planner's feet {tuple(planner.feet)} must be the robot's {self.feet}")
+        self.frame_ids = [self.model.getFrameId(robot.foot_frames[f]) for f in self.feet]
+        self.config = config
+        self.planner = planner
+        self.omega = float(planner.omega)
+        if planner_after is not None and abs(planner_after[1].omega - self.omega) > 1e-12:
+            raise ParameterError(
+                f"sequencer_params_from: the later planner's omega={planner_after[1].omega:.6g} 1/s must equal "
+                f"the first one's {self.omega:.6g} 1/s (z_c fixes the run's omega)"
+            )
+        self._planner_after = planner_after
+        self.stance = StanceTracker(self.feet, config.touchdown_detection)
+        self.slide = StanceSlide(config.stance_slide_follow)
+        self.velocity_integral = VelocityIntegral(config.velocity_integral_gain, config.velocity_correction_max,
+                                                  config.velocity_filter_time, config.replan_period)
+        self.lipm = None
+        if isinstance(planner, DcmFootstepPlanner):
+            self.lipm = LipmCorrectionEstimator(
+                planner.corrections, self.omega, config.lipm_correction_gain, config.swing_drift_max,
+                config.dcm_offset_bias_max, config.lipm_correction_min_step, config.lipm_correction_max_error,
+                config.lipm_correction_max_slide,
+            )
+        self.command = VelocityCommand()
+        self.plan = None
+        self.planner_time = 0.0  # [s], total wall time in the planner
+
+    # ------------------------------------------------------------------ measurements
+    def feet_position(self, q: np.ndarray) -> np.ndarray:
+        """Foot frame positions (n_feet, 3) [m], world frame."""
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return np.array([self.data.oMf[i].translation for i in self.frame_ids])
+
+    def reduced_state(self, q: np.ndarray, v: np.ndarray) -> ReducedState:
+        """CoM, CoM velocity and DCM (with the planner's ω), world frame."""
+        com = pin.centerOfMass(self.model, self.data, q, v).copy()
+        com_velocity = self.data.vcom[0].copy()
+        return ReducedState(com, com_velocity, com[:2] + com_velocity[:2] / self.omega)
+
+    # ------------------------------------------------------------------ episode
+    def reset(self, x0: np.ndarray, t0: float, command: VelocityCommand) -> None:
+        """Start with ``config.first_stance_foot`` in stance at its measured position."""
+        q0 = np.asarray(x0)[: self.nq]
+        feet = self.feet_position(q0)
+        index = self.feet.index(self.config.first_stance_foot)
+        self.stance.reset(self.config.first_stance_foot, feet[index, :2], t0, yaw=base_yaw(q0))
+        self.slide.reset(self.stance.state.position)
+        self.set_command(command)
+        self.plan = None
+
+    def set_command(self, command: VelocityCommand) -> None:
+        """The velocity command of the next plans (heading frame)."""
+        self.command = VelocityCommand.from_tuple(command)
+
+    @property
+    def planned_command(self) -> VelocityCommand:
+        """The command handed to the planner: the user's plus the speed integral's correction."""
+        c = self.command
+        return VelocityCommand(c.v_x + self.velocity_integral.correction, c.v_y, c.yaw_rate)
+
+    # ------------------------------------------------------------------ every replan
+    def update(self, t: float, x: np.ndarray, foot_in_contact: np.ndarray) -> tuple[Any, ReducedState, dict]:
+        """Switch the stance, update the estimates, plan. Returns (plan, reduced state, record).
+
+        Raises:
+            SolverError: the planner failed and there is no previous plan to keep.
+        """
+        q, v = x[: self.nq], x[self.nq:]
+        measured = self.reduced_state(q, v)
+        stance = self.stance.state
+        self.velocity_integral.update(self.command.v_x, rotate_xy(measured.com_velocity[:2], -stance.yaw))
+        feet = self.feet_position(q)
+        first = self.plan.steps[0] if self.plan is not None and len(self.plan.steps) else None
+        stance_index = self.feet.index(stance.foot)
+        slide = self.slide.measure(stance.position, feet[stance_index, :2])
+        switched = self.stance.update(
+            t, None if first is None else first.foot, None if first is None else first.touchdown_time,
+            stance.t_start, feet, foot_in_contact, 0.0 if first is None else float(getattr(first, "yaw", 0.0)),
+        )
+        stance = self.stance.state
+        stance_index = self.feet.index(stance.foot)
+        if switched:  # the measurement before the switch covered the old stance foot up to now
+            ended_slide = self.slide.slide
+            self.slide.reset(stance.position)
+            slide = self.slide.measure(stance.position, feet[stance_index, :2])
+            if self.lipm is not None:
+                landed = first is not None and first.foot == stance.foot
+                self.lipm.touchdown(t, measured.dcm, stance.position, stance.yaw,
+                                    first.dcm_offset if landed else None, ended_slide)
+            if self._planner_after is not None and t >= self._planner_after[0] - 1e-9:
+                self._switch_planner(self._planner_after[1])
+        self.slide.follow_if_sliding(slide, feet[stance_index, :2], bool(foot_in_contact[stance_index]))
+        command = self.planned_command
+        record: dict[str, float] = {
+            "stance_foot": float(stance_index),
+            "stance_x": stance.position[0],
+            "stance_y": stance.position[1],
+            "stance_yaw": stance.yaw,
+            "stance_slide": self.slide.slide,
+            "sequencer_stance_x": self.slide.plan_position[0],
+            "sequencer_stance_y": self.slide.plan_position[1],
+            "t_stance_start": stance.t_start,
+            "stance_switched": float(switched),
+            "dcm_x": measured.dcm[0],
+            "dcm_y": measured.dcm[1],
+            "sequencer_ok": 1.0,
+            "sequencer_v_x": command.v_x,
+            "sequencer_v_y": command.v_y,
+            "sequencer_yaw_rate": command.yaw_rate,
+            "swing_drift": np.nan if self.lipm is None else self.lipm.corrections.swing_drift,
+            "dcm_offset_bias": np.nan if self.lipm is None else self.lipm.corrections.dcm_offset_bias,
+        }
+        tic = time.perf_counter()
+        planned_stance = type(stance)(stance.foot, self.slide.plan_position, stance.yaw, stance.t_start)
+        try:
+            self.plan = self.planner.plan(t, planned_stance, measured, command)
+        except SolverError:  # e.g. an infeasible step QP: keep following the last plan
+            if self.plan is None:
+                raise
+            record["sequencer_ok"] = 0.0
+        elapsed = time.perf_counter() - tic
+        self.planner_time += elapsed
+        record["sequencer_time"] = elapsed
+        step = self.plan.steps[0]
+        record["next_foot"] = float(self.feet.index(step.foot))
+        record["next_x"], record["next_y"] = float(step.position[0]), float(step.position[1])
+        record["next_touchdown_time"] = float(step.touchdown_time)
+        return self.plan, measured, record
+
+    def _switch_planner(self, planner: FootstepPlanner) -> None:
+        """Plan with ``planner`` from now on; the identified LIPM corrections carry over."""
+        if self.lipm is not None and isinstance(planner, DcmFootstepPlanner):
+            planner.corrections = self.lipm.corrections
+        self.planner = planner
+        self._planner_after = None

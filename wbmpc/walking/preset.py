@@ -1,0 +1,223 @@
+"""Walking presets: every tuned number of a robot's walking pipeline, in one TOML file per robot.
+
+``wbmpc/walking/presets/<robot>.toml`` has five sections, each loaded into a validated dataclass:
+
+- ``[planner]``: the DCM step QP (:class:`sequencer.SequencerParams`);
+- ``[ocp]`` (and ``[ocp.state_weights]``): the whole-body OCP (:class:`~wbmpc.walking.ocp.WalkingOCPConfig`);
+- ``[controller]``: horizon, rates, touchdown handling, estimator gains
+  (:class:`~wbmpc.walking.controller_config.WalkingControllerConfig`);
+- ``[fall]``: fall thresholds (:class:`FallThresholds`);
+- ``[command]``: the velocity commands the robot can follow (:class:`CommandRange`).
+
+Overrides address a value as ``"section.name"`` (``"planner.l_max"``, ``"ocp.state_weights.joint_position"``),
+a bare name addresses ``[controller]``; a whole section can be replaced by a dataclass instance
+(``{"planner": SequencerParams(...)}``). ``wbmpc walk --set planner.l_max=0.25`` and
+``run_scenario(..., **{"planner.l_max": 0.25})`` both go through :func:`load_walking_preset`.
+
+A robot without a preset file cannot walk yet: :func:`load_walking_preset` refuses it with the list
+of robots that can (docs/extending.md shows how to add one).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping
+
+from sequencer.params import SequencerParams
+from sequencer.planner import VelocityCommand
+from wbmpc.config import read_toml
+from wbmpc.errors import ParameterError
+from wbmpc.walking.controller_config import WalkingControllerConfig
+from wbmpc.walking.ocp import StateWeights, WalkingOCPConfig
+
+PRESET_DIR = Path(__file__).resolve().parent / "presets"
+
+SECTIONS = ("planner", "ocp", "controller", "fall", "command")
+
+
+@dataclass(frozen=True)
+class FallThresholds:
+    """When a run counts as a fall (the simulation's fall detector reads them).
+
+    Attributes:
+        min_base_height: base height below which the robot has fallen [m].
+        max_tilt_deg: largest angle between the base z axis and the vertical [deg].
+    """
+
+    min_base_height: float
+    max_tilt_deg: float
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.min_base_height) and self.min_base_height >= 0.0):
+            raise ParameterError(f"fall.min_base_height={self.min_base_height} m must be finite and >= 0")
+        if not (math.isfinite(self.max_tilt_deg) and 0.0 < self.max_tilt_deg <= 180.0):
+            raise ParameterError(f"fall.max_tilt_deg={self.max_tilt_deg} deg must be in (0, 180]")
+
+
+def _interval(name: str, value) -> tuple[float, float]:
+    try:
+        low, high = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"command.{name}={value!r} must be a [min, max] pair") from None
+    if not (math.isfinite(low) and math.isfinite(high) and low <= high):
+        raise ParameterError(f"command.{name}={value!r} must be finite with min <= max")
+    return low, high
+
+
+@dataclass(frozen=True)
+class CommandRange:
+    """The velocity commands (heading frame) a robot's walking preset can follow.
+
+    Attributes:
+        v_x: (min, max) forward velocity [m/s].
+        v_y: (min, max) lateral velocity [m/s].
+        yaw_rate: (min, max) yaw rate [rad/s].
+        yaw_rate_note: why the yaw-rate range is what it is (said when a command is refused).
+    """
+
+    v_x: tuple[float, float]
+    v_y: tuple[float, float]
+    yaw_rate: tuple[float, float]
+    yaw_rate_note: str = ""
+
+    def __post_init__(self) -> None:
+        for name in ("v_x", "v_y", "yaw_rate"):
+            object.__setattr__(self, name, _interval(name, getattr(self, name)))
+
+    def check(self, command: VelocityCommand, robot: str = "") -> None:
+        """Raise ParameterError naming the first component of ``command`` outside its range."""
+        units = {"v_x": "m/s", "v_y": "m/s", "yaw_rate": "rad/s"}
+        for name, unit in units.items():
+            value = getattr(command, name)
+            low, high = getattr(self, name)
+            if not low - 1e-12 <= value <= high + 1e-12:
+                who = f" for robot {robot!r}" if robot else ""
+                allowed = f"must be 0 {unit}" if low == high == 0.0 else f"must be in [{low}, {high}] {unit}"
+                note = f" ({self.yaw_rate_note})" if name == "yaw_rate" and self.yaw_rate_note else ""
+                raise ParameterError(f"velocity command {name}={value} {unit}{who} {allowed}{note}")
+
+
+@dataclass(frozen=True)
+class WalkingPreset:
+    """A robot's walking pipeline, all of its tuned numbers (see the module docstring)."""
+
+    robot: str
+    planner: SequencerParams
+    ocp: WalkingOCPConfig
+    controller: WalkingControllerConfig
+    fall: FallThresholds
+    command: CommandRange
+    source: str = ""
+
+    @property
+    def omega(self) -> float:
+        """The run's pendulum frequency sqrt(g / z_c) [1/s] (the planner's, the logged DCM's)."""
+        return self.planner.omega
+
+
+def available_walking_presets() -> list[str]:
+    """Robots that have a walking preset."""
+    return sorted(path.stem for path in PRESET_DIR.glob("*.toml"))
+
+
+def _build(cls, table: Mapping[str, Any], section: str):
+    allowed = [f.name for f in dataclasses.fields(cls)]
+    unknown = sorted(set(table) - set(allowed))
+    if unknown:
+        raise ParameterError(f"[{section}] has no field {unknown} (allowed: {allowed})")
+    try:
+        return cls(**table)
+    except TypeError as err:  # a required field missing
+        raise ParameterError(f"[{section}]: {err}") from None
+
+
+def _ocp_from_table(table: Mapping[str, Any]) -> WalkingOCPConfig:
+    table = dict(table)
+    weights = table.pop("state_weights", {})
+    if isinstance(weights, Mapping):
+        weights = _build(StateWeights, {k: tuple(v) if isinstance(v, list) else v for k, v in weights.items()},
+                         "ocp.state_weights")
+    if "baumgarte_gains" in table:
+        table["baumgarte_gains"] = tuple(table["baumgarte_gains"])
+    return _build(WalkingOCPConfig, {**table, "state_weights": weights}, "ocp")
+
+
+def _controller_from_table(table: Mapping[str, Any]) -> WalkingControllerConfig:
+    table = dict(table)
+    if "mpc_failure_times" in table:
+        table["mpc_failure_times"] = tuple(float(t) for t in table["mpc_failure_times"])
+    return _build(WalkingControllerConfig, table, "controller")
+
+
+_BUILDERS = {
+    "planner": lambda table: SequencerParams.from_dict(table, source="[planner]"),
+    "ocp": _ocp_from_table,
+    "controller": _controller_from_table,
+    "fall": lambda table: _build(FallThresholds, table, "fall"),
+    "command": lambda table: _build(CommandRange, table, "command"),
+}
+
+
+def _as_table(value) -> dict[str, Any]:
+    """A section's values as a plain (nested) table."""
+    if dataclasses.is_dataclass(value):
+        return {f.name: _as_table(getattr(value, f.name)) if dataclasses.is_dataclass(getattr(value, f.name))
+                else getattr(value, f.name) for f in dataclasses.fields(value)}
+    return dict(value)
+
+
+def _apply_override(tables: dict[str, dict[str, Any]], key: str, value: Any) -> None:
+    parts = key.split(".")
+    if parts[0] not in SECTIONS:
+        parts = ["controller", *parts]
+    section, path = parts[0], parts[1:]
+    if not path:  # a whole section: a dataclass instance or a table of fields
+        tables[section] = _as_table(value) if dataclasses.is_dataclass(value) else {**tables[section], **dict(value)}
+        return
+    table = tables[section]
+    for name in path[:-1]:
+        if not isinstance(table.get(name), dict):
+            raise ParameterError(f"override {key!r}: [{section}] has no sub-table {name!r}")
+        table = table[name]
+    table[path[-1]] = value
+
+
+def load_walking_preset(robot: str, overrides: Mapping[str, Any] | None = None) -> WalkingPreset:
+    """The walking preset of ``robot`` with ``overrides`` applied (see the module docstring).
+
+    Raises:
+        ParameterError: the robot has no walking preset (the message lists those that do), the
+            file is not valid, an override names no field, or a value is out of its range.
+    """
+    available = available_walking_presets()
+    if robot not in available:
+        raise ParameterError(
+            f"robot={robot!r} has no walking preset yet (robots that walk: {', '.join(available)}); "
+            f"add wbmpc/walking/presets/{robot}.toml to make it walk (docs/extending.md)"
+        )
+    path = PRESET_DIR / f"{robot}.toml"
+    data = read_toml(path, "walking preset")
+    missing = [s for s in SECTIONS if s not in data]
+    extra = sorted(set(data) - set(SECTIONS))
+    if missing or extra:
+        raise ParameterError(f"walking preset {str(path)!r}: sections must be {list(SECTIONS)} "
+                             f"(missing {missing}, unknown {extra})")
+    tables = {section: _as_table(data[section]) for section in SECTIONS}
+    for key, value in (overrides or {}).items():
+        _apply_override(tables, key, value)
+    sections = {section: _BUILDERS[section](tables[section]) for section in SECTIONS}
+    return WalkingPreset(robot=robot, source=str(path), **sections)
+
+
+def preset_override_keys() -> set[str]:
+    """Names accepted as overrides besides dotted ``section.field`` keys: the sections and the
+    controller's fields."""
+    return set(SECTIONS) | {f.name for f in dataclasses.fields(WalkingControllerConfig)}
+
+
+def is_preset_override(key: str) -> bool:
+    """True when ``key`` addresses the walking preset (a section, ``section.field`` or a controller field)."""
+    return key in preset_override_keys() or key.split(".", 1)[0] in SECTIONS
