@@ -26,7 +26,7 @@ import numpy as np
 
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.blas import limit_blas_threads
-from wbmpc.ocp.kernels import sum_quadratic_forms
+from wbmpc.ocp.kernels.linalg import sum_quadratic_forms
 from wbmpc.ocp.problem import RolloutError, ShootingProblem
 from wbmpc.ocp.solvers.riccati import riccati_backward
 
