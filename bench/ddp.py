@@ -222,26 +222,26 @@ def run(args: argparse.Namespace) -> dict:
     from wbmpc.ocp.blas import limit_blas_threads
     from wbmpc.walking.ocp import WalkingOCPConfig
 
-    limit_blas_threads(1)
-    for n in args.nodes:
-        if n < 2:
-            raise ValueError(f"--nodes {n}: every horizon must have at least 2 nodes")
-    bolt = load_robot("bolt")
-    config = WalkingOCPConfig()
-    result = {"robot": "bolt", "dt_s": 0.01, "horizon_end": args.horizon_end, "horizons": {}}
-    for n_nodes in args.nodes:
-        entry = _phases(bolt, config, n_nodes, 0.01, args.repeats)
-        entry["mpc_tick"] = _mpc_loop(bolt, config, n_nodes, 0.01, 0.3, (0.1, -0.1), args.ticks, args.seed,
-                                      time_budget=args.time_budget, horizon_end=args.horizon_end,
-                                      prepare=not args.no_prepare)
-        result["horizons"][str(n_nodes)] = entry
-    if args.g1_nodes:
-        g1 = load_robot("g1")
-        g1_config = WalkingOCPConfig(swing_apex_height=0.08, baumgarte_gains=(0.0, 30.0))
-        result["g1"] = {"n_nodes": args.g1_nodes, "dt_s": 0.02,
-                        "mpc_tick": _mpc_loop(g1, g1_config, args.g1_nodes, 0.02, 0.4, (0.12, -0.12),
-                                              max(20, args.ticks // 4), args.seed, speed=0.2,
-                                              prepare=not args.no_prepare)}
+    with limit_blas_threads(1):  # both solvers single-threaded, for this run only
+        for n in args.nodes:
+            if n < 2:
+                raise ValueError(f"--nodes {n}: every horizon must have at least 2 nodes")
+        bolt = load_robot("bolt")
+        config = WalkingOCPConfig()
+        result = {"robot": "bolt", "dt_s": 0.01, "horizon_end": args.horizon_end, "horizons": {}}
+        for n_nodes in args.nodes:
+            entry = _phases(bolt, config, n_nodes, 0.01, args.repeats)
+            entry["mpc_tick"] = _mpc_loop(bolt, config, n_nodes, 0.01, 0.3, (0.1, -0.1), args.ticks, args.seed,
+                                          time_budget=args.time_budget, horizon_end=args.horizon_end,
+                                          prepare=not args.no_prepare)
+            result["horizons"][str(n_nodes)] = entry
+        if args.g1_nodes:
+            g1 = load_robot("g1")
+            g1_config = WalkingOCPConfig(swing_apex_height=0.08, baumgarte_gains=(0.0, 30.0))
+            result["g1"] = {"n_nodes": args.g1_nodes, "dt_s": 0.02,
+                            "mpc_tick": _mpc_loop(g1, g1_config, args.g1_nodes, 0.02, 0.4, (0.12, -0.12),
+                                                  max(20, args.ticks // 4), args.seed, speed=0.2,
+                                                  prepare=not args.no_prepare)}
     return result
 
 

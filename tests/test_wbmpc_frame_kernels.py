@@ -8,7 +8,7 @@ import pytest
 
 from robots import load_robot
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.frame_kernels import FrameKinematics, frame_kinematics_support
+from wbmpc.ocp.kernels.frames import FrameKinematics, frame_kinematics_support
 
 
 @pytest.mark.parametrize("robot_name", ["bolt", "g1"])

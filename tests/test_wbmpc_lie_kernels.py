@@ -7,10 +7,10 @@ import pinocchio as pin
 import pytest
 
 from robots import load_robot
-from wbmpc.ocp.lie_kernels import (
+from wbmpc.ocp.kernels.integration import free_flyer_euler_step
+from wbmpc.ocp.kernels.lie import (
     free_flyer_ddifference_second,
     free_flyer_dintegrate,
-    free_flyer_euler_step,
     free_flyer_integrate,
 )
 

@@ -9,14 +9,14 @@ reads the same node models (contacts, cost terms, weights, references) and evalu
 - a Python loop over the nodes doing only what needs Pinocchio: contact-constrained dynamics
   (``constraintDynamics`` with the node's contact set, or ABA without contacts) and, in
   :meth:`calcDiff`, its derivatives; one Pinocchio data per contact set, so it stays in cache;
-  the Euler step (and, in the rollout, the feedback update) are compiled (:mod:`wbmpc.ocp.lie_kernels`);
+  the Euler step (and, in the rollout, the feedback update) are compiled (:mod:`wbmpc.ocp.kernels.lie`);
 - compiled passes over all nodes for everything else: the frame kinematics of the active frame
-  terms (:mod:`wbmpc.ocp.frame_kernels`), residual rows, activations, cost values and Gauss-Newton
+  terms (:mod:`wbmpc.ocp.kernels.frames`), residual rows, activations, cost values and Gauss-Newton
   derivatives (assembled per residual kind), the Lie-group Jacobians of the Euler step and of the
   state residual, Euler transition Jacobians, the dt scaling.
 
 The compiled Jacobian of exp6 is exact where Pinocchio's ``Jexp6`` loses up to ~6e-8 (base
-rotations of 1e-5..1e-2 rad per node, see :mod:`wbmpc.ocp.lie_kernels`), so the two evaluations agree
+rotations of 1e-5..1e-2 rad per node, see :mod:`wbmpc.ocp.kernels.lie`), so the two evaluations agree
 to rounding except there, by that much.
 
 Supported nodes: :class:`~wbmpc.ocp.integrator.IntegratedActionModelEuler` over
@@ -42,15 +42,12 @@ from numba import njit
 
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.dynamics import DifferentialActionModelContactFwdDynamics
-from wbmpc.ocp.frame_kernels import FrameKinematics, frame_kinematics_support
 from wbmpc.ocp.integrator import IntegratedActionModelEuler
-from wbmpc.ocp.kernels import cost_rows_value, free_flyer_state_difference
-from wbmpc.ocp.lie_kernels import (
-    free_flyer_dintegrate,
-    free_flyer_euler_step,
-    free_flyer_state_jacobians,
-    rollout_node_start,
-)
+from wbmpc.ocp.kernels.costs import cost_rows_value
+from wbmpc.ocp.kernels.feedback import rollout_node_start
+from wbmpc.ocp.kernels.frames import FrameKinematics, frame_kinematics_support
+from wbmpc.ocp.kernels.integration import free_flyer_euler_jacobians, free_flyer_euler_step
+from wbmpc.ocp.kernels.lie import free_flyer_dintegrate, free_flyer_state_difference, free_flyer_state_jacobians
 from wbmpc.ocp.problem import RolloutError, ShootingProblem
 from wbmpc.ocp.residuals import ResidualControl, ResidualFrameHeight, ResidualFrameTranslation, ResidualState
 
@@ -552,44 +549,6 @@ def batched_cost_values(xs, us, dt, term_kind, term_row, term_slot, term_scale, 
 
 
 @njit(cache=True)
-def _free_flyer_euler_jacobians(da_dx, da_du, J_q, J_dq, dt, Fx, Fu):
-    """Fx (ndx, ndx), Fu (ndx, nu) of q⁺ = q ⊕ (v dt + a dt²), v⁺ = v + a dt (the products of
-    ``kernels.euler_transition_jacobians``) for free-flyer J_q, J_dq: identity outside their 6×6
-    base blocks, so only the base rows need the products."""
-    nv = da_dx.shape[0]
-    ndx = 2 * nv
-    nu = da_du.shape[1]
-    dt2 = dt * dt
-    for i in range(6):
-        for c in range(ndx):
-            s = 0.0
-            for m in range(6):
-                s += J_dq[i, m] * da_dx[m, c]
-            Fx[i, c] = s * dt2
-        for c in range(nu):
-            s = 0.0
-            for m in range(6):
-                s += J_dq[i, m] * da_du[m, c]
-            Fu[i, c] = s * dt2
-        for m in range(6):
-            Fx[i, nv + m] += J_dq[i, m] * dt
-            Fx[i, m] += J_q[i, m]
-    for i in range(6, nv):
-        for c in range(ndx):
-            Fx[i, c] = da_dx[i, c] * dt2
-        for c in range(nu):
-            Fu[i, c] = da_du[i, c] * dt2
-        Fx[i, nv + i] += dt
-        Fx[i, i] += 1.0
-    for i in range(nv):
-        for c in range(ndx):
-            Fx[nv + i, c] = da_dx[i, c] * dt
-        for c in range(nu):
-            Fu[nv + i, c] = da_du[i, c] * dt
-        Fx[nv + i, nv + i] += 1.0
-
-
-@njit(cache=True)
 def _row_coefficients(r, w, lb, ub, scale):
     """Gradient and Hessian coefficients (c, h) of one residual row under the dead-zone activation."""
     below = r - lb
@@ -679,7 +638,7 @@ def batched_cost_derivatives(xs, us, dt, term_kind, term_row, term_slot, term_sc
     nq = xs.shape[1] - nv
     for k in range(dt.size):
         free_flyer_dintegrate(xs[k, :nq], euler_dx[k, :nv], J_q, J_dq)
-        _free_flyer_euler_jacobians(da_dx[k], da_du[k], J_q, J_dq, dt[k], Fx[k], Fu[k])
+        free_flyer_euler_jacobians(da_dx[k], da_du[k], J_q, J_dq, dt[k], Fx[k], Fu[k])
         _fill_residual_rows(k, xs[k], us[k], term_kind, term_row, term_slot, term_scale, reference,
                             state_residual, frame_position, r)
         value = cost_rows_value(r, row_term, term_scale[k], w[k], lb[k], ub[k], term_cost[k])

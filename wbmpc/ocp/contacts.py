@@ -22,7 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.kernels import contact3d_drift_derivative, contact3d_force_terms
+from wbmpc.ocp.kernels.contact import contact3d_drift_derivative, contact3d_force_terms
 from wbmpc.ocp.state import StateMultibody
 
 _ZERO3 = np.zeros(3)

@@ -20,7 +20,7 @@ import numpy as np
 
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.activations import ActivationQuad
-from wbmpc.ocp.kernels import cost_rows_derivatives, cost_rows_value
+from wbmpc.ocp.kernels.costs import cost_rows_derivatives, cost_rows_value
 from wbmpc.ocp.residuals.base import DataCollector
 from wbmpc.ocp.state import StateMultibody
 

@@ -12,7 +12,8 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.kernels import euler_step_tangent, euler_transition_jacobians, scale_cost_derivatives
+from wbmpc.ocp.kernels.costs import scale_cost_derivatives
+from wbmpc.ocp.kernels.integration import euler_step_tangent, euler_transition_jacobians
 
 
 class IntegratedActionModelEuler:

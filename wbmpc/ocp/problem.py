@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.kernels import feedback_control, free_flyer_feedback_control
+from wbmpc.ocp.kernels.feedback import feedback_control, free_flyer_feedback_control
 
 
 class RolloutError(ArithmeticError):

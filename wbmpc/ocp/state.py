@@ -14,7 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.kernels import free_flyer_state_difference, free_flyer_state_differences
+from wbmpc.ocp.kernels.lie import free_flyer_state_difference, free_flyer_state_differences
 
 
 class StateMultibody:

@@ -25,8 +25,7 @@ from typing import Callable
 import numpy as np
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.blas import limit_blas_threads
-from wbmpc.ocp.kernels import sum_quadratic_forms
+from wbmpc.ocp.kernels.linalg import sum_quadratic_forms
 from wbmpc.ocp.problem import RolloutError, ShootingProblem
 from wbmpc.ocp.solvers.riccati import riccati_backward
 
@@ -60,9 +59,10 @@ class SolverFDDP:
 
     Args:
         problem: the shooting problem.
-        single_thread_blas: limit OpenBLAS to one thread for the process (see
-            :func:`wbmpc.ocp.blas.limit_blas_threads`; the MPC's small products run 3x faster so on a
-            shared machine). Ignored when OPENBLAS_NUM_THREADS is set.
+
+    The constructor has no process-wide effect: to solve with single-threaded BLAS (3x faster
+    on a shared machine), wrap the solve in :func:`wbmpc.ocp.blas.limit_blas_threads`
+    (:class:`~wbmpc.ocp.mpc.RecedingHorizonMPC` does).
 
     Attributes (after :meth:`solve`):
         xs (N + 1, nx), us (N, nu): current solution.
@@ -78,9 +78,7 @@ class SolverFDDP:
         th_stepinc=0.01, alphas (line-search trials 1, ½, …, 2⁻⁹; see ``set_max_line_search_trials``).
     """
 
-    def __init__(self, problem: ShootingProblem, single_thread_blas: bool = True):
-        if single_thread_blas:
-            limit_blas_threads(1)
+    def __init__(self, problem: ShootingProblem):
         self.problem = problem
         N, nx, ndx, nu = problem.T, problem.nx, problem.ndx, problem.nu
         self.reg_incfactor = 10.0

@@ -20,8 +20,8 @@ import pinocchio as pin
 from numba import njit
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.kernels import _quaternion_matrix
-from wbmpc.ocp.small_linalg import mat3_mul, mat3_vec
+from wbmpc.ocp.kernels.lie import quaternion_matrix
+from wbmpc.ocp.kernels.linalg import mat3_mul, mat3_vec
 
 _AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "JointModelRZ": (0.0, 0.0, 1.0)}
 
@@ -127,7 +127,7 @@ def frame_kinematics(qs, needed, parents, placement_rotation, placement_translat
             mat3_mul(R[parent], placement_rotation[i], Rp)
             mat3_vec(R[parent], placement_translation[i], offset)
             if i == 1:  # free flyer: (R(quaternion), position)
-                _quaternion_matrix(q[3:7], local)
+                quaternion_matrix(q[3:7], local)
                 mat3_mul(Rp, local, R[i])
                 for a in range(3):
                     p[i, a] = p[parent, a] + offset[a] + Rp[a, 0] * q[0] + Rp[a, 1] * q[1] + Rp[a, 2] * q[2]

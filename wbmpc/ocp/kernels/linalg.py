@@ -1,9 +1,11 @@
-"""3x3 products for the numba kernels, written out: inside a compiled loop ``np.dot`` on 3x3
-blocks calls BLAS and allocates its result (~180 ns), where these take ~13 ns. They write into
-``out`` (which must not alias the inputs) and are inlined into their callers."""
+"""Small dense linear algebra for the numba kernels: 3x3 products written out (inside a compiled
+loop ``np.dot`` on 3x3 blocks calls BLAS and allocates its result, ~180 ns, where these take
+~13 ns; they write into ``out``, which must not alias the inputs, and are inlined into their
+callers), the cross-product matrix, and a sum of quadratic forms over a horizon."""
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 
@@ -53,3 +55,28 @@ def skew_into(w, out):
     out[1, 2] = -w[0]
     out[2, 0] = -w[1]
     out[2, 1] = w[0]
+
+
+@njit(cache=True)
+def skew3(w):
+    """[w]×, shape (3, 3)."""
+    S = np.empty((3, 3))
+    skew_into(w, S)
+    return S
+
+
+@njit(cache=True)
+def sum_quadratic_forms(a, M, b):
+    """Σ_t a[t]ᵀ M[t] b[t] for a, b (T, n) and M (T, n, n)."""
+    total = 0.0
+    T, n = a.shape
+    for t in range(T):
+        for i in range(n):
+            ai = a[t, i]
+            if ai == 0.0:
+                continue
+            s = 0.0
+            for j in range(n):
+                s += M[t, i, j] * b[t, j]
+            total += ai * s
+    return total

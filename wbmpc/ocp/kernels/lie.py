@@ -18,8 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
-from wbmpc.ocp.kernels import _quaternion_matrix, free_flyer_difference, free_flyer_feedback_control
-from wbmpc.ocp.small_linalg import mat3_mul, mat3_vec, skew_into
+from wbmpc.ocp.kernels.linalg import mat3_mul, mat3_tmul, mat3_tvec, mat3_vec, skew_into
 
 # [rad] below it the coefficients come from their Taylor series (terms up to θ¹²): the closed
 # forms of the higher ones cancel catastrophically (c3's numerator is ~θ⁵/60).
@@ -76,6 +75,25 @@ def _so3_polynomial(w, s1, s2, out):
 
 
 @njit(cache=True)
+def quaternion_matrix(q, R):
+    """Rotation matrix of the quaternion (x, y, z, w) (Eigen's toRotationMatrix)."""
+    x, y, z, w = q[0], q[1], q[2], q[3]
+    tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
+    twx, twy, twz = tx * w, ty * w, tz * w
+    txx, txy, txz = tx * x, ty * x, tz * x
+    tyy, tyz, tzz = ty * y, tz * y, tz * z
+    R[0, 0] = 1.0 - (tyy + tzz)
+    R[0, 1] = txy - twz
+    R[0, 2] = txz + twy
+    R[1, 0] = txy + twz
+    R[1, 1] = 1.0 - (txx + tzz)
+    R[1, 2] = tyz - twx
+    R[2, 0] = txz - twy
+    R[2, 1] = tyz + twx
+    R[2, 2] = 1.0 - (txx + tyy)
+
+
+@njit(cache=True)
 def _matrix_quaternion(R, out):
     """Unit quaternion (x, y, z, w) of a rotation matrix (Eigen's branch on the largest term)."""
     trace = R[0, 0] + R[1, 1] + R[2, 2]
@@ -124,7 +142,7 @@ def free_flyer_integrate(q, dq, out):
     nq = q.size
     R_exp, p_exp = se3_exp(dq[:6])
     R0 = np.empty((3, 3))
-    _quaternion_matrix(q[3:7], R0)
+    quaternion_matrix(q[3:7], R0)
     p1 = np.empty(3)
     mat3_vec(R0, p_exp, p1)
     for i in range(3):
@@ -270,18 +288,78 @@ def free_flyer_ddifference_second(q0, q1, J):
 
 
 @njit(cache=True)
-def free_flyer_euler_step(x, a, dt, dx, x_next):
-    """Semi-implicit Euler step of a free-flyer state: dx = [v dt + a dt², a dt] (2 nv,) and
-    x⁺ = [q ⊕ dx[:nv], v + a dt] (nx,)."""
-    nv = a.size
-    nq = x.size - nv
-    dt2 = dt * dt
+def free_flyer_difference(q0, q1, nq, out):
+    """pin.difference for a free-flyer root followed by 1-dof joints (nq = nv + 1), written in out
+    (nv,). Returns False (out untouched beyond use) when the relative rotation is within 1e-2 rad
+    of π, where Pinocchio's log3 takes a special branch: the caller then uses Pinocchio."""
+    R0 = np.empty((3, 3))
+    R1 = np.empty((3, 3))
+    quaternion_matrix(q0[3:7], R0)
+    quaternion_matrix(q1[3:7], R1)
+    R = np.empty((3, 3))
+    mat3_tmul(R0, R1, R)
+    dp = np.empty(3)
+    for i in range(3):
+        dp[i] = q1[i] - q0[i]
+    p = np.empty(3)
+    mat3_tvec(R0, dp, p)
+    trace = R[0, 0] + R[1, 1] + R[2, 2]
+    if trace >= 3.0:
+        theta = 0.0
+    elif trace <= -1.0:
+        return False
+    else:
+        theta = np.arccos((trace - 1.0) / 2.0)
+    if theta >= np.pi - 1e-2:
+        return False
+    # log3 (Pinocchio): w = θ / (2 sin θ) vee(R − Rᵀ), with the limit 1/2 for small θ
+    eps3 = 1e-5  # a safe small-angle threshold; the Taylor limit is exact to 1e-11 below it
+    t = (theta / np.sin(theta) if theta > eps3 else 1.0) / 2.0
+    w0 = t * (R[2, 1] - R[1, 2])
+    w1 = t * (R[0, 2] - R[2, 0])
+    w2 = t * (R[1, 0] - R[0, 1])
+    t2 = theta * theta
+    if t2 < 1e-8:
+        alpha = 1.0 - t2 / 12.0 - t2 * t2 / 720.0
+        beta = 1.0 / 12.0 + t2 / 720.0
+    else:
+        st = np.sin(theta)
+        ct = np.cos(theta)
+        alpha = theta * st / (2.0 * (1.0 - ct))
+        beta = 1.0 / t2 - st / (2.0 * theta * (1.0 - ct))
+    wp = w0 * p[0] + w1 * p[1] + w2 * p[2]
+    cross0 = w1 * p[2] - w2 * p[1]
+    cross1 = w2 * p[0] - w0 * p[2]
+    cross2 = w0 * p[1] - w1 * p[0]
+    out[0] = alpha * p[0] - 0.5 * cross0 + beta * wp * w0
+    out[1] = alpha * p[1] - 0.5 * cross1 + beta * wp * w1
+    out[2] = alpha * p[2] - 0.5 * cross2 + beta * wp * w2
+    out[3] = w0
+    out[4] = w1
+    out[5] = w2
+    for i in range(7, nq):
+        out[i - 1] = q1[i] - q0[i]
+    return True
+
+
+@njit(cache=True)
+def free_flyer_state_difference(x0, x1, nq, out):
+    """x1 ⊖ x0 (2 nv,) for a free-flyer root followed by 1-dof joints; False near a half turn."""
+    nv = nq - 1
+    if not free_flyer_difference(x0[:nq], x1[:nq], nq, out[:nv]):
+        return False
     for i in range(nv):
-        v = x[nq + i]
-        dx[i] = v * dt + a[i] * dt2
-        dx[nv + i] = a[i] * dt
-        x_next[nq + i] = v + a[i] * dt
-    free_flyer_integrate(x[:nq], dx[:nv], x_next[:nq])
+        out[nv + i] = x1[nq + i] - x0[nq + i]
+    return True
+
+
+@njit(cache=True)
+def free_flyer_state_differences(X0, X1, nq, out):
+    """out[k] = X1[k] ⊖ X0[k] for every row; returns the first row needing Pinocchio (half turn), or −1."""
+    for k in range(out.shape[0]):
+        if not free_flyer_state_difference(X0[k], X1[k], nq, out[k]):
+            return k
+    return -1
 
 
 @njit(cache=True)
@@ -301,24 +379,12 @@ def free_flyer_state_jacobians(references, xs, scale, out, ok):
 
 
 @njit(cache=True)
-def rollout_node_start(t, x_prev, fs, alpha, closing, xs, us, k, K, x_try, dx, u_try, tau):
-    """One node of the FDDP rollout before its dynamics: x_try = x_prev ⊕ (α − 1) fs[t] when
-    closing gaps (else x_prev), dx[t] = x_try ⊖ xs[t], u_try[t] = us[t] − α k[t] − K[t] dx[t]
-    (Crocoddyl's sign) and the joint torques tau[6:] = u_try[t]. Returns 0 on success, 1 when the
-    difference needs Pinocchio (half turn; x_try is written, not dx, u_try, tau), 2 when the
-    control is not finite."""
-    nv = dx.shape[1] // 2
-    nq = x_try.size - nv
-    if closing:
-        step = (alpha - 1.0) * fs[t]
-        free_flyer_integrate(x_prev[:nq], step[:nv], x_try[:nq])
-        for i in range(nv):
-            x_try[nq + i] = x_prev[nq + i] + step[nv + i]
-    else:
-        x_try[:] = x_prev
-    code = free_flyer_feedback_control(xs[t], x_try, us[t], k[t], K[t], alpha, nq, dx[t], u_try[t])
-    if code != 0:
-        return code
-    for i in range(u_try.shape[1]):
-        tau[6 + i] = u_try[t, i]
-    return 0
+def free_flyer_interpolate(q0, q1, alpha, dq, out):
+    """out (nq,) = q0 ⊕ α (q1 ⊖ q0) (Pinocchio's interpolate), dq (nv,) scratch. False (out
+    untouched) near a half-turn relative rotation: the caller then uses Pinocchio."""
+    if not free_flyer_difference(q0, q1, q0.size, dq):
+        return False
+    for i in range(dq.size):
+        dq[i] *= alpha
+    free_flyer_integrate(q0, dq, out)
+    return True
