@@ -18,7 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from wbmpc.walking.controller import WalkingController, WalkingControllerConfig
+from wbmpc.walking.controller import WalkingController
+from wbmpc.walking.preset import WalkingPreset, load_walking_preset
 
 
 class CrocoddylSolver:
@@ -84,8 +85,10 @@ class CrocoddylWalkingController(WalkingController):
     Nothing is prepared between updates (``mpc_prepare`` off): Crocoddyl evaluates everything in
     its solve."""
 
-    def __init__(self, config: WalkingControllerConfig | None = None) -> None:
-        super().__init__(dataclasses.replace(config or WalkingControllerConfig(), mpc_prepare=False),
+    def __init__(self, preset: WalkingPreset | None = None) -> None:
+        preset = preset or load_walking_preset("bolt")
+        super().__init__(dataclasses.replace(preset, controller=dataclasses.replace(preset.controller,
+                                                                                    mpc_prepare=False)),
                          mpc_solver=CrocoddylSolver)
 
     @property

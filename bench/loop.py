@@ -128,14 +128,14 @@ def _run_loop(args: argparse.Namespace, controller_class=None):
     (default :class:`~wbmpc.walking.controller.WalkingController`) built as ``run_scenario`` builds its own
     (the scenario's velocity command, ``--max-iterations``); returns (log, controller)."""
     from sim.runner import run_scenario
-    from sim.scenarios.base import make_scenario
-    from wbmpc.walking.controller import WalkingController, WalkingControllerConfig
+    from wbmpc.walking.controller import WalkingController
+    from wbmpc.walking.preset import load_walking_preset
 
+    robot = getattr(args, "robot", "bolt")
     extra = {} if args.max_iterations is None else {"max_iterations": args.max_iterations}
-    command = make_scenario(args.scenario).velocity_command(0.0)
-    controller = (controller_class or WalkingController)(WalkingControllerConfig(velocity_command=tuple(command),
-                                                                                 **extra))
-    log = run_scenario(args.scenario, duration=args.duration, seed=args.seed, progress=False, controller=controller)
+    controller = (controller_class or WalkingController)(load_walking_preset(robot, extra))
+    log = run_scenario(args.scenario, robot=robot, duration=args.duration, seed=args.seed, progress=False,
+                       controller=controller)
     return log, controller
 
 

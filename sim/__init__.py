@@ -8,18 +8,11 @@
 from sim.log import RunLog, load_run
 from sim.runner import RunnerOptions, run_scenario
 from sim.scenarios import Scenario, available_scenarios, make_scenario, register
-from wbmpc.walking.controller import Controller, JointPDController, WalkingController, WalkingControllerConfig
-from wbmpc.walking.measurement import Measurement
 
 __all__ = [
-    "Controller",
-    "JointPDController",
-    "Measurement",
     "RunLog",
     "RunnerOptions",
     "Scenario",
-    "WalkingController",
-    "WalkingControllerConfig",
     "available_scenarios",
     "load_run",
     "make_scenario",

@@ -37,9 +37,9 @@ def test_trial_arguments_translate_force_components_phase_and_step_timing():
     arguments = resolve_arguments("push", "walking", 6.0, params)
     assert arguments["force"] == pytest.approx(5.0)
     assert arguments["direction"] == pytest.approx(math.degrees(math.atan2(4.0, -3.0)))
-    from wbmpc.walking.controller import default_sequencer_params
+    from wbmpc.walking.preset import load_walking_preset
 
-    base = default_sequencer_params()  # the walking controller's own parameters: 'adaptive' is the default controller
+    base = load_walking_preset("bolt").planner  # the walking controller's own parameters: 'adaptive' is the default controller
     assert arguments["push_time"] == pytest.approx(3.0 + 0.5 * base.t_nom)
     fixed = arguments["sequencer_params"]
     assert fixed.t_min == fixed.t_max == fixed.t_nom == base.t_nom

@@ -12,9 +12,10 @@ import os
 import numpy as np
 import pytest
 
-from sim import JointPDController, load_run, run_scenario
+from sim import load_run, run_scenario
 from sim.falls import FallCriteria, base_tilt
 from wbmpc.errors import ParameterError
+from wbmpc.walking import JointPDController
 
 
 @pytest.fixture(scope="module")

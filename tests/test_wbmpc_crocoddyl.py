@@ -147,10 +147,9 @@ def test_closed_loop_with_crocoddyl_as_the_solver_applies_the_same_torques():
     MPC solver (bench.crocoddyl_loop, the baseline of `wbmpc bench loop`) applies our torques."""
     from bench.crocoddyl_loop import CrocoddylWalkingController
     from sim.runner import run_scenario
-    from wbmpc.walking.controller import WalkingControllerConfig
 
     ours = run_scenario("walk", duration=0.4, seed=0, progress=False)
-    controller = CrocoddylWalkingController(WalkingControllerConfig(velocity_command=(0.0, 0.0)))
+    controller = CrocoddylWalkingController()
     theirs = run_scenario("walk", duration=0.4, seed=0, progress=False, controller=controller)
     assert ours.status == theirs.status == "completed"
     np.testing.assert_allclose(theirs.ticks["tau"], ours.ticks["tau"], rtol=0, atol=1e-6)

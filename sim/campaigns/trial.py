@@ -128,11 +128,11 @@ def make_trials(spec) -> list[Trial]:
 def _allowed_names(scenario: str, controller: str) -> set[str]:
     from sim.runner import RunnerOptions
     from sim.scenarios import scenario_parameters
-    from wbmpc.walking.controller import WalkingControllerConfig
+    from wbmpc.walking.preset import preset_override_keys
 
     names = set(scenario_parameters(scenario)) | {f.name for f in dataclasses.fields(RunnerOptions)}
     if controller == "walking":
-        names |= {f.name for f in dataclasses.fields(WalkingControllerConfig)} | {"step_timing", "step_timing_from"}
+        names |= preset_override_keys() | {"sequencer_params", "step_timing", "step_timing_from"}
     else:
         names |= set(PD_OPTIONS)
     if scenario == "push":
@@ -157,7 +157,7 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
         arguments["sequencer_params"] = (
             SequencerParams.preset(given)
             if isinstance(given, str)
-            else SequencerParams.from_dict({**SequencerParams.bolt_walking().to_dict(), **given}, "sequencer_params")
+            else SequencerParams.from_dict({**_walking_planner().to_dict(), **given}, "sequencer_params")
         )
     step_timing = arguments.pop("step_timing", None)
     step_timing_from = _finite("step_timing_from", arguments.pop("step_timing_from", 0.0))
@@ -201,20 +201,28 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
             f"the push ends at t = {events['push_end']:.3f} s, not before the end of the trial (duration={duration} s)"
         )
     if controller == "walking":
-        from wbmpc.walking.controller import WalkingControllerConfig
+        from wbmpc.walking.preset import is_preset_override, load_walking_preset
 
-        config_names = {f.name for f in dataclasses.fields(WalkingControllerConfig)}
-        WalkingControllerConfig(**{k: v for k, v in arguments.items() if k in config_names})
+        overrides = {("planner" if k == "sequencer_params" else k): v for k, v in arguments.items()
+                     if k == "sequencer_params" or (is_preset_override(k) and k not in scenario_args)}
+        if "mpc_failure_times" in overrides:
+            overrides["mpc_failure_times"] = tuple(float(t) for t in overrides["mpc_failure_times"])
+        load_walking_preset("bolt", overrides)  # validated as the run will load it
     return arguments
+
+
+def _walking_planner():
+    """The walking controller's planner parameters (Bolt's walking preset)."""
+    from wbmpc.walking.preset import load_walking_preset
+
+    return load_walking_preset("bolt").planner
 
 
 def _sequencer_params(step_timing: str, base: Any = None):
     """Sequencer parameters for ``step_timing`` from ``base`` (None: the walking controller's default)."""
-    from wbmpc.walking.controller import default_sequencer_params
-
     if step_timing not in STEP_TIMINGS:
         raise ParameterError(f"step_timing={step_timing!r} must be one of {STEP_TIMINGS}")
-    params = base if base is not None else default_sequencer_params()
+    params = base if base is not None else _walking_planner()
     if step_timing == "fixed":
         return dataclasses.replace(params, t_min=params.t_nom, t_max=params.t_nom, name=f"{params.name}+fixed_timing")
     if step_timing == "stiff":

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sequencer.dcm_planner import LipmCorrections
+from sequencer.corrections import LipmCorrections
 
 
 def rotate_xy(vector_xy: np.ndarray, yaw: float) -> np.ndarray:

@@ -15,8 +15,13 @@ import numpy as np
 
 
 def solve_walking_ocp(robot_name: str = "bolt", speed: float | None = None, n_nodes: int = 100, dt: float = 0.01,
-                      iterations: int = 100, foothold_weight: float = 0.0) -> dict:
+                      iterations: int = 100, foothold_weight: float | None = 0.0) -> dict:
     """Plan footsteps from a standing start, solve the walking OCP, summarise the solution.
+
+    The planner and the OCP weights are the robot's walking preset's
+    (:func:`wbmpc.walking.preset.load_walking_preset`; a robot without one is refused), with the
+    command ``speed`` [m/s] (None: the preset's) and ``foothold_weight`` (0, the default: the
+    footholds emerge, the paper's choice; None: the preset's closed-loop value).
 
     Returns a dict with the solver log, term costs, swing apex heights [m] above the ground,
     CoM displacement [m], peak torque [N·m], and the trajectories (times [s], xs, us, foot
@@ -25,14 +30,16 @@ def solve_walking_ocp(robot_name: str = "bolt", speed: float | None = None, n_no
     import pinocchio as pin
 
     from robots import load_robot
-    from sequencer import FootstepSequencer, SequencerParams, contact_schedule
+    from sequencer import FootstepSequencer, contact_schedule
     from wbmpc.errors import ParameterError
     from wbmpc.ocp.solvers import SolverFDDP
-    from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig, quasi_static_controls
+    from wbmpc.walking.ocp import WalkingOCP, quasi_static_controls
+    from wbmpc.walking.preset import load_walking_preset
 
     if int(iterations) != iterations or iterations < 1:
         raise ParameterError(f"iterations={iterations} must be an integer >= 1")
     robot = load_robot(robot_name)
+    preset = load_walking_preset(robot_name)
     model = robot.pinocchio_model
     data = model.createData()
     x0 = np.concatenate([robot.q_reference, np.zeros(model.nv)])
@@ -40,14 +47,15 @@ def solve_walking_ocp(robot_name: str = "bolt", speed: float | None = None, n_no
     pin.framesForwardKinematics(model, data, q0)
     com0 = pin.centerOfMass(model, data, q0).copy()
     feet = {foot: data.oMf[model.getFrameId(name)].translation.copy() for foot, name in robot.foot_frames.items()}
-    params = SequencerParams.bolt_walking()
+    params = preset.planner
     if speed is not None:
         params = dataclasses.replace(params, v_x=float(speed))
     plan = FootstepSequencer(params).plan(t=0.0, stance_foot="left", stance_position=feet["left"][:2],
                                           dcm_measured=com0[:2], t_stance_start=0.0)
     schedule = contact_schedule(plan, 0.0, dt, n_nodes)
     com_terminal = np.append(plan.lipm_com_at(n_nodes * dt, com0[:2]), com0[2])
-    ocp = WalkingOCP(robot, WalkingOCPConfig(foothold_weight=foothold_weight), n_nodes=n_nodes, dt=dt)
+    config = preset.ocp if foothold_weight is None else dataclasses.replace(preset.ocp, foothold_weight=foothold_weight)
+    ocp = WalkingOCP(robot, config, n_nodes=n_nodes, dt=dt)
     ocp.update(x0, schedule, com_terminal)
     solver = SolverFDDP(ocp.problem)
     u0 = quasi_static_controls(ocp, x0)

@@ -1,0 +1,266 @@
+"""The walking controller's parts, each alone: the feedback law (eqs. 25-26, the library's gain
+sign), the estimators (speed integral, LIPM corrections, stance slide), the touchdown delay, and
+the per-robot walking preset."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from robots import load_robot
+from sequencer.corrections import LipmCorrections
+from sequencer.planner import VelocityCommand
+from wbmpc.errors import ParameterError
+from wbmpc.ocp.mpc import MPCSolution
+from wbmpc.ocp.state import StateMultibody
+from wbmpc.walking.controller_config import WalkingControllerConfig
+from wbmpc.walking.estimators import LipmCorrectionEstimator, StanceSlide, VelocityIntegral
+from wbmpc.walking.feedback import FeedbackLaw
+from wbmpc.walking.preset import available_walking_presets, load_walking_preset
+from wbmpc.walking.stance import delay_to_touchdown
+
+# ---------------------------------------------------------------------------------------- feedback
+
+
+@pytest.fixture(scope="module")
+def known_solution():
+    """A synthetic MPC solution (random xs, us, K) at t = 0.5 s and a random measured state."""
+    model = load_robot("bolt").pinocchio_model
+    rng = np.random.default_rng(0)
+    n, nu, ndx = 5, model.nv - 6, 2 * model.nv
+
+    def random_state():
+        return np.concatenate([pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq)),
+                               rng.normal(size=model.nv)])
+
+    xs = np.array([random_state() for _ in range(n + 1)])
+    solution = MPCSolution(True, "max_iter", 1, 0.0, 0.0, 0.5, xs, rng.normal(size=(n, nu)),
+                           rng.normal(size=(n, nu, ndx)))
+    return StateMultibody(model), solution, random_state()
+
+
+def _law(state, **options):
+    settings = dict(node_dt=0.01, delay_nodes=1, interpolate=False, feedback=True, computation_delay=0.0)
+    settings.update(options)
+    return FeedbackLaw(state, **settings)
+
+
+def _riccati(model, solution, k, x):
+    nq = model.nq
+    dx = np.concatenate([pin.difference(model, solution.xs[k][:nq], x[:nq]), x[nq:] - solution.xs[k][nq:]])
+    return solution.us[k] + solution.K[k] @ dx
+
+
+def test_feedback_law_uses_node_one_by_default_and_the_library_gain_sign(known_solution):
+    state, solution, x = known_solution
+    law = _law(state)
+    law.hand_over(0.5, solution)
+    # 3 ms after the solution: node 1 (the paper's delay model)
+    np.testing.assert_allclose(law.control(0.503, x), _riccati(state.pinocchio, solution, 1, x), rtol=1e-12, atol=1e-12)
+    # 12 ms after (a failed update in between): node 2 of the same solution
+    np.testing.assert_allclose(law.control(0.512, x), _riccati(state.pinocchio, solution, 2, x), rtol=1e-12, atol=1e-12)
+
+
+def test_feedback_options_no_delay_no_feedback_interpolation(known_solution):
+    state, solution, x = known_solution
+    for options, expected in (
+        (dict(delay_nodes=0), _riccati(state.pinocchio, solution, 0, x)),
+        (dict(feedback=False), solution.us[1]),
+        (dict(feedback=False, interpolate=True), 0.7 * solution.us[1] + 0.3 * solution.us[2]),  # 30 % to node 2
+    ):
+        law = _law(state, **options)
+        law.hand_over(0.5, solution)
+        np.testing.assert_allclose(law.control(0.503, x), expected, rtol=1e-9, atol=1e-12)
+
+
+def test_computation_delay_applies_a_new_solution_only_after_the_latency(known_solution):
+    state, solution, x = known_solution
+    law = _law(state, delay_nodes=0, computation_delay=0.01, feedback=False)
+    law.hand_over(0.5, solution)  # the first one applies at once: there is nothing else to follow
+    newer = dataclasses.replace(solution, t=0.51, us=solution.us + 100.0)
+    law.hand_over(0.51, newer)
+    # at 0.515 s the solution of 0.51 s is still being "computed": node 1 of the 0.5 s one
+    np.testing.assert_array_equal(law.control(0.515, x), solution.us[1])
+    # from 0.52 s on the newer one applies, at its node 1 (10 ms after its own t)
+    np.testing.assert_array_equal(law.control(0.52, x), newer.us[1])
+
+
+def test_feedback_law_without_a_solution_says_so(known_solution):
+    state, _, x = known_solution
+    with pytest.raises(RuntimeError, match="no MPC solution yet"):
+        _law(state).control(0.0, x)
+
+
+# ---------------------------------------------------------------------------------------- estimators
+
+
+def test_speed_integral_acts_on_the_forward_speed_with_anti_windup():
+    integral = VelocityIntegral(gain=1.0, correction_max=0.2, filter_time=1.0, period=0.01)
+    assert integral.correction == 0.0
+    for _ in range(1000):  # 10 s standing still while 0.3 m/s forward is asked, drifting sideways
+        integral.update(0.3, np.array([0.0, 0.5]))
+    assert integral.correction == pytest.approx(0.2)  # the bound
+    for _ in range(150):  # now too fast: the clamped integral unwinds once the filtered speed passes 0.3
+        integral.update(0.3, np.array([0.6, 0.0]))
+    assert integral.correction < 0.2
+    off = VelocityIntegral(gain=0.0, correction_max=0.2, filter_time=1.0, period=0.01)
+    off.update(0.3, np.array([0.0, 0.0]))
+    assert off.correction == 0.0
+
+
+def _estimator(corrections, gain=0.5):
+    config = WalkingControllerConfig()
+    return LipmCorrectionEstimator(corrections, omega=np.sqrt(9.81 / 0.295), gain=gain,
+                                   swing_drift_max=config.swing_drift_max, offset_bias_max=config.dcm_offset_bias_max,
+                                   min_step=config.lipm_correction_min_step, max_error=config.lipm_correction_max_error,
+                                   max_slide=config.lipm_correction_max_slide)
+
+
+def test_lipm_corrections_are_identified_from_undisturbed_steps_only():
+    """Swing drift kappa = DCM gained over the LIPM / step length; offset bias = measured - planned b_T."""
+    corrections = LipmCorrections()
+    estimator = _estimator(corrections)
+    omega, duration, length, kappa, epsilon = estimator.omega, 0.3, 0.1, 0.2, 0.003
+    stance, landing = np.array([1.0, 0.05]), np.array([1.0 + length, -0.05])
+    planned = np.array([0.017, 0.01])  # the offset the plan aimed at for this touchdown
+    # the stance started from b0 and ended epsilon ahead of the plan after the LIPM growth + kappa L
+    b0 = ((1.0 - kappa) * length + planned[0] + epsilon) / np.exp(omega * duration)
+    # the first stance, started as planned: nothing to identify yet
+    assert not estimator.touchdown(0.0, stance + np.array([b0, 0.0]), stance, 0.0, np.array([b0, 0.0]), 0.0)
+    measured = landing + planned + np.array([epsilon, 0.0])
+    assert measured[0] - stance[0] == pytest.approx(b0 * np.exp(omega * duration) + kappa * length)
+    assert estimator.touchdown(duration, measured, landing, 0.0, planned, 0.0)
+    assert corrections.swing_drift == pytest.approx(0.5 * kappa, rel=1e-9)
+    assert corrections.dcm_offset_bias == pytest.approx(0.5 * epsilon, rel=1e-9)
+    before = (corrections.swing_drift, corrections.dcm_offset_bias)
+    # a pushed step (DCM 3 cm off the plan at touchdown) changes nothing, nor does the next one
+    assert not estimator.touchdown(0.6, landing + [0.1, 0.1] + [0.05, -0.01], landing + [0.1, 0.1], 0.0,
+                                   np.array([0.02, -0.01]), 0.0)
+    assert not estimator.touchdown(0.9, landing + [0.2, 0.0] + [0.02, 0.01], landing + [0.2, 0.0], 0.0,
+                                   np.array([0.02, 0.01]), 0.0)
+    assert (corrections.swing_drift, corrections.dcm_offset_bias) == before
+    assert len(estimator.steps) == 1
+
+
+def test_a_step_whose_stance_foot_slid_is_not_used_for_the_lipm_corrections():
+    """The swing drift is measured against the touchdown point: a slid stance foot is excluded."""
+    max_slide = WalkingControllerConfig().lipm_correction_max_slide
+    stance, landing = np.array([1.0, 0.05]), np.array([1.1, -0.05])
+    planned = np.array([0.017, 0.01])
+    measured = landing + np.array([0.018, 0.01])  # 1 mm from the plan: an undisturbed touchdown otherwise
+    for slide, used in ((2.0 * max_slide, False), (0.5 * max_slide, True)):
+        corrections = LipmCorrections()
+        estimator = _estimator(corrections)
+        estimator.touchdown(0.0, stance + np.array([0.018, 0.01]), stance, 0.0, planned + [0.001, 0.0], 0.0)
+        assert estimator.touchdown(0.3, measured, landing, 0.0, planned, ended_slide=slide) == used
+        assert len(estimator.steps) == int(used)
+
+
+def test_lipm_corrections_are_measured_along_the_heading():
+    """The same step walked along a heading rotated by 90 deg gives the same corrections."""
+    results = []
+    for yaw in (0.0, np.pi / 2):
+        c, s = np.cos(yaw), np.sin(yaw)
+        rotate = lambda v, c=c, s=s: np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])  # noqa: E731
+        corrections = LipmCorrections()
+        estimator = _estimator(corrections)
+        stance, landing, planned = rotate([1.0, 0.05]), rotate([1.1, -0.05]), rotate([0.017, 0.01])
+        estimator.touchdown(0.0, stance + rotate([0.02, 0.0]), stance, yaw, rotate([0.02, 0.0]), 0.0)
+        estimator.touchdown(0.3, landing + planned + rotate([0.002, 0.0]), landing, yaw, planned, 0.0)
+        results.append((corrections.swing_drift, corrections.dcm_offset_bias))
+    np.testing.assert_allclose(results[0], results[1], atol=1e-12)
+    assert results[0][0] > 0.0
+
+
+def test_the_planner_plans_from_a_sliding_stance_foot():
+    slide = StanceSlide(follow=0.02)
+    touchdown = np.array([0.1, 0.05])
+    slide.reset(touchdown)
+
+    def at(offset, in_contact=True):
+        foot = touchdown + offset
+        slide.follow_if_sliding(slide.measure(touchdown, foot), foot, in_contact)
+
+    at([0.005, 0.01])  # rolling: the touchdown point is kept
+    np.testing.assert_array_equal(slide.plan_position, touchdown)
+    at([0.01, 0.05])  # a slide: the planner plans from the measured foot
+    np.testing.assert_allclose(slide.plan_position, touchdown + [0.01, 0.05])
+    at([0.01, 0.08], in_contact=False)  # bouncing off the ground: kept
+    np.testing.assert_allclose(slide.plan_position, touchdown + [0.01, 0.05])
+    assert slide.slide == pytest.approx(np.hypot(0.01, 0.08))  # the largest slide of this stance
+    slide.reset(np.array([0.2, -0.1]))  # the next stance
+    assert slide.slide == 0.0
+    np.testing.assert_array_equal(slide.plan_position, [0.2, -0.1])
+    never = StanceSlide(follow=None)
+    never.reset(touchdown)
+    never.follow_if_sliding(never.measure(touchdown, touchdown + [0.01, 0.05]), touchdown + [0.01, 0.05], True)
+    np.testing.assert_array_equal(never.plan_position, touchdown)
+    with pytest.raises(ParameterError, match=r"stance_slide_follow=-0.01 m must be None or > 0"):
+        WalkingControllerConfig(stance_slide_follow=-0.01)
+
+
+# ---------------------------------------------------------------------------------------- touchdown
+
+
+def test_a_due_but_unmeasured_touchdown_is_delayed_by_the_wait_nodes():
+    from sequencer import FootstepSequencer
+
+    plan = FootstepSequencer(load_walking_preset("bolt").planner).plan(
+        t=0.0, stance_foot="left", stance_position=[0.0, 0.05], dcm_measured=[0.0, 0.0], t_stance_start=0.0
+    )
+    first = plan.steps[0].touchdown_time
+    t = first - 0.005  # touchdown due in 5 ms, the foot still in the air
+    delayed, delay = delay_to_touchdown(plan, t, False, 0.01, wait_nodes=2)
+    assert delay == pytest.approx(t + 2 * 0.01 - first)
+    np.testing.assert_allclose(delayed.touchdown_times, plan.touchdown_times + delay)
+    np.testing.assert_array_equal(delayed.positions, plan.positions)
+    same, no_delay = delay_to_touchdown(plan, t, True, 0.01, wait_nodes=2)  # foot already on the ground
+    assert same is plan and no_delay == 0.0
+
+
+# ---------------------------------------------------------------------------------------- presets
+
+
+def test_bolt_preset_states_every_tuned_number_and_takes_overrides():
+    import tomllib
+
+    from wbmpc.walking.preset import PRESET_DIR
+
+    assert "bolt" in available_walking_presets()
+    with (PRESET_DIR / "bolt.toml").open("rb") as stream:
+        data = tomllib.load(stream)
+    # every field of the tuned sections is written in the file (nothing left to code defaults)
+    skip = {"controller": {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate",
+                           "feedback", "mpc_failure_times", "sequencer_params_from"},
+            "planner": {"swing_drift", "dcm_offset_bias", "double_support"}}
+    preset = load_walking_preset("bolt")
+    for section in ("planner", "ocp", "controller", "fall", "command"):
+        fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())
+        assert fields <= set(data[section]), (section, sorted(fields - set(data[section])))
+    assert preset.planner.w_right_max == 0.30 and preset.ocp.foothold_weight == 1e5
+    changed = load_walking_preset("bolt", {"planner.l_max": 0.25, "ocp.state_weights.joint_position": 2.0,
+                                           "n_nodes": 80, "fall.min_base_height": 0.2})
+    assert (changed.planner.l_max, changed.ocp.state_weights.joint_position, changed.controller.n_nodes,
+            changed.fall.min_base_height) == (0.25, 2.0, 80, 0.2)
+    with pytest.raises(ParameterError, match=r"unknown sequencer parameter\(s\) \['l_maxx'\]"):
+        load_walking_preset("bolt", {"planner.l_maxx": 0.25})
+    with pytest.raises(ParameterError, match=r"\[controller\] has no field \['n_nodez'\]"):
+        load_walking_preset("bolt", {"n_nodez": 3})
+
+
+def test_a_robot_without_a_walking_preset_is_refused_at_once():
+    with pytest.raises(ParameterError, match=r"robot='g1' has no walking preset yet \(robots that walk: bolt\)"):
+        load_walking_preset("g1")
+
+
+def test_command_range_refuses_with_the_reason():
+    command = load_walking_preset("bolt").command
+    command.check(VelocityCommand(0.3, 0.1, 0.0), "bolt")
+    with pytest.raises(ParameterError, match=r"velocity command v_x=0.9 m/s for robot 'bolt' must be in \[-0.3, 0.5\]"):
+        command.check(VelocityCommand(0.9, 0.0, 0.0), "bolt")
+    with pytest.raises(ParameterError, match=r"yaw_rate=0.3 rad/s for robot 'bolt' must be 0 rad/s \(Bolt's legs have "
+                                             r"no hip yaw"):
+        command.check(VelocityCommand(0.3, 0.0, 0.3), "bolt")
