@@ -275,8 +275,7 @@ class FootstepSequencer:
         self._width_bounds = {foot: params.width_bounds(foot) for foot in FEET}
         self._max_steps = int(math.ceil(params.horizon / params.t_min)) + 2
         self._gait_key = None
-        self._gait: NominalGait | None = None
-        self._per_stance: dict = {}
+        self._gait: tuple[NominalGait, dict] | None = None
         self.nominal_gait()
 
     def nominal_gait(self, velocity=None, corrections: LipmCorrections | None = None) -> NominalGait:
@@ -288,6 +287,10 @@ class FootstepSequencer:
         Raises:
             ParameterError: the command is outside ``params.velocity_range()`` (names the component).
         """
+        return self._gait_tables(velocity, corrections)[0]
+
+    def _gait_tables(self, velocity, corrections) -> tuple[NominalGait, dict]:
+        """(gait, stance foot -> (w_nom, (b_x, b_y), (w_min, w_max))): the gait and what one step QP reads of it."""
         params = self.params
         v_x, v_y = (params.v_x, params.v_y) if velocity is None else velocity
         if corrections is None:
@@ -296,10 +299,10 @@ class FootstepSequencer:
             key = (v_x, v_y, corrections.swing_drift, corrections.dcm_offset_bias)
         if key != self._gait_key:
             gait = params.nominal_gait(*key)
-            self._per_stance = {
+            per_stance = {
                 foot: (w_nom, b_nom, self._width_bounds[foot]) for foot, (w_nom, b_nom) in gait.per_stance.items()
             }
-            self._gait, self._gait_key = gait, key
+            self._gait, self._gait_key = (gait, per_stance), key
         return self._gait
 
     def problem(self, stance_foot: str, stance_position, dcm_measured, elapsed: float,
@@ -379,7 +382,7 @@ class FootstepSequencer:
         stance_yaw, yaw_rate = float(stance_yaw), float(yaw_rate)
         if not (math.isfinite(stance_yaw) and math.isfinite(yaw_rate)):
             raise ParameterError(f"stance_yaw={stance_yaw} rad and yaw_rate={yaw_rate} rad/s must be finite")
-        gait = self.nominal_gait(velocity, corrections)
+        gait, per_stance = self._gait_tables(velocity, corrections)
         params = self.params
         if elapsed > params.t_max:
             if clamp_elapsed:
@@ -392,21 +395,21 @@ class FootstepSequencer:
                     self.backend_name,
                 )
         if self.backend_name == "exact":
-            steps = self._plan_exact(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate)
+            steps = self._plan_exact(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate,
+                                     gait.step_length, per_stance)
         else:
             steps = self._plan_backend(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate, gait)
         return FootstepPlan(
             t0=t, stance_foot=stance_foot, stance_position=p0.copy(), dcm_measured=dcm.copy(), omega=self._omega,
             steps=tuple(steps), t_stance_start=t_stance_start, horizon=params.horizon, com_height=params.z_c,
-            stance_yaw=stance_yaw, double_support=params.double_support,
+            stance_yaw=stance_yaw, double_support=params.double_support, feet=FEET,
         )
 
-    def _plan_exact(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate) -> list[PlannedStep]:
+    def _plan_exact(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, l_nom, per_stance) -> list[PlannedStep]:
         params = self.params
         omega = self._omega
         a1, a2, a3 = params.alpha1, params.alpha2, params.alpha3
-        l_nom, l_min, l_max = self._gait.step_length, params.l_min, params.l_max
-        per_stance = self._per_stance
+        l_min, l_max = params.l_min, params.l_max
         gamma_nom, g_hi = self._gamma_nom, self._gamma_hi
         t_end = t + params.horizon
         rotate = yaw != 0.0 or yaw_rate != 0.0  # else the world frame is every stance's heading frame

@@ -37,6 +37,11 @@ class ContactSchedule:
         touchdown_yaw: shape (n_nodes + 1, n_feet), world yaw of that foothold [rad]; NaN where
             the foot is in contact. Omitted (None): 0 for every swinging foot (a plan without
             heading), NaN in contact.
+        contact_yaw: shape (n_nodes + 1, n_feet), world yaw of the foothold a foot in contact
+            stands on [rad] (the stance yaw of the plan, or the yaw of the foot's last planned
+            touchdown); NaN where the foot swings, and where it landed before the plan was made
+            (the trailing foot of a double support at the start of the plan). Omitted (None): 0
+            in contact, NaN in swing.
     """
 
     t0: float
@@ -47,20 +52,25 @@ class ContactSchedule:
     swing_duration: np.ndarray
     touchdown_position: np.ndarray
     touchdown_yaw: np.ndarray | None = None
+    contact_yaw: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.dt) and self.dt > 0):
             raise ParameterError(f"dt={self.dt} s must be a finite positive number")
         n_feet = len(self.feet)
         rows = self.in_contact.shape[0]
+        in_contact = np.asarray(self.in_contact, dtype=bool)
         if self.touchdown_yaw is None:
-            object.__setattr__(self, "touchdown_yaw", np.where(np.asarray(self.in_contact, dtype=bool), np.nan, 0.0))
+            object.__setattr__(self, "touchdown_yaw", np.where(in_contact, np.nan, 0.0))
+        if self.contact_yaw is None:
+            object.__setattr__(self, "contact_yaw", np.where(in_contact, 0.0, np.nan))
         expected = {
             "in_contact": (rows, n_feet),
             "swing_phase": (rows, n_feet),
             "swing_duration": (rows, n_feet),
             "touchdown_position": (rows, n_feet, 2),
             "touchdown_yaw": (rows, n_feet),
+            "contact_yaw": (rows, n_feet),
         }
         for name, shape in expected.items():
             if getattr(self, name).shape != shape:
@@ -107,7 +117,8 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
         rounding: ``"next"`` or ``"nearest"`` (see above).
 
     Returns:
-        ContactSchedule with ``feet == plan.feet``; ``touchdown_yaw`` from the steps' ``yaw``.
+        ContactSchedule with ``feet == plan.feet``; ``touchdown_yaw`` and ``contact_yaw`` from the
+        plan's ``stance_yaw`` and the steps' ``yaw``.
     """
     t0 = float(t0)
     dt = float(dt)
@@ -139,6 +150,7 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
     interval = np.searchsorted(touchdowns, times + shift, side="right")
     landing_column = np.array([column[step.foot] for step in plan.steps])
     rows = np.arange(n_nodes + 1)
+    node_interval = interval
     start = np.concatenate([[plan.t_stance_start], touchdowns])[interval]  # the previous touchdown
     end = touchdowns[interval]
     double_support = float(plan.double_support)
@@ -162,7 +174,15 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
     touchdown_position[rows, swing] = plan.positions[interval]
     touchdown_yaw = np.full((n_nodes + 1, len(feet)), np.nan)
     touchdown_yaw[rows, swing] = plan.yaws[interval]
+    # yaw of the foothold each foot stands on in each stance interval (NaN: it landed before the plan)
+    standing_yaw = np.full((int(node_interval[-1]) + 1, len(feet)), np.nan)
+    standing_yaw[0, column[plan.stance_foot]] = plan.stance_yaw
+    for i in range(1, standing_yaw.shape[0]):
+        standing_yaw[i] = standing_yaw[i - 1]
+        standing_yaw[i, landing_column[i - 1]] = plan.steps[i - 1].yaw
+    contact_yaw = np.where(in_contact, standing_yaw[node_interval], np.nan)
     return ContactSchedule(
         t0=t0, dt=dt, feet=feet, in_contact=in_contact, swing_phase=swing_phase,
         swing_duration=swing_duration, touchdown_position=touchdown_position, touchdown_yaw=touchdown_yaw,
+        contact_yaw=contact_yaw,
     )

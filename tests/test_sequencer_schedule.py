@@ -131,6 +131,10 @@ def test_point_feet_schedule_is_unchanged(rounding):
                                    side="right")
         assert np.array_equal(schedule.touchdown_yaw[swing], plan.yaws[interval])
         assert np.all(np.isnan(schedule.touchdown_yaw[schedule.in_contact]))
+        # the stance foot stands on the plan's stance yaw, then on the yaw of the step that landed it
+        stance_yaws = np.concatenate([[plan.stance_yaw], plan.yaws])[interval]
+        assert np.array_equal(schedule.contact_yaw[schedule.in_contact], stance_yaws)
+        assert np.all(np.isnan(schedule.contact_yaw[swing]))
 
 
 # ---------------------------------------------------------------------------- double support
@@ -162,6 +166,13 @@ def test_double_support_keeps_both_feet_down_after_each_touchdown(rounding):
         assert np.array_equal(schedule.touchdown_yaw[swing], point_feet.touchdown_yaw[swing])
         for name in ("swing_phase", "swing_duration", "touchdown_yaw"):
             assert np.all(np.isnan(getattr(schedule, name)[schedule.in_contact])), name
+        # in double support the trailing foot stands where it landed: the plan's stance foot after the
+        # first touchdown, unknown (NaN) before it
+        landing = np.array([schedule.feet.index(step.foot) for step in plan.steps])[interval]
+        rows = np.nonzero(both)[0]
+        trailing = schedule.contact_yaw[rows, landing[rows]]
+        previous = np.concatenate([[np.nan, plan.stance_yaw], plan.yaws])[interval[rows]]
+        np.testing.assert_array_equal(trailing, previous)
 
 
 def test_double_support_nodes_after_a_touchdown():
@@ -204,6 +215,12 @@ def test_feet_and_their_order_come_from_the_plan(plan):
     swinging = [feet[j] for j in np.argmax(~schedule.in_contact, axis=1)]
     assert swinging == [order[k % 3] for k in interval]
     assert schedule.touchdown_yaw[~schedule.in_contact] == pytest.approx(0.1 * interval)
+    # the front foot stands at the plan's stance yaw until it lifts off; the hind feet are unknown
+    # (they landed before the plan) until their first planned touchdown
+    front = schedule.contact_yaw[:, 0][schedule.in_contact[:, 0] & (interval < 2)]
+    assert np.all(front == tripod.stance_yaw)
+    assert np.all(np.isnan(schedule.contact_yaw[interval == 0, 1:]))
+    assert schedule.contact_yaw[interval == 1, 1] == pytest.approx(0.0)  # hind_left landed with yaw 0.1 * 0
     with pytest.raises(ParameterError, match=r"the plan's stance and steps use feet \['left'\] that are not in its feet"):
         contact_schedule(dataclasses.replace(tripod, stance_foot="left"), plan.t0, 0.01, 10)
 
@@ -214,5 +231,6 @@ def test_a_schedule_built_without_yaws_has_zero_yaw_in_swing(plan):
                            swing_phase=schedule.swing_phase, swing_duration=schedule.swing_duration,
                            touchdown_position=schedule.touchdown_position)
     np.testing.assert_array_equal(bare.touchdown_yaw, schedule.touchdown_yaw)  # a plan without heading: 0
+    np.testing.assert_array_equal(bare.contact_yaw, schedule.contact_yaw)
     with pytest.raises(ParameterError, match=r"touchdown_yaw has shape \(21, 3\), expected \(21, 2\)"):
         dataclasses.replace(schedule, touchdown_yaw=np.zeros((21, 3)))
