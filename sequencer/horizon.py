@@ -11,6 +11,17 @@ Gamma in the clock of the first stance; the constraints are identical, but the a
 multiplies alpha2 by exp(2 omega T_k) for the k-th step (about 1e14 at the end of a 3 s horizon),
 which would freeze the timing of all later steps and depend on the choice of time origin.
 
+Heading frame (turning and lateral commands): with ``stance_yaw`` ψ_0 and ``yaw_rate`` r given,
+the QP of step k is written in the frame of its stance rotated about z by the planned heading
+ψ_k (x along the heading), ψ_{k+1} = ψ_k + r T_k with T_k the planned duration of step k; the
+composition and its exactness are described in :mod:`sequencer.dcm_planner`. With ψ_0 = 0 and
+r = 0 no rotation is applied: the plan is bit for bit the paper's world-frame Algorithm 1.
+
+Command and corrections per call: ``velocity`` (v_x, v_y) and ``corrections``
+(:class:`sequencer.corrections.LipmCorrections`) override the parameter set's ``v_x``, ``v_y``,
+``swing_drift`` and ``dcm_offset_bias`` for one plan without rebuilding the sequencer; the nominal
+steps and offsets of the last distinct (command, corrections) are kept (:meth:`FootstepSequencer.nominal_gait`).
+
 Failure: :meth:`FootstepSequencer.plan` raises :class:`sequencer.step_qp.InfeasibleStep` (a
 :class:`sequencer.step_qp.StepQPError`, itself a :class:`wbmpc.errors.SolverError`) carrying the
 failing :class:`StepProblem` and the solver status. A closed loop that wants to keep running
@@ -26,7 +37,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from sequencer.backends import make_backend
-from sequencer.nominal import other_foot
+from sequencer.corrections import LipmCorrections
+from sequencer.nominal import FEET, NominalGait, other_foot
 from sequencer.params import SequencerParams
 from sequencer.step_qp import CONSTRAINT_NAMES, InfeasibleStep, StepProblem, solve_exact_scalars
 from wbmpc.errors import ParameterError
@@ -42,10 +54,12 @@ class PlannedStep:
         foot: ``"left"`` or ``"right"``, the foot that LANDS at this step.
         position: world (x, y) of the foothold p_T [m], shape (2,).
         touchdown_time: absolute touchdown time [s] (same clock as the plan's t0).
-        dcm_offset: b_T = zeta_T - p_T [m], shape (2,).
+        dcm_offset: b_T = zeta_T - p_T, world frame [m], shape (2,).
         dcm_at_touchdown: zeta_T = p_T + b_T, world (x, y) [m], shape (2,).
         stance_start_time: when the stance preceding this touchdown began [s].
         active: names of the active inequalities of this step's QP (see step_qp.CONSTRAINT_NAMES).
+        yaw: world yaw of the foothold [rad] (not wrapped): the heading ψ_{k+1} = ψ_k + yaw_rate T_k
+            of the stance this touchdown starts, the frame the next step's QP is written in.
     """
 
     foot: str
@@ -55,6 +69,7 @@ class PlannedStep:
     dcm_at_touchdown: np.ndarray
     stance_start_time: float
     active: tuple[str, ...] = ()
+    yaw: float = 0.0
 
     @property
     def duration(self) -> float:
@@ -75,6 +90,10 @@ class FootstepPlan:
         steps: planned touchdowns in time order; the last one is at or after t0 + horizon.
         t_stance_start: when the current stance began [s] (<= t0).
         horizon: H_u [s].
+        com_height: CoM height of the planner's model above the ground [m] (the LIPM's z_c).
+        stance_yaw: world yaw of the stance foot's heading frame [rad].
+        double_support: time both feet stay on the ground after each touchdown [s] (0 = point feet).
+        feet: names of the feet the plan alternates, in the order schedules index them.
     """
 
     t0: float
@@ -85,6 +104,10 @@ class FootstepPlan:
     steps: tuple[PlannedStep, ...]
     t_stance_start: float
     horizon: float
+    com_height: float
+    stance_yaw: float = 0.0
+    double_support: float = 0.0
+    feet: tuple[str, ...] = FEET
 
     # ------------------------------------------------------------------ queries
     @property
@@ -96,6 +119,11 @@ class FootstepPlan:
     def positions(self) -> np.ndarray:
         """Footholds, world (x, y) [m], shape (K, 2)."""
         return np.array([s.position for s in self.steps])
+
+    @property
+    def yaws(self) -> np.ndarray:
+        """World yaw of each planned foothold [rad], shape (K,)."""
+        return np.array([s.yaw for s in self.steps])
 
     def _segments(self):
         """(start time, stance position, DCM at start) of every stance, the current one first."""
@@ -171,6 +199,22 @@ class FootstepPlan:
                 )
         return out[0] if times.ndim == 0 else out
 
+    def com_reference(self, t, com_xy_measured) -> np.ndarray:
+        """The planner model's CoM prediction, world frame [m]: (x, y) of :meth:`lipm_com_at`, z = com_height.
+
+        Model-neutral: what a whole-body OCP tracks (e.g. its terminal CoM), whatever planner made the plan.
+
+        Args:
+            t: time(s) [s] >= t0, scalar or shape (n,).
+            com_xy_measured: CoM (x, y) at t0 [m], shape (2,).
+        Returns:
+            shape (3,) for a scalar t, else (n, 3).
+        """
+        com_xy = self.lipm_com_at(t, com_xy_measured)
+        if com_xy.ndim == 1:
+            return np.array((com_xy[0], com_xy[1], self.com_height))
+        return np.column_stack((com_xy, np.full(com_xy.shape[0], self.com_height)))
+
     def _lipm_com_scalar(self, t: float, com0: np.ndarray) -> np.ndarray:
         """lipm_com_at for one time, on plain floats (called every control cycle)."""
         omega = self.omega
@@ -211,7 +255,7 @@ class FootstepSequencer:
     """Receding-horizon footstep sequencer (Algorithm 1) with one warm QP workspace.
 
     Args:
-        params: SequencerParams (weights, bounds, nominal gait, horizon).
+        params: SequencerParams (weights, bounds, default command, horizon).
         backend: ``"exact"`` (default: closed-form active-set solution of the same QP, ~10x faster,
             verified against OSQP and ProxQP in the tests), ``"osqp"`` (the paper's solver) or
             ``"proxqp"``.
@@ -228,14 +272,59 @@ class FootstepSequencer:
         self._gamma_nom = math.exp(omega * params.t_nom)
         self._gamma_hi = math.exp(omega * params.t_max)
         self._gamma_lo0 = math.exp(omega * params.t_min)
-        self._per_stance = {
-            foot: (params.w_nom(foot), params.b_nom(foot), params.width_bounds(foot)) for foot in ("left", "right")
-        }
+        self._width_bounds = {foot: params.width_bounds(foot) for foot in FEET}
         self._max_steps = int(math.ceil(params.horizon / params.t_min)) + 2
+        self._gait_key = None
+        self._gait: tuple[NominalGait, dict] | None = None
+        self.nominal_gait()
 
-    def problem(self, stance_foot: str, stance_position, dcm_measured, elapsed: float) -> StepProblem:
-        """The one-step QP (eqs. 2-5) for this sequencer's parameters."""
-        return StepProblem.from_params(self.params, stance_foot, stance_position, dcm_measured, elapsed)
+    def nominal_gait(self, velocity=None, corrections: LipmCorrections | None = None) -> NominalGait:
+        """Nominal steps and aimed offsets for ``velocity`` (v_x, v_y) [m/s] (None: the params') and
+        ``corrections`` (None: the params' swing_drift and dcm_offset_bias).
+
+        The last distinct (command, corrections) is kept: a repeated call costs one comparison.
+
+        Raises:
+            ParameterError: the command is outside ``params.velocity_range()`` (names the component).
+        """
+        return self._gait_tables(velocity, corrections)[0]
+
+    def _gait_tables(self, velocity, corrections) -> tuple[NominalGait, dict]:
+        """(gait, stance foot -> (w_nom, (b_x, b_y), (w_min, w_max))): the gait and what one step QP reads of it."""
+        params = self.params
+        v_x, v_y = (params.v_x, params.v_y) if velocity is None else velocity
+        if corrections is None:
+            key = (v_x, v_y, params.swing_drift, params.dcm_offset_bias)
+        else:
+            key = (v_x, v_y, corrections.swing_drift, corrections.dcm_offset_bias)
+        if key != self._gait_key:
+            gait = params.nominal_gait(*key)
+            per_stance = {
+                foot: (w_nom, b_nom, self._width_bounds[foot]) for foot, (w_nom, b_nom) in gait.per_stance.items()
+            }
+            self._gait, self._gait_key = (gait, per_stance), key
+        return self._gait
+
+    def problem(self, stance_foot: str, stance_position, dcm_measured, elapsed: float,
+                gait: NominalGait | None = None) -> StepProblem:
+        """The one-step QP (eqs. 2-5) for this sequencer's weights and bounds and ``gait``'s nominal
+        values (None: the parameters' own), with p0 and the DCM in the frame the QP is written in."""
+        params = self.params
+        gait = self.nominal_gait() if gait is None else gait
+        return StepProblem(
+            stance_foot=stance_foot,
+            p0=np.asarray(stance_position, dtype=float),
+            dcm_measured=np.asarray(dcm_measured, dtype=float),
+            elapsed=float(elapsed),
+            omega=params.omega,
+            alpha=np.array([params.alpha1, params.alpha2, params.alpha3]),
+            step_nominal=np.array([gait.step_length, gait.step_width(stance_foot)]),
+            t_nom=params.t_nom,
+            b_nominal=np.array(gait.dcm_offset(stance_foot)),
+            length_bounds=(params.l_min, params.l_max),
+            width_bounds=params.width_bounds(stance_foot),
+            time_bounds=(params.t_min, params.t_max),
+        )
 
     def plan(
         self,
@@ -245,6 +334,11 @@ class FootstepSequencer:
         dcm_measured,
         t_stance_start: float,
         clamp_elapsed: bool = False,
+        *,
+        stance_yaw: float = 0.0,
+        yaw_rate: float = 0.0,
+        velocity=None,
+        corrections: LipmCorrections | None = None,
     ) -> FootstepPlan:
         """Run Algorithm 1 from the measured state.
 
@@ -257,6 +351,11 @@ class FootstepSequencer:
                 paper's "time elapsed since the last contact").
             clamp_elapsed: if True and the elapsed time exceeds T_max, plan as if it were T_max
                 (touchdown now) instead of raising InfeasibleStep.
+            stance_yaw: world yaw ψ_0 of the stance foot's heading frame [rad].
+            yaw_rate: commanded turning rate r [rad/s]; step k's QP is written in the heading frame
+                ψ_k, ψ_{k+1} = ψ_k + r T_k.
+            velocity: (v_x, v_y) [m/s] in the heading frame; None = ``params.v_x``, ``params.v_y``.
+            corrections: live LIPM corrections; None = ``params.swing_drift``, ``params.dcm_offset_bias``.
 
         Returns:
             FootstepPlan whose last step lands at or after t + horizon.
@@ -265,7 +364,7 @@ class FootstepSequencer:
             ParameterError: bad input (names the argument and value).
             InfeasibleStep / StepQPError: a QP failed; carries the problem data and solver status.
         """
-        if stance_foot not in ("left", "right"):
+        if stance_foot not in FEET:
             raise ParameterError(f"stance_foot={stance_foot!r} must be 'left' or 'right'")
         t = float(t)
         t_stance_start = float(t_stance_start)
@@ -280,6 +379,10 @@ class FootstepSequencer:
             raise ParameterError(f"stance_position={stance_position!r} must be a finite (x, y) pair [m]")
         if dcm.shape != (2,) or not (math.isfinite(dcm[0]) and math.isfinite(dcm[1])):
             raise ParameterError(f"dcm_measured={dcm_measured!r} must be a finite (x, y) pair [m]")
+        stance_yaw, yaw_rate = float(stance_yaw), float(yaw_rate)
+        if not (math.isfinite(stance_yaw) and math.isfinite(yaw_rate)):
+            raise ParameterError(f"stance_yaw={stance_yaw} rad and yaw_rate={yaw_rate} rad/s must be finite")
+        gait, per_stance = self._gait_tables(velocity, corrections)
         params = self.params
         if elapsed > params.t_max:
             if clamp_elapsed:
@@ -287,66 +390,90 @@ class FootstepSequencer:
             else:
                 raise InfeasibleStep(
                     f"elapsed time t - t_stance_start = {elapsed:.4g} s exceeds T_max={params.t_max} s",
-                    self.problem(stance_foot, p0, dcm, 0.0),
+                    self.problem(stance_foot, p0, dcm, 0.0, gait),
                     "primal infeasible",
                     self.backend_name,
                 )
         if self.backend_name == "exact":
-            steps = self._plan_exact(t, stance_foot, p0, dcm, t - elapsed, elapsed)
+            steps = self._plan_exact(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate,
+                                     gait.step_length, per_stance)
         else:
-            steps = self._plan_backend(t, stance_foot, p0, dcm, t - elapsed, elapsed)
+            steps = self._plan_backend(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate, gait)
         return FootstepPlan(
             t0=t, stance_foot=stance_foot, stance_position=p0.copy(), dcm_measured=dcm.copy(), omega=self._omega,
-            steps=tuple(steps), t_stance_start=t_stance_start, horizon=params.horizon,
+            steps=tuple(steps), t_stance_start=t_stance_start, horizon=params.horizon, com_height=params.z_c,
+            stance_yaw=stance_yaw, double_support=params.double_support, feet=FEET,
         )
 
-    def _plan_exact(self, t, stance, p0, dcm, stance_start, elapsed) -> list[PlannedStep]:
+    def _plan_exact(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, l_nom, per_stance) -> list[PlannedStep]:
         params = self.params
         omega = self._omega
         a1, a2, a3 = params.alpha1, params.alpha2, params.alpha3
-        l_nom, l_min, l_max = params.l_nom, params.l_min, params.l_max
+        l_min, l_max = params.l_min, params.l_max
         gamma_nom, g_hi = self._gamma_nom, self._gamma_hi
         t_end = t + params.horizon
+        rotate = yaw != 0.0 or yaw_rate != 0.0  # else the world frame is every stance's heading frame
         p0x, p0y = float(p0[0]), float(p0[1])
         zx, zy = float(dcm[0]), float(dcm[1])
         steps = []
         for _ in range(self._max_steps):
-            w_nom, (bnx, bny), (w_lo, w_hi) = self._per_stance[stance]
+            w_nom, (bnx, bny), (w_lo, w_hi) = per_stance[stance]
             if elapsed > 0.0:
                 decay = math.exp(-omega * elapsed)
                 g_lo = math.exp(omega * max(params.t_min, elapsed))
             else:
                 decay = 1.0
                 g_lo = self._gamma_lo0
-            px, py, gamma, bx, by, bits = solve_exact_scalars(
-                p0x, p0y, (zx - p0x) * decay, (zy - p0y) * decay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny,
-                l_min, l_max, w_lo, w_hi, g_lo, g_hi,
-            )
-            touchdown = stance_start + math.log(gamma) / omega
+            ax, ay = (zx - p0x) * decay, (zy - p0y) * decay
+            if rotate:  # solve in the heading frame of the stance, rotate the step and the offset back
+                c, s = math.cos(yaw), math.sin(yaw)
+                dx, dy, gamma, hx, hy, bits = solve_exact_scalars(
+                    0.0, 0.0, c * ax + s * ay, c * ay - s * ax, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny,
+                    l_min, l_max, w_lo, w_hi, g_lo, g_hi,
+                )
+                px, py = p0x + (c * dx - s * dy), p0y + (s * dx + c * dy)
+                bx, by = c * hx - s * hy, s * hx + c * hy
+            else:
+                px, py, gamma, bx, by, bits = solve_exact_scalars(
+                    p0x, p0y, ax, ay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny,
+                    l_min, l_max, w_lo, w_hi, g_lo, g_hi,
+                )
+            duration = math.log(gamma) / omega
+            touchdown = stance_start + duration
+            yaw = yaw + yaw_rate * duration
             landing = "right" if stance == "left" else "left"
             zx, zy = px + bx, py + by
             steps.append(
                 PlannedStep(landing, np.array((px, py)), touchdown, np.array((bx, by)), np.array((zx, zy)),
-                            stance_start, _ACTIVE_NAMES[bits])
+                            stance_start, _ACTIVE_NAMES[bits], yaw)
             )
             if touchdown >= t_end:
                 break
             stance, p0x, p0y, stance_start, elapsed = landing, px, py, touchdown, 0.0
         return steps
 
-    def _plan_backend(self, t, stance, p0, dcm, stance_start, elapsed) -> list[PlannedStep]:
+    def _plan_backend(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, gait) -> list[PlannedStep]:
         t_end = t + self.params.horizon
+        rotate = yaw != 0.0 or yaw_rate != 0.0
         steps = []
         for _ in range(self._max_steps):
-            solution = self.backend.solve(self.problem(stance, p0, dcm, elapsed))
+            if rotate:  # the QP in the stance's heading frame: p0 and the DCM rotated by -yaw
+                c, s = math.cos(yaw), math.sin(yaw)
+                to_heading = np.array(((c, s), (-s, c)))
+                solution = self.backend.solve(self.problem(stance, to_heading @ p0, to_heading @ dcm, elapsed, gait))
+                position = to_heading.T @ solution.step_position
+                offset = to_heading.T @ solution.dcm_offset
+            else:
+                solution = self.backend.solve(self.problem(stance, p0, dcm, elapsed, gait))
+                position = solution.step_position.copy()
+                offset = solution.dcm_offset.copy()
             touchdown = stance_start + solution.duration
+            yaw = yaw + yaw_rate * solution.duration
             landing = other_foot(stance)
-            position = solution.step_position.copy()
-            offset = solution.dcm_offset.copy()
             dcm = position + offset
             steps.append(
                 PlannedStep(landing, position, touchdown, offset, dcm.copy(), stance_start,
-                            tuple(solution.active_names))
+                            tuple(solution.active_names), yaw)
             )
             if touchdown >= t_end:
                 break

@@ -21,11 +21,17 @@ Swing drift (an extension, off by default): on a robot whose legs carry a large 
 the DCM gains, over each stance, ``kappa * L`` more than the LIPM predicts (the swing leg's
 angular momentum; Bolt: kappa ~ 0.2, docs/closed_loop.md). The sagittal step relation becomes
 ``(1 - kappa) L + b_next = b E`` and the periodic offset ``b_x = (1 - kappa) L / (E - 1)``.
+
+Heading frame: with a turning command every step is planned in the frame of its stance rotated
+by the planned heading (see :mod:`sequencer.dcm_planner`); the nominal values here are in that
+frame (x along the heading), so they do not depend on the heading. :class:`NominalGait` gathers
+them for one velocity command and one set of LIPM corrections.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from wbmpc.errors import ParameterError
 
@@ -79,3 +85,66 @@ def nominal_dcm_offset(
     b_x = (1.0 - swing_drift) * step_length / (growth - 1.0)
     b_y = stance_sign(stance_foot) * pelvis_width / (1.0 + growth) - v_y * t_nom / (1.0 - growth)
     return b_x, b_y
+
+
+def aimed_dcm_offset(
+    omega: float, step_length: float, pelvis_width: float, v_y: float, t_nom: float, stance_foot: str,
+    swing_drift: float = 0.0, dcm_offset_bias: float = 0.0,
+) -> tuple[float, float]:
+    """The DCM offset the step QP aims at [m]: :func:`nominal_dcm_offset` minus ``dcm_offset_bias`` in x.
+
+    ``dcm_offset_bias`` [m] is how far ahead of the planned offset the DCM is, on average, when
+    the foot lands; aiming that much short makes the next stance start from the nominal offset.
+    """
+    b_x, b_y = nominal_dcm_offset(omega, step_length, pelvis_width, v_y, t_nom, stance_foot, swing_drift)
+    return b_x - dcm_offset_bias, b_y
+
+
+@dataclass(frozen=True, slots=True)
+class NominalGait:
+    """Nominal step and aimed DCM offset of each stance for one command and one set of LIPM corrections.
+
+    Every value is in the heading frame of the stance (x along the heading, y to the left).
+
+    Attributes:
+        v_x, v_y: velocity command [m/s] the gait was computed for.
+        swing_drift: κ [-]; dcm_offset_bias: [m] (the LIPM corrections it was computed with).
+        step_length: l_nom = v_x t_nom [m].
+        per_stance: stance foot -> (w_nom [m], (b_x, b_y) [m]): the nominal lateral step
+            p_T,y - p_0,y and the aimed DCM offset at the touchdown ending that stance.
+    """
+
+    v_x: float
+    v_y: float
+    swing_drift: float
+    dcm_offset_bias: float
+    step_length: float
+    per_stance: dict
+
+    def step_width(self, stance_foot: str) -> float:
+        """Nominal lateral step p_T,y - p_0,y from ``stance_foot`` [m]."""
+        return self.per_stance[stance_foot][0]
+
+    def dcm_offset(self, stance_foot: str) -> tuple[float, float]:
+        """Aimed DCM offset (b_x, b_y) at the touchdown ending a ``stance_foot`` stance [m]."""
+        return self.per_stance[stance_foot][1]
+
+
+def nominal_gait(
+    omega: float, t_nom: float, pelvis_width: float, v_x: float, v_y: float,
+    swing_drift: float = 0.0, dcm_offset_bias: float = 0.0, feet: tuple[str, ...] = FEET,
+) -> NominalGait:
+    """The :class:`NominalGait` of command (v_x, v_y) [m/s] with LIPM corrections (κ [-], bias [m]).
+
+    Computed with the same operations as ``SequencerParams.l_nom``, ``w_nom`` and ``b_nom``, so a
+    gait built from a parameter set's own values equals them bit for bit.
+    """
+    step_length = v_x * t_nom
+    per_stance = {
+        foot: (
+            nominal_step_width(pelvis_width, v_y, t_nom, foot),
+            aimed_dcm_offset(omega, step_length, pelvis_width, v_y, t_nom, foot, swing_drift, dcm_offset_bias),
+        )
+        for foot in feet
+    }
+    return NominalGait(v_x, v_y, swing_drift, dcm_offset_bias, step_length, per_stance)

@@ -17,7 +17,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from sequencer.nominal import nominal_dcm_offset, nominal_step_width, stance_sign
+from sequencer.corrections import check_dcm_offset_bias, check_swing_drift
+from sequencer.nominal import FEET, NominalGait, aimed_dcm_offset, nominal_gait, nominal_step_width, stance_sign
 from wbmpc.config import read_toml
 from wbmpc.errors import ParameterError
 
@@ -34,24 +35,33 @@ class SequencerParams:
         alpha3: weight of the DCM offset error [-], > 0.
         z_c: constant CoM height of the LIPM [m], > 0.
         gravity: gravitational acceleration [m/s^2], > 0.
-        v_x: commanded forward velocity [m/s]; the nominal step length is l_nom = v_x * t_nom.
-        v_y: commanded lateral velocity [m/s] (y to the left).
-        l_min, l_max: bounds on the step length p_T,x - p_0,x [m].
+        v_x: default forward velocity command [m/s] (heading frame); the nominal step length is
+            l_nom = v_x * t_nom. A planner given a command per call
+            (:class:`sequencer.dcm_planner.DcmFootstepPlanner`) uses the command instead.
+        v_y: default lateral velocity command [m/s] (heading frame, y to the left).
+        l_min, l_max: bounds on the step length p_T,x - p_0,x along the stance's heading [m].
         pelvis_width: nominal lateral distance between the feet l_p [m] (Khadiv et al. 2020).
-        w_left_min, w_left_max: bounds on p_T,y - p_0,y while the LEFT foot is in stance [m].
-        w_right_min, w_right_max: bounds on p_T,y - p_0,y while the RIGHT foot is in stance [m].
+        w_left_min, w_left_max: bounds on p_T,y - p_0,y (heading frame) while the LEFT foot is
+            in stance [m].
+        w_right_min, w_right_max: the same while the RIGHT foot is in stance [m].
         t_min, t_nom, t_max: step duration (time from the start of a stance to the next
             touchdown) bounds and nominal value [s], 0 < t_min <= t_nom <= t_max.
         horizon: H_u, Algorithm 1 plans until a touchdown is at or after t0 + horizon [s], > 0.
+        double_support: time both feet stay on the ground after each touchdown [s], in
+            [0, t_min) (0 = point feet, the paper). It shapes the contact schedule only: the
+            swing of the other foot starts double_support after the touchdown; the step QP and
+            the LIPM predictions keep the instantaneous transfer of support at the touchdown.
         swing_drift: kappa in [0, 0.9], forward DCM gain per unit of step length over a stance
             beyond the LIPM [-] (0 = the pure LIPM of the paper, the default). The nominal offset
             becomes ``b_x = (1 - kappa) l_nom / (E - 1)``, the periodic gait of
             ``(1 - kappa) L + b_next = b E`` (see ``sequencer.nominal``). The step QP's dynamics
             stay the LIPM's: the closed loop re-plans every 10 ms from the measured DCM, which
-            takes up the drift of the step in progress.
+            takes up the drift of the step in progress. Initial value only for a planner given a
+            :class:`sequencer.corrections.LipmCorrections` (it reads the live value from it).
         dcm_offset_bias: how far ahead of the planned offset b_T,x the DCM is, on average, when the
             foot has landed [m], |.| <= 0.05 (0 = none, the paper). The nominal offset aimed at is
-            b_x - dcm_offset_bias, so that the offset the next stance starts from is b_x.
+            b_x - dcm_offset_bias, so that the offset the next stance starts from is b_x. Initial
+            value only, as swing_drift.
         name: label of the parameter set (for reports only).
     """
 
@@ -73,6 +83,7 @@ class SequencerParams:
     t_nom: float = 0.3
     t_max: float = 1.0
     horizon: float = 3.0
+    double_support: float = 0.0
     swing_drift: float = 0.0
     dcm_offset_bias: float = 0.0
     name: str = "custom"
@@ -101,10 +112,8 @@ class SequencerParams:
                 raise ParameterError(
                     f"{low}={getattr(self, low)} {unit} must be <= {high}={getattr(self, high)} {unit}"
                 )
-        if not 0.0 <= self.swing_drift <= 0.9:
-            raise ParameterError(f"swing_drift={self.swing_drift} must be in [0, 0.9]")
-        if not abs(self.dcm_offset_bias) <= 0.05:
-            raise ParameterError(f"dcm_offset_bias={self.dcm_offset_bias} m must be in [-0.05, 0.05] m")
+        check_swing_drift(self.swing_drift)
+        check_dcm_offset_bias(self.dcm_offset_bias)
         if not self.t_min > 0:
             raise ParameterError(f"t_min={self.t_min} s must be > 0")
         if not self.t_min <= self.t_nom <= self.t_max:
@@ -112,20 +121,9 @@ class SequencerParams:
                 f"step durations must satisfy 0 < t_min <= t_nom <= t_max, "
                 f"got t_min={self.t_min} s, t_nom={self.t_nom} s, t_max={self.t_max} s"
             )
-        if not self.l_min <= self.l_nom <= self.l_max:
-            raise ParameterError(
-                f"v_x={self.v_x} m/s gives a nominal step length v_x*t_nom={self.l_nom:.4g} m "
-                f"outside [l_min, l_max] = [{self.l_min}, {self.l_max}] m"
-            )
-        for foot in ("left", "right"):
-            low, high = self.width_bounds(foot)
-            nominal = self.w_nom(foot)
-            if not low <= nominal <= high:
-                raise ParameterError(
-                    f"pelvis_width={self.pelvis_width} m and v_y={self.v_y} m/s give a nominal "
-                    f"{foot}-stance width {nominal:.4g} m outside [w_{foot}_min, w_{foot}_max] = "
-                    f"[{low}, {high}] m"
-                )
+        if not 0.0 <= self.double_support < self.t_min:
+            raise ParameterError(f"double_support={self.double_support} s must be in [0, t_min={self.t_min} s)")
+        self.check_velocity(self.v_x, self.v_y)
 
     # ------------------------------------------------------------------ derived values
     @property
@@ -151,10 +149,65 @@ class SequencerParams:
     def b_nom(self, stance_foot: str) -> tuple[float, float]:
         """Nominal DCM offset (b_x, b_y) at touchdown [m], relative to the landing foot (the aim: minus
         ``dcm_offset_bias`` in x)."""
-        b_x, b_y = nominal_dcm_offset(
-            self.omega, self.l_nom, self.pelvis_width, self.v_y, self.t_nom, stance_foot, self.swing_drift
+        return aimed_dcm_offset(
+            self.omega, self.l_nom, self.pelvis_width, self.v_y, self.t_nom, stance_foot, self.swing_drift,
+            self.dcm_offset_bias,
         )
-        return b_x - self.dcm_offset_bias, b_y
+
+    # ------------------------------------------------------------------ velocity commands
+    def velocity_range(self) -> dict[str, tuple[float, float]]:
+        """Velocity commands the bounds allow, heading frame [m/s]: ``{"v_x": (min, max), "v_y": (min, max)}``.
+
+        v_x: ``v_x t_nom`` within [l_min, l_max]. v_y: the nominal width ``-+pelvis_width + v_y t_nom``
+        of both stances within their width bounds (the intersection of the two ranges; min > max
+        when no v_y fits both).
+        """
+        v_y_min, v_y_max = -math.inf, math.inf
+        for foot in FEET:
+            low, high = self.width_bounds(foot)
+            lateral = stance_sign(foot) * self.pelvis_width
+            v_y_min = max(v_y_min, (low + lateral) / self.t_nom)
+            v_y_max = min(v_y_max, (high + lateral) / self.t_nom)
+        return {"v_x": (self.l_min / self.t_nom, self.l_max / self.t_nom), "v_y": (v_y_min, v_y_max)}
+
+    def check_velocity(self, v_x: float, v_y: float) -> None:
+        """Raise ParameterError (naming the component, its value and the allowed range) unless command
+        (v_x, v_y) [m/s] lies within :meth:`velocity_range` (its nominal steps within the step bounds).
+
+        The check is on the range itself, so a command clipped to :meth:`velocity_range` always passes.
+        """
+        v_x_min, v_x_max = self.l_min / self.t_nom, self.l_max / self.t_nom
+        if not v_x_min <= v_x <= v_x_max:
+            raise ParameterError(
+                f"v_x={v_x} m/s gives a nominal step length v_x*t_nom={v_x * self.t_nom:.4g} m outside [l_min, l_max] "
+                f"= [{self.l_min}, {self.l_max}] m: v_x must lie within [{v_x_min:.4g}, {v_x_max:.4g}] m/s"
+            )
+        for foot in FEET:
+            low, high = self.width_bounds(foot)
+            lateral = stance_sign(foot) * self.pelvis_width
+            if not (low + lateral) / self.t_nom <= v_y <= (high + lateral) / self.t_nom:
+                v_y_min, v_y_max = self.velocity_range()["v_y"]
+                allowed = (f"v_y must lie within [{v_y_min:.4g}, {v_y_max:.4g}] m/s" if v_y_min <= v_y_max
+                           else "no v_y fits the width bounds of both stances")
+                nominal = nominal_step_width(self.pelvis_width, v_y, self.t_nom, foot)
+                raise ParameterError(
+                    f"pelvis_width={self.pelvis_width} m and v_y={v_y} m/s give a nominal {foot}-stance width "
+                    f"{nominal:.4g} m outside [w_{foot}_min, w_{foot}_max] = [{low}, {high}] m: {allowed}"
+                )
+
+    def nominal_gait(self, v_x: float | None = None, v_y: float | None = None, swing_drift: float | None = None,
+                     dcm_offset_bias: float | None = None) -> NominalGait:
+        """Nominal steps and aimed DCM offsets for a command and LIPM corrections (None = this set's own).
+
+        Raises:
+            ParameterError: the command is outside :meth:`velocity_range` or a correction out of range.
+        """
+        v_x = self.v_x if v_x is None else float(v_x)
+        v_y = self.v_y if v_y is None else float(v_y)
+        swing_drift = self.swing_drift if swing_drift is None else check_swing_drift(swing_drift)
+        dcm_offset_bias = self.dcm_offset_bias if dcm_offset_bias is None else check_dcm_offset_bias(dcm_offset_bias)
+        self.check_velocity(v_x, v_y)
+        return nominal_gait(self.omega, self.t_nom, self.pelvis_width, v_x, v_y, swing_drift, dcm_offset_bias)
 
     # ------------------------------------------------------------------ presets and I/O
     @classmethod

@@ -2,8 +2,9 @@
 
 A footstep planner decides where and when each foot lands. The walking controller calls it at
 every replan with the current stance, the measured reduced state it needs and the velocity
-command, and samples the returned :class:`~sequencer.horizon.FootstepPlan` on the OCP grid
-(:func:`sequencer.schedule.contact_schedule`). The DCM step QP (:mod:`sequencer.dcm_planner`)
+command, samples the returned :class:`~sequencer.horizon.FootstepPlan` on the OCP grid
+(:func:`sequencer.schedule.contact_schedule`) and takes its CoM reference from the plan
+(:meth:`~sequencer.horizon.FootstepPlan.com_reference`, model-neutral). The DCM step QP (:mod:`sequencer.dcm_planner`)
 implements it; a second planner (the ALIP step-to-step NMPC) is one more module implementing
 :class:`FootstepPlanner`, and the controller does not know which one it runs.
 
@@ -157,3 +158,8 @@ class FootstepPlanner(Protocol):
     def check_command(self, command: VelocityCommand) -> None:
         """Raise ParameterError (naming the component, its value and the allowed range) when
         ``command`` cannot be planned with this planner's bounds; called before a run starts."""
+
+    def command_range(self) -> dict[str, tuple[float, float]]:
+        """``{"v_x": (min, max), "v_y": (min, max), "yaw_rate": (min, max)}`` [m/s, m/s, rad/s], heading
+        frame: the commands :meth:`check_command` accepts (infinite where the planner has no bound).
+        A controller clips a corrected command to it before :meth:`plan`."""

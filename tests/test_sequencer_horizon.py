@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from sequencer import FootstepSequencer, InfeasibleStep, SequencerParams
+from sequencer import FootstepSequencer, InfeasibleStep, SequencerParams, StepProblem
 from wbmpc.errors import ParameterError
 
 TABLE_I_STATE = dict(t=0.229, stance_foot="left", stance_position=np.array([-0.12, 0.10]),
@@ -166,3 +166,16 @@ def test_scalar_and_vector_com_predictions_agree():
     vector = plan.lipm_com_at(times, com0)
     for t, expected in zip(times, vector):
         assert plan.lipm_com_at(float(t), com0) == pytest.approx(expected, abs=1e-12, rel=1e-12)
+
+
+def test_the_sequencer_problem_is_the_params_problem_and_the_gait_is_kept():
+    params = dataclasses.replace(SequencerParams.table_i(), swing_drift=0.1)
+    seq = FootstepSequencer(params)
+    for foot in ("left", "right"):
+        built, expected = seq.problem(foot, [0.1, 0.2], [0.15, 0.1], 0.05), StepProblem.from_params(
+            params, foot, [0.1, 0.2], [0.15, 0.1], 0.05)
+        for field in dataclasses.fields(StepProblem):
+            assert np.array_equal(getattr(built, field.name), getattr(expected, field.name)), field.name
+    gait = seq.nominal_gait((0.2, 0.1))
+    assert seq.nominal_gait((0.2, 0.1)) is gait  # the last distinct command is kept
+    assert seq.nominal_gait() is not gait and seq.nominal_gait().v_x == params.v_x

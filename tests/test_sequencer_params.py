@@ -75,3 +75,33 @@ def test_toml_round_trip_and_errors(tmp_path):
         SequencerParams.from_toml(tmp_path / "missing.toml")
     with pytest.raises(ParameterError, match=r"preset='walk' is not known \(available: \['bolt_walking', 'table_i'\]\)"):
         SequencerParams.preset("walk")
+
+
+@pytest.mark.parametrize("preset", ["table_i", "bolt_walking"])
+def test_nominal_gait_of_the_own_values_is_l_nom_w_nom_b_nom_bit_for_bit(preset):
+    p = dataclasses.replace(SequencerParams.preset(preset), v_y=0.05, swing_drift=0.2, dcm_offset_bias=0.01)
+    gait = p.nominal_gait()
+    assert gait.step_length == p.l_nom
+    for foot in ("left", "right"):
+        assert gait.step_width(foot) == p.w_nom(foot)
+        assert gait.dcm_offset(foot) == p.b_nom(foot)
+    other = p.nominal_gait(v_x=0.2, v_y=0.0, swing_drift=0.0, dcm_offset_bias=0.0)
+    rebuilt = dataclasses.replace(p, v_x=0.2, v_y=0.0, swing_drift=0.0, dcm_offset_bias=0.0)
+    assert other.step_length == rebuilt.l_nom and other.dcm_offset("right") == rebuilt.b_nom("right")
+    with pytest.raises(ParameterError, match=r"swing_drift=1.0 must be in \[0, 0.9\]"):
+        p.nominal_gait(swing_drift=1.0)
+    with pytest.raises(ParameterError, match=r"v_x=-2.0 m/s .* v_x must lie within"):
+        p.nominal_gait(v_x=-2.0)
+
+
+def test_velocity_range_and_the_commands_it_admits():
+    p = SequencerParams.table_i()
+    assert p.velocity_range() == {"v_x": pytest.approx((-1.0, 1.0)), "v_y": pytest.approx((-0.5, 0.5))}
+    low, high = p.velocity_range()["v_x"]
+    p.check_velocity(low, 0.0)
+    p.check_velocity(high, 0.0)
+    with pytest.raises(ParameterError, match=r"v_x=1.01 m/s gives a nominal step length"):
+        p.check_velocity(1.01, 0.0)
+    with pytest.raises(ParameterError, match=r"v_y=0.51 m/s give a nominal left-stance width -0.097 m outside "
+                                             r"\[w_left_min, w_left_max\] = \[-0.4, -0.1\] m"):
+        p.check_velocity(0.0, 0.51)

@@ -40,6 +40,7 @@ _HELP = {
     "t_nom": "nominal step duration [s]",
     "t_max": "max step duration [s]",
     "horizon": "H_u: plan until a touchdown at or after t + horizon [s]",
+    "double_support": "time both feet stay on the ground after each touchdown, in [0, t_min) (0 = point feet) [s]",
     "swing_drift": "kappa: DCM gain over the LIPM per unit of step length (0 = the paper's LIPM) [-]",
     "dcm_offset_bias": "measured minus planned sagittal DCM offset at touchdown, aimed off (0 = none) [m]",
 }

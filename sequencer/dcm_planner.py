@@ -1,0 +1,159 @@
+"""The DCM step QP behind the :class:`~sequencer.planner.FootstepPlanner` interface, omnidirectional.
+
+:class:`DcmFootstepPlanner` runs Algorithm 1 of Roux et al. 2024 (the one-step QP of eqs. 2-5,
+repeated over the horizon H_u, eqs. 13-16; :class:`sequencer.horizon.FootstepSequencer`) with a
+velocity command (v_x, v_y, yaw_rate) given at each call, and the live LIPM corrections of
+:class:`sequencer.corrections.LipmCorrections`.
+
+Heading frame (turning and lateral walking)
+-------------------------------------------
+Each step's QP is written in the frame of its stance rotated about z by the planned heading ψ_k
+(x along the heading, y to the left). With R(ψ) the rotation about z, stance foothold p_k, DCM
+ζ_k at the start of stance k, and the step QP's solution ℓ_k = p_{k+1} - p_k and b_{k+1} (offset
+at touchdown) in that frame::
+
+    ψ_0 = stance yaw,        ψ_{k+1} = ψ_k + yaw_rate · T_k       (T_k: planned duration of step k)
+    QP_k in frame ψ_k:       p0 -> R(ψ_k)ᵀ p_k,  ζ -> R(ψ_k)ᵀ ζ_k
+    p_{k+1} = p_k + R(ψ_k) ℓ_k,     b_{k+1} = R(ψ_k) b^h_{k+1},     ζ_{k+1} = p_{k+1} + b_{k+1}
+
+so the footholds compose as in eq. (16) of the ALIP paper ("Hierarchical Reduced-Order Model
+Predictive Control for Robust Locomotion on Humanoid Robots", the G1 step planner): the stance
+foot positions relative to the current stance are p_k - p_0 = Σ_{i=1..k} R_z(ψ_{i-1}) ℓ_i. The first step's
+duration T_0 counts from the start of the current stance, so the planned yaw of the next
+foothold does not move while a stance goes on. This is exact: the LIPM (ζ̇ = ω (ζ - p)) commutes
+with rotations about z, so the rotated QP is the same problem, and only its nominal values and
+bounds, which are given along the heading, change meaning: the command (v_x, v_y) is in the
+heading frame, and the nominal step (l_nom = v_x t_nom, w_nom = -+pelvis_width + v_y t_nom), the
+nominal DCM offsets and the length and width bounds apply per step in the step's own frame.
+Without turning (yaw_rate = 0) and with the stance yaw 0 no rotation is applied: the plan is the
+paper's, bit for bit. Each :class:`~sequencer.horizon.PlannedStep` carries its foothold ``yaw``
+ψ_{k+1}; yaws are not wrapped.
+
+Command and corrections per call
+--------------------------------
+The command is not written into the frozen :class:`~sequencer.params.SequencerParams`: the
+nominal steps and offsets are computed from the command and the corrections object when either
+changes (a few exponentials; the last distinct pair is kept). ``SequencerParams.v_x``/``v_y`` are
+the preset's nominal command (:attr:`DcmFootstepPlanner.nominal_command`) and its
+``swing_drift``/``dcm_offset_bias`` the corrections' initial values.
+"""
+
+from __future__ import annotations
+
+import math
+
+from sequencer.corrections import LipmCorrections
+from sequencer.horizon import FootstepPlan, FootstepSequencer
+from sequencer.nominal import FEET
+from sequencer.params import SequencerParams
+from sequencer.planner import ReducedState, StanceState, VelocityCommand
+from wbmpc.errors import ParameterError
+
+
+class DcmFootstepPlanner:
+    """Footstep planner of the DCM step QP (Algorithm 1), implementing :class:`~sequencer.planner.FootstepPlanner`.
+
+    Args:
+        params: SequencerParams (weights, bounds, timing, horizon; ``v_x``/``v_y`` are only the
+            nominal command, ``swing_drift``/``dcm_offset_bias`` the corrections' initial values).
+        backend: QP backend, ``"exact"`` (closed form, the default), ``"osqp"`` or ``"proxqp"``.
+        corrections: the live LIPM corrections, read at every plan; None = a new object holding
+            the params' values (then :attr:`corrections` is the one to update).
+        clamp_elapsed: a stance older than t_max (late touchdown) is planned as if its elapsed
+            time were t_max (touchdown now) instead of raising InfeasibleStep (the closed loop's
+            behaviour, the default).
+
+    Attributes:
+        params, corrections, clamp_elapsed: as given.
+        sequencer: the :class:`~sequencer.horizon.FootstepSequencer` running Algorithm 1.
+    """
+
+    feet: tuple[str, ...] = FEET
+
+    def __init__(self, params: SequencerParams, backend: str = "exact", corrections: LipmCorrections | None = None,
+                 clamp_elapsed: bool = True) -> None:
+        if corrections is not None and not isinstance(corrections, LipmCorrections):
+            raise ParameterError(f"corrections must be a LipmCorrections or None, got {type(corrections).__name__}")
+        if not isinstance(clamp_elapsed, bool):
+            raise ParameterError(f"clamp_elapsed={clamp_elapsed!r} must be True or False")
+        self.sequencer = FootstepSequencer(params, backend=backend)
+        self.params = params
+        self.corrections = LipmCorrections.from_params(params) if corrections is None else corrections
+        self.clamp_elapsed = clamp_elapsed
+
+    # ------------------------------------------------------------------ model
+    @property
+    def omega(self) -> float:
+        """LIPM natural frequency sqrt(gravity / z_c) [1/s]."""
+        return self.params.omega
+
+    @property
+    def com_height(self) -> float:
+        """LIPM CoM height z_c [m]."""
+        return self.params.z_c
+
+    @property
+    def double_support(self) -> float:
+        """Both feet on the ground after each touchdown for this long [s] (``params.double_support``)."""
+        return self.params.double_support
+
+    @property
+    def backend(self) -> str:
+        """Name of the QP backend."""
+        return self.sequencer.backend_name
+
+    @property
+    def nominal_command(self) -> VelocityCommand:
+        """The preset's command (params.v_x, params.v_y, no turning)."""
+        return VelocityCommand(self.params.v_x, self.params.v_y, 0.0)
+
+    # ------------------------------------------------------------------ commands
+    def command_range(self) -> dict[str, tuple[float, float]]:
+        """(min, max) of each command component the bounds allow, heading frame.
+
+        ``v_x`` [m/s]: v_x t_nom within [l_min, l_max]; ``v_y`` [m/s]: -+pelvis_width + v_y t_nom
+        within both stances' width bounds; ``yaw_rate`` [rad/s]: (-inf, inf), the step QP has no
+        bound on it (a robot that cannot turn refuses it elsewhere). A command clipped to these
+        ranges passes :meth:`check_command`.
+        """
+        return {**self.params.velocity_range(), "yaw_rate": (-math.inf, math.inf)}
+
+    def check_command(self, command: VelocityCommand) -> None:
+        """Raise ParameterError, naming the component, its value and the allowed range, when
+        ``command`` is outside :meth:`command_range`."""
+        command = _velocity_command(command)
+        self.params.check_velocity(command.v_x, command.v_y)
+
+    # ------------------------------------------------------------------ planning
+    def plan(self, t: float, stance: StanceState, measured: ReducedState, command: VelocityCommand) -> FootstepPlan:
+        """Footsteps from time ``t`` [s] until a touchdown at or after t + params.horizon.
+
+        Uses the stance's foot, position, yaw (the heading ψ_0) and start time, the measured DCM
+        (``measured.dcm``, world (x, y), with this planner's ω), the command and the current
+        values of :attr:`corrections`.
+
+        Raises:
+            ParameterError: bad input, or a command outside :meth:`command_range` (clip it first).
+            sequencer.step_qp.StepQPError: the step QP failed (``clamp_elapsed=False`` and a late
+                touchdown, or a backend failure); a control loop keeps its last plan.
+        """
+        if not isinstance(stance, StanceState):
+            raise ParameterError(f"stance must be a StanceState, got {type(stance).__name__}")
+        if not isinstance(measured, ReducedState):
+            raise ParameterError(f"measured must be a ReducedState, got {type(measured).__name__}")
+        if stance.foot not in self.feet:
+            raise ParameterError(f"stance foot={stance.foot!r} must be one of {self.feet}")
+        command = _velocity_command(command)
+        return self.sequencer.plan(
+            t, stance.foot, stance.position, measured.dcm, stance.t_start, self.clamp_elapsed,
+            stance_yaw=stance.yaw, yaw_rate=command.yaw_rate, velocity=(command.v_x, command.v_y),
+            corrections=self.corrections,
+        )
+
+
+def _velocity_command(command) -> VelocityCommand:
+    if isinstance(command, VelocityCommand):
+        return command
+    if isinstance(command, (tuple, list)):
+        return VelocityCommand.from_tuple(command)
+    raise ParameterError(f"command must be a VelocityCommand or (v_x, v_y, yaw_rate), got {type(command).__name__}")
