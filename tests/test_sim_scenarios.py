@@ -81,11 +81,12 @@ def test_slip_patch_lies_on_the_chosen_track(side, track_y):
 
 def test_transition_command_changes_at_the_switch_and_walk_ramps():
     scenario = make_scenario("transition")
-    assert scenario.velocity_command(4.99) == (0.0, 0.0)
-    assert scenario.velocity_command(5.0) == (0.3, 0.0)
-    walk = make_scenario("walk", speed=0.3, ramp_time=2.0)
-    assert walk.velocity_command(0.5) == pytest.approx((0.075, 0.0))
-    assert walk.velocity_command(2.5) == (0.3, 0.0)
+    assert scenario.velocity_command(4.99) == (0.0, 0.0, 0.0)
+    assert scenario.velocity_command(5.0) == (0.3, 0.0, 0.0)
+    walk = make_scenario("walk", speed=0.3, ramp_time=2.0, lateral_speed=0.1, yaw_rate=0.2)
+    assert walk.velocity_command(0.5) == pytest.approx((0.075, 0.025, 0.05))
+    assert walk.velocity_command(2.5) == (0.3, 0.1, 0.2)
+    assert walk.commands() == [(0.3, 0.1, 0.2)]
 
 
 def test_stance_tracker_switches_at_the_planned_touchdown_or_on_contact():
@@ -120,7 +121,7 @@ def _synthetic_log(t, velocity_x, command_x, events=None):
     n = len(t)
     velocity = np.zeros((n, 3))
     velocity[:, 0] = velocity_x
-    command = np.zeros((n, 2))
+    command = np.zeros((n, 3))
     command[:, 0] = command_x
     x = np.zeros((n, 25))
     x[:, 0] = np.cumsum(velocity_x) * (t[1] - t[0])

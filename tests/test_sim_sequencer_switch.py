@@ -54,7 +54,8 @@ def test_a_switch_to_another_com_height_is_refused_before_the_run():
     robot = load_robot("bolt")
     other = dataclasses.replace(default_sequencer_params(), z_c=0.25)
     controller = WalkingController(load_walking_preset("bolt", {"n_nodes": 10, "sequencer_params_from": (1.0, other)}))
-    with pytest.raises(ParameterError, match=r"sequencer_params_from: the later planner's omega=6.264 1/s must equal"):
+    message = r"sequencer_params_from: the later planner's omega=6.26418 1/s must equal the first one's 5.76665 1/s"
+    with pytest.raises(ParameterError, match=message):
         controller.reset(robot, np.concatenate([robot.q_reference, robot.v_reference]), 0.0)
 
 

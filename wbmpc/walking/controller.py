@@ -96,8 +96,7 @@ class WalkingController:
         self.omega = self.planning.omega
         self.feet = self.planning.feet
         self.reference_stage = OcpReferenceStage(self.feet, cfg.n_nodes, cfg.node_dt,
-                                                 cfg.touchdown_detection == "contact", cfg.touchdown_wait_nodes,
-                                                 planner.com_height)
+                                                 cfg.touchdown_detection == "contact", cfg.touchdown_wait_nodes)
         self.mpc = WalkingMPC(robot, preset.ocp, n_nodes=cfg.n_nodes, dt=cfg.node_dt, max_iterations=cfg.max_iterations,
                               horizon_end=cfg.mpc_horizon_end, time_budget=cfg.mpc_time_budget, solver=self.mpc_solver)
         self.feedback = FeedbackLaw(self.mpc.ocp.state, cfg.node_dt, cfg.delay_nodes, cfg.interpolate, cfg.feedback,

@@ -18,7 +18,7 @@ import numpy as np
 import pinocchio as pin
 
 from sequencer.dcm_planner import DcmFootstepPlanner
-from sequencer.planner import FootstepPlanner, ReducedState, VelocityCommand
+from sequencer.planner import FootstepPlanner, ReducedState, StanceState, VelocityCommand
 from wbmpc.errors import ParameterError, SolverError
 from wbmpc.walking.controller_config import WalkingControllerConfig
 from wbmpc.walking.estimators import LipmCorrectionEstimator, StanceSlide, VelocityIntegral, rotate_xy
@@ -72,6 +72,7 @@ class PlanningStage:
                 config.lipm_correction_max_slide,
             )
         self.command = VelocityCommand()
+        self._range = planner.command_range()
         self.plan = None
         self.planner_time = 0.0  # [s], total wall time in the planner
 
@@ -99,14 +100,22 @@ class PlanningStage:
         self.plan = None
 
     def set_command(self, command: VelocityCommand) -> None:
-        """The velocity command of the next plans (heading frame)."""
-        self.command = VelocityCommand.from_tuple(command)
+        """The velocity command of the next plans (heading frame).
+
+        Raises:
+            ParameterError: the planner cannot plan it (names the component and the range).
+        """
+        command = VelocityCommand.from_tuple(command)
+        self.planner.check_command(command)
+        self.command = command
 
     @property
     def planned_command(self) -> VelocityCommand:
-        """The command handed to the planner: the user's plus the speed integral's correction."""
+        """The command handed to the planner: the user's plus the speed integral's correction,
+        within the planner's command range (the correction may not push it outside)."""
         c = self.command
-        return VelocityCommand(c.v_x + self.velocity_integral.correction, c.v_y, c.yaw_rate)
+        low, high = self._range["v_x"]
+        return VelocityCommand(min(max(c.v_x + self.velocity_integral.correction, low), high), c.v_y, c.yaw_rate)
 
     # ------------------------------------------------------------------ every replan
     def update(self, t: float, x: np.ndarray, foot_in_contact: np.ndarray) -> tuple[Any, ReducedState, dict]:
@@ -125,7 +134,7 @@ class PlanningStage:
         slide = self.slide.measure(stance.position, feet[stance_index, :2])
         switched = self.stance.update(
             t, None if first is None else first.foot, None if first is None else first.touchdown_time,
-            stance.t_start, feet, foot_in_contact, 0.0 if first is None else float(getattr(first, "yaw", 0.0)),
+            stance.t_start, feet, foot_in_contact, 0.0 if first is None else first.yaw,
         )
         stance = self.stance.state
         stance_index = self.feet.index(stance.foot)
@@ -161,7 +170,7 @@ class PlanningStage:
             "dcm_offset_bias": np.nan if self.lipm is None else self.lipm.corrections.dcm_offset_bias,
         }
         tic = time.perf_counter()
-        planned_stance = type(stance)(stance.foot, self.slide.plan_position, stance.yaw, stance.t_start)
+        planned_stance = StanceState(stance.foot, self.slide.plan_position, stance.yaw, stance.t_start)
         try:
             self.plan = self.planner.plan(t, planned_stance, measured, command)
         except SolverError:  # e.g. an infeasible step QP: keep following the last plan
@@ -182,4 +191,5 @@ class PlanningStage:
         if self.lipm is not None and isinstance(planner, DcmFootstepPlanner):
             planner.corrections = self.lipm.corrections
         self.planner = planner
+        self._range = planner.command_range()
         self._planner_after = None

@@ -44,15 +44,13 @@ class OcpReferenceStage:
         wait_for_contact: with contact touchdown detection, delay a due but unmeasured touchdown
             by ``wait_nodes`` nodes (see :func:`~wbmpc.walking.stance.delay_to_touchdown`).
         wait_nodes: see above.
-        com_height: the planner model's CoM height [m] (terminal z reference).
     """
 
     def __init__(self, feet: tuple[str, ...], n_nodes: int, node_dt: float, wait_for_contact: bool,
-                 wait_nodes: int, com_height: float) -> None:
+                 wait_nodes: int) -> None:
         self.feet = tuple(feet)
         self.n_nodes, self.node_dt = int(n_nodes), float(node_dt)
         self.wait_for_contact, self.wait_nodes = bool(wait_for_contact), int(wait_nodes)
-        self.com_height = float(com_height)
 
     def sample(self, plan: Any, t: float, com_xy: np.ndarray, foot_in_contact: np.ndarray) -> OcpReference:
         """The OCP reference of the update at ``t`` [s] from ``plan``; ``com_xy`` (2,) [m] is the
@@ -64,5 +62,5 @@ class OcpReferenceStage:
             sampled, wait = delay_to_touchdown(plan, t, bool(foot_in_contact[swing_foot]), self.node_dt,
                                                self.wait_nodes)
         schedule = contact_schedule(sampled, t, self.node_dt, self.n_nodes, rounding="nearest")
-        com_xy_end = np.asarray(plan.lipm_com_at(t + self.n_nodes * self.node_dt, com_xy), dtype=float)
-        return OcpReference(schedule, np.array([com_xy_end[0], com_xy_end[1], self.com_height]), wait)
+        com_end = plan.com_reference(t + self.n_nodes * self.node_dt, com_xy)
+        return OcpReference(schedule, np.asarray(com_end, dtype=float), wait)
