@@ -191,12 +191,10 @@ def _run(args: argparse.Namespace) -> int:
         if on_tick is not None:
             on_tick.close()
     figures = []
-    from sim.plots import save_figures
+    for path in ([os.path.join(args.out, "figures.png")] if args.out else []) + ([args.plot] if args.plot else []):
+        from sim.plots import save_figures
 
-    if args.out:
-        figures.append(save_figures(log, os.path.join(args.out, "figures.png")))
-    if args.plot:
-        figures.append(save_figures(log, args.plot))
+        figures.append(save_figures(log, path))
     if args.render:
         from sim.render import render_run
 
