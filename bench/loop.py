@@ -25,6 +25,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--duration", type=float, default=5.0, help="simulated time [s]")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--scenario", default="walk", help="scenario to run (default: walk)")
+    parser.add_argument("--robot", default="bolt", metavar="NAME", help="robot (default: bolt)")
     parser.add_argument(
         "--max-iterations", type=int, default=None, help="FDDP iterations per MPC update (default: the controller's, 1)"
     )
@@ -34,8 +35,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _bare_step_time(n_steps: int = 3000) -> float:
-    """Wall time of one bare ``mj_step`` of Bolt standing [s] (median of 3 batches)."""
+def _bare_step_time(robot_name: str = "bolt", n_steps: int = 3000) -> float:
+    """Wall time of one bare ``mj_step`` of the robot standing [s] (median of 3 batches)."""
     import mujoco
     import numpy as np
 
@@ -43,7 +44,7 @@ def _bare_step_time(n_steps: int = 3000) -> float:
     from robots.conventions import pinocchio_to_mujoco_state
     from robots.mujoco_model import build_mujoco_spec
 
-    robot = load_robot("bolt")
+    robot = load_robot(robot_name)
     model = build_mujoco_spec(robot, link_collisions=True).compile()
     data = mujoco.MjData(model)
     batches = []
@@ -131,7 +132,7 @@ def _run_loop(args: argparse.Namespace, controller_class=None):
     from wbmpc.walking.controller import WalkingController
     from wbmpc.walking.preset import load_walking_preset
 
-    robot = getattr(args, "robot", "bolt")
+    robot = args.robot
     extra = {} if args.max_iterations is None else {"max_iterations": args.max_iterations}
     controller = (controller_class or WalkingController)(load_walking_preset(robot, extra))
     log = run_scenario(args.scenario, robot=robot, duration=args.duration, seed=args.seed, progress=False,
@@ -142,7 +143,7 @@ def _run_loop(args: argparse.Namespace, controller_class=None):
 def run(args: argparse.Namespace) -> dict:
     import numpy as np
 
-    bare = _bare_step_time()
+    bare = _bare_step_time(args.robot)
     log, controller = _run_loop(args)
     timing = dict(log.timing)
     total = timing["loop"]  # the ticks; the setup (models, cold first solve) is reported apart
@@ -186,6 +187,7 @@ def run(args: argparse.Namespace) -> dict:
     return {
         "baseline": baseline,
         "scenario": args.scenario,
+        "robot": args.robot,
         "max_iterations": controller.config.max_iterations,
         "status": log.status,
         "simulated_time": simulated,

@@ -83,21 +83,62 @@ def plot_velocity(log, axes=None):
     return axes
 
 
+EQUAL_ASPECT_MAX_RATIO = 4.0  # plane panel: equal x-y scales while the longer extent is at most this times the shorter
+
+
+def plane_limits(x: np.ndarray, y: np.ndarray, aspect: float, margin: float = 0.05) -> tuple[tuple, tuple, bool]:
+    """Axis limits of the ground-plane panel from the data drawn in it (NaN ignored).
+
+    Args:
+        x, y: the drawn points [m].
+        aspect: the panel's height over its width (display units).
+        margin: share of each extent added on both sides.
+
+    Returns:
+        (xlim, ylim, equal): equal scales when the data's extents are comparable (the longer at most
+        ``EQUAL_ASPECT_MAX_RATIO`` times the other, once the panel's shape is taken out); else each
+        axis spans its own data, so a 20 m walk keeps its ±0.1 m lateral sway readable.
+    """
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    keep = np.isfinite(x) & np.isfinite(y)
+    if not keep.any():
+        return (-1.0, 1.0), (-1.0, 1.0), True
+    x, y = x[keep], y[keep]
+    extent_x, extent_y = max(np.ptp(x), 0.02), max(np.ptp(y), 0.02)  # at least 2 cm: a still robot
+    centre_x, centre_y = (x.min() + x.max()) / 2, (y.min() + y.max()) / 2
+    ratio = (extent_x * aspect) / extent_y
+    equal = 1.0 / EQUAL_ASPECT_MAX_RATIO <= ratio <= EQUAL_ASPECT_MAX_RATIO
+    if equal:  # grow the shorter extent to the panel's shape
+        extent_x, extent_y = max(extent_x, extent_y / aspect), max(extent_y, extent_x * aspect)
+    half_x, half_y = (0.5 + margin) * extent_x, (0.5 + margin) * extent_y
+    return (centre_x - half_x, centre_x + half_x), (centre_y - half_y, centre_y + half_y), equal
+
+
 def plot_plane(log, ax=None):
-    """Foot contacts and DCM in the ground plane, x-y [m]."""
+    """Foot contacts and DCM in the ground plane, x-y [m] (limits from the data: :func:`plane_limits`)."""
     plt = _pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 3))
     ticks = log.ticks
     ax.plot(ticks["dcm"][:, 0], ticks["dcm"][:, 1], color=COLORS["dcm"], lw=0.8, label="DCM")
     ax.plot(ticks["com"][:, 0], ticks["com"][:, 1], color=COLORS["com"], lw=0.8, label="CoM")
+    xs, ys = [ticks["dcm"][:, 0], ticks["com"][:, 0]], [ticks["dcm"][:, 1], ticks["com"][:, 1]]
     for j, foot in enumerate(("left", "right")[: ticks["feet"].shape[1]]):
         contact = ticks["foot_contact"][:, j]
         ax.scatter(ticks["feet"][contact, j, 0], ticks["feet"][contact, j, 1], s=2, color=COLORS[foot], label=foot)
+        xs.append(ticks["feet"][contact, j, 0])
+        ys.append(ticks["feet"][contact, j, 1])
+    bbox = ax.get_position()
+    figure_width, figure_height = ax.figure.get_size_inches()
+    aspect = (bbox.height * figure_height) / (bbox.width * figure_width)
+    xlim, ylim, equal = plane_limits(np.concatenate(xs), np.concatenate(ys), aspect)
+    ax.set_xlim(*xlim)
+    ax.set_ylim(*ylim)
+    if equal:
+        ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(loc="upper right", fontsize=7, ncol=4)
+    ax.set_ylabel("y [m]" if equal else "y [m] (scale ≠ x)")
+    ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), fontsize=7, ncol=4, frameon=False)  # above the data
     return ax
 
 

@@ -13,6 +13,9 @@ Each tick (``model.opt.timestep``, 1 ms):
 5. ``tau = controller.compute(...)``, clipped to the robot's torque limits, written to ``data.ctrl``;
 6. the scenario acts (pushes), then ``mj_step``.
 
+The tick logs grow by chunks of ``LOG_CHUNK_TICKS`` rows as the run goes (no allocation for
+the whole duration up front: a long or open-ended ``duration`` costs memory only for the ticks run).
+
 The log and ``metrics.json`` are written to ``out`` (when given) in a ``finally`` block, so a fall,
 an exception or Ctrl-C still leaves a complete record of what happened up to that point.
 """
@@ -24,7 +27,7 @@ import gc
 import sys
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import pinocchio as pin
@@ -41,6 +44,7 @@ from wbmpc.walking.pd import JointPDController
 from wbmpc.walking.preset import WalkingPreset, available_walking_presets, is_preset_override, load_walking_preset
 
 CONTROLLERS = ("walking", "pd")
+LOG_CHUNK_TICKS = 10_000  # rows of the tick logs allocated at a time (10 s at 1 kHz, ~7 MB for Bolt)
 
 
 @dataclass(frozen=True)
@@ -91,6 +95,7 @@ def run_scenario(
     out: str | None = None,
     controller: "str | Controller" = "walking",
     velocity_command: Any = None,
+    on_tick: Callable[[Any, Any], None] | None = None,
     **params: Any,
 ) -> RunLog:
     """Run scenario ``name`` in closed loop and return its log (metrics included).
@@ -112,6 +117,8 @@ def run_scenario(
             (:func:`wbmpc.walking.preset.load_walking_preset`: controller fields by name,
             ``"planner.l_max"``-style keys, whole sections ``planner=``/``ocp=``; the legacy
             ``sequencer_params=`` is the ``planner`` section); ``kp``, ``kd`` for "pd".
+        on_tick: optional observer ``on_tick(mj_model, mj_data)`` called after every ``mj_step``
+            (e.g. a live viewer, :class:`sim.render.LiveViewer`); it must not change the state.
 
     Returns:
         The :class:`RunLog`; ``status`` tells whether the run completed or fell.
@@ -187,7 +194,7 @@ def run_scenario(
             "steady_start": scenario_cls.steady_start,
         },
     )
-    return _ClosedLoop(scenario, ctrl, options, robot, duration, int(seed), log, out, preset).run()
+    return _ClosedLoop(scenario, ctrl, options, robot, duration, int(seed), log, out, preset, on_tick).run()
 
 
 def check_commands(preset: WalkingPreset, scenario) -> None:
@@ -211,9 +218,11 @@ def _jsonable_param(value: Any) -> Any:
 class _ClosedLoop:
     """One run's simulation state (built and used by :func:`run_scenario` only)."""
 
-    def __init__(self, scenario, controller, options, robot_name, duration, seed, log, out, preset) -> None:
+    def __init__(self, scenario, controller, options, robot_name, duration, seed, log, out, preset,
+                 on_tick=None) -> None:
         self.scenario, self.controller, self.options, self.preset = scenario, controller, options, preset
         self.robot_name, self.duration, self.seed, self.log, self.out = robot_name, duration, seed, log, out
+        self.on_tick = on_tick
 
     def _build(self) -> None:
         import mujoco
@@ -255,8 +264,9 @@ class _ClosedLoop:
                 f"time step {self.dt} s"
             )
 
-    def _allocate(self) -> dict[str, np.ndarray]:
-        n, n_feet = self.n_ticks, len(self.feet)
+    def _allocate(self, start: int) -> dict[str, np.ndarray]:
+        """The next chunk of the tick logs: rows for ticks ``start`` .. ``start + LOG_CHUNK_TICKS`` (or the end)."""
+        n, n_feet = min(LOG_CHUNK_TICKS, self.n_ticks - start), len(self.feet)
         return {
             "t": np.zeros(n),
             "qpos": np.zeros((n, self.mj_model.nq)),
@@ -286,10 +296,11 @@ class _ClosedLoop:
         timing = {"simulation": 0.0, "replan": 0.0, "feedback": 0.0, "logging": 0.0, "setup": 0.0, "total": 0.0}
         wall_start = time.perf_counter()
         bar = None
-        ticks: dict[str, np.ndarray] = {}
+        chunks: list[dict[str, np.ndarray]] = []  # the tick logs, LOG_CHUNK_TICKS rows each
         try:
             self._build()
-            ticks = self._allocate()
+            chunks.append(self._allocate(0))
+            ticks, row0 = chunks[-1], 0  # the chunk being filled and the tick of its first row
             timing["setup"] = time.perf_counter() - wall_start
             # The models, solvers and buffers built above live for the whole run: move them out of
             # the collector's reach, so a full collection in the loop (~35 ms with them) stays short.
@@ -304,9 +315,14 @@ class _ClosedLoop:
                 bar = tqdm(total=round(self.duration, 3), unit="s", desc=f"{log.scenario} (sim time)", leave=False)
             x0 = None
             data, model = self.mj_data, self.mj_model
+            on_tick = self.on_tick
             for i in range(self.n_ticks):
                 tic = time.perf_counter()
                 t = i * self.dt
+                r = i - row0  # row of tick i in the current chunk
+                if r == LOG_CHUNK_TICKS:
+                    chunks.append(self._allocate(i))
+                    ticks, row0, r = chunks[-1], i, 0
                 q, v = self.to_pinocchio(self.robot, data.qpos, data.qvel)
                 com = pin.centerOfMass(self.model, self.data, q, v)
                 com_velocity = self.data.vcom[0]
@@ -314,17 +330,17 @@ class _ClosedLoop:
                 feet = np.array([self.data.oMf[f].translation for f in self.frame_ids])
                 foot_contact, other_contact = self.contacts.classify(data)
                 command = self.scenario.velocity_command(t)
-                ticks["t"][i] = t
-                ticks["qpos"][i] = data.qpos
-                ticks["qvel"][i] = data.qvel
-                ticks["x"][i, : self.nq] = q
-                ticks["x"][i, self.nq :] = v
-                ticks["com"][i] = com
-                ticks["com_velocity"][i] = com_velocity
-                ticks["feet"][i] = feet
-                ticks["foot_contact"][i] = foot_contact
-                ticks["base_velocity_world"][i] = data.qvel[:3]
-                ticks["velocity_command"][i] = command
+                ticks["t"][r] = t
+                ticks["qpos"][r] = data.qpos
+                ticks["qvel"][r] = data.qvel
+                ticks["x"][r, : self.nq] = q
+                ticks["x"][r, self.nq :] = v
+                ticks["com"][r] = com
+                ticks["com_velocity"][r] = com_velocity
+                ticks["feet"][r] = feet
+                ticks["foot_contact"][r] = foot_contact
+                ticks["base_velocity_world"][r] = data.qvel[:3]
+                ticks["velocity_command"][r] = command
                 ticks_done = i + 1
                 timing["logging"] += time.perf_counter() - tic
 
@@ -350,14 +366,16 @@ class _ClosedLoop:
                 tau_command = np.asarray(self.controller.compute(t, measurement), dtype=float)
                 timing["feedback"] += time.perf_counter() - tic
                 tau = np.minimum(np.maximum(tau_command, -self.torque_limit), self.torque_limit)  # clip, 4x faster
-                ticks["tau_command"][i] = tau_command
-                ticks["tau"][i] = tau
+                ticks["tau_command"][r] = tau_command
+                ticks["tau"][r] = tau
 
                 tic = time.perf_counter()
                 self.scenario.before_step(t, model, data)
                 data.ctrl[:] = tau
                 self.mj_step(model, data)
                 timing["simulation"] += time.perf_counter() - tic
+                if on_tick is not None:
+                    on_tick(model, data)
                 if bar is not None and i % 100 == 99:
                     bar.update(0.1)
             if log.status == "running":
@@ -373,14 +391,14 @@ class _ClosedLoop:
                 bar.close()
             timing["total"] = time.perf_counter() - wall_start
             timing["loop"] = timing["total"] - timing["setup"]
-            self._finish(ticks, ticks_done, replan_rows, timing)
+            self._finish(chunks, ticks_done, replan_rows, timing)
         return log
 
-    def _finish(self, ticks, ticks_done, replan_rows, timing) -> None:
+    def _finish(self, chunks, ticks_done, replan_rows, timing) -> None:
         from sim.metrics import compute_metrics
 
         log = self.log
-        log.ticks = {k: v[:ticks_done].copy() for k, v in ticks.items()}
+        log.ticks = {k: np.concatenate([chunk[k] for chunk in chunks])[:ticks_done] for k in (chunks[0] if chunks else {})}
         if "com" in log.ticks:  # the DCM with the controller's omega (the planner's): one omega per run
             omega = float(self.controller.omega)
             log.ticks["dcm"] = log.ticks["com"][:, :2] + log.ticks["com_velocity"][:, :2] / omega

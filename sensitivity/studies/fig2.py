@@ -54,30 +54,43 @@ def run_monte_carlo(problem: StepProblem, samples: int = 1000, sigma: float = 0.
 
 
 def plot_fig2(study: MonteCarloStudy, path: str, title: str = "") -> None:
-    """Draw p_T,y (left) and b_T,y (right) over (theta_x, theta_y): re-solves and analytic planes."""
+    """Draw p_T,y (left) and b_T,y (right) over (theta_x, theta_y): re-solves and analytic planes.
+
+    theta is drawn in mm and each solution as its deviation from the optimum at theta = 0, in mm or
+    in µm (whichever keeps the tick labels short): the optima are given in the panel titles.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
-    fig = plt.figure(figsize=(11, 4.8))
-    grid = np.linspace(study.theta.min(), study.theta.max(), 12)
+    fig = plt.figure(figsize=(12, 5.4))
+    theta_mm = 1e3 * study.theta
+    grid = np.linspace(theta_mm.min(), theta_mm.max(), 12)
     tx, ty = np.meshgrid(grid, grid)
-    for col, (index, label) in enumerate(((1, r"$p_{T,y}$ [m]"), (4, r"$b_{T,y}$ [m]"))):
+    for col, (index, name) in enumerate(((1, "p_{T,y}"), (4, "b_{T,y}"))):
         ax = fig.add_subplot(1, 2, col + 1, projection="3d")
-        ax.scatter(study.theta[:, 0], study.theta[:, 1], study.x[:, index], s=3, c="tab:blue", alpha=0.5,
-                   label="re-solved QP")
+        optimum = study.sensitivity.x[index]
         slope = study.sensitivity.dx_dtheta[index]
-        plane = study.sensitivity.x[index] + slope[0] * tx + slope[1] * ty
+        deviation = study.x[:, index] - optimum
+        scale, unit = (1e3, "mm") if np.max(np.abs(deviation)) >= 1e-4 else (1e6, "µm")
+        ax.scatter(theta_mm[:, 0], theta_mm[:, 1], scale * deviation, s=3, c="tab:blue", alpha=0.5,
+                   label="re-solved QP")
+        plane = scale * 1e-3 * (slope[0] * tx + slope[1] * ty)  # theta in mm -> m, then to the z unit
         ax.plot_surface(tx, ty, plane, color="tab:orange", alpha=0.35)
-        ax.scatter([0.0], [0.0], [study.sensitivity.x[index]], c="red", s=40, label="optimum (theta = 0)")
-        ax.set_xlabel(r"$\theta_x$ [m]")
-        ax.set_ylabel(r"$\theta_y$ [m]")
-        ax.set_zlabel(label)
-        ax.set_title(f"d/dθ = ({slope[0]:.4g}, {slope[1]:.4g})")
+        ax.scatter([0.0], [0.0], [0.0], c="red", s=40, label="optimum (theta = 0)")
+        for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+            axis.set_major_locator(MaxNLocator(5))
+        ax.tick_params(axis="z", pad=6)
+        ax.set_xlabel(r"$\theta_x$ [mm]", labelpad=6)
+        ax.set_ylabel(r"$\theta_y$ [mm]", labelpad=6)
+        ax.set_zlabel(rf"${name} - {name}^*$ [{unit}]", labelpad=14)
+        ax.set_title(rf"${name}^*$ = {optimum:.4f} m, d/dθ = ({slope[0]:.4g}, {slope[1]:.4g})", fontsize=10)
+        ax.set_box_aspect(None, zoom=0.88)  # room for the z label inside the panel
         if col == 0:
             ax.legend(loc="upper left", fontsize=8)
     fig.suptitle(title or "Fig. 2: footstep QP solutions over DCM disturbances, analytic planes (orange)")
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.02, right=0.95, bottom=0.04, top=0.88, wspace=0.12)
     fig.savefig(path, dpi=120)
     plt.close(fig)

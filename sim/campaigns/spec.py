@@ -138,6 +138,10 @@ class CampaignSpec:
             raise ParameterError(f"name={self.name!r} must be a non-empty string")
         if self.scenario not in available_scenarios():
             raise ParameterError(f"scenario={self.scenario!r} is unknown (available: {available_scenarios()})")
+        from robots.registry import available_robots
+
+        if self.robot not in available_robots():
+            raise ParameterError(f"robot={self.robot!r} is not known; available robots: {', '.join(available_robots())}")
         if self.controller not in CONTROLLERS:
             raise ParameterError(f"controller={self.controller!r} must be one of {CONTROLLERS}")
         if self.duration is not None:
@@ -252,6 +256,7 @@ def push_map(
     push_after: float = PUSH_AFTER,
     duration: float | None = None,
     params: dict[str, Any] | None = None,
+    robot: str = "bolt",
 ) -> CampaignSpec:
     """Push-recovery map (ALIP paper, Fig. 6): 0.1 s pushes, Fx in [-Fx, Fx], Fy in [0, Fy] [N].
 
@@ -275,6 +280,7 @@ def push_map(
         push_after: time before the pushes [s] (walking reaches steady state).
         duration: simulated time per trial [s]; None = latest push end + ``PUSH_RECOVERY_TIME``.
         params: extra shared parameters (scenario, runner, controller options).
+        robot: registered robot name.
     """
     for name, value in (("force_max_x", force_max_x), ("force_max_y", force_max_y)):
         if not (math.isfinite(value) and value > 0):
@@ -306,6 +312,7 @@ def push_map(
         scenario="push",
         controller=controller,
         duration=duration,
+        robot=robot,
         params=shared,
         grid={
             "force_x": {"start": -float(force_max_x), "stop": float(force_max_x), "num": steps_x},
@@ -323,6 +330,7 @@ def terrain(
     controller: str = "walking",
     duration: float = TERRAIN_DURATION,
     params: dict[str, Any] | None = None,
+    robot: str = "bolt",
 ) -> CampaignSpec:
     """Cluttered-ground trials (Bolt paper, section IV.C): one random box layout per seed.
 
@@ -332,6 +340,7 @@ def terrain(
         controller: "walking" or "pd".
         duration: simulated time per trial [s].
         params: extra shared parameters (e.g. ``speed``, ``height_max``).
+        robot: registered robot name.
     """
     if isinstance(seeds, int):
         if seeds < 1:
@@ -342,6 +351,7 @@ def terrain(
         scenario="terrain",
         controller=controller,
         duration=duration,
+        robot=robot,
         params=dict(params or {}),
         grid={"density": list(densities)},
         seeds=list(seeds),

@@ -3,13 +3,19 @@
 Each package that has something to run contributes its subcommands through a module with a
 ``register(subparsers)`` function (listed in ``SUBCOMMAND_MODULES``). Every subcommand accepts
 ``--json`` (machine-readable result on stdout); the ones that draw accept ``--plot FILE``.
+
+A user error (an option out of range, an unknown robot, a parameter a library function refuses:
+:class:`wbmpc.errors.WbmpcError`, ``ValueError``, ``OSError``) ends the command with one line on
+stderr naming the parameter, its value and what is allowed, and the exit code 2; no traceback.
 """
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import sys
+
+from wbmpc.cli.arguments import CommandParser, fail
+from wbmpc.errors import WbmpcError
 
 # Modules providing ``register(subparsers)``; the order is the order of ``wbmpc --help``.
 SUBCOMMAND_MODULES: list[str] = [
@@ -24,8 +30,8 @@ SUBCOMMAND_MODULES: list[str] = [
 ]
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+def build_parser() -> CommandParser:
+    parser = CommandParser(
         prog="wbmpc",
         description="Whole-body MPC walking: footstep sequencer, sensitivity, FDDP, MuJoCo closed loop.",
     )
@@ -38,15 +44,17 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Run the ``wbmpc`` command line; returns the process exit code."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as end:  # --help, or an option refused while parsing (its one line is printed)
+        return end.code if isinstance(end.code, int) else 0
     try:
         code = args.func(args)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
-    except (ValueError, OSError) as err:  # user errors: one clear line, no traceback
-        print(f"wbmpc {args.command}: error: {err}", file=sys.stderr)
-        return 2
+    except (WbmpcError, ValueError, OSError) as err:  # user errors: one clear line, no traceback
+        return fail(f"wbmpc {args.command}", " ".join(str(err).split()))
     return 0 if code is None else int(code)
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import importlib
 
+from wbmpc.cli.arguments import COUNT, DURATION, NON_NEGATIVE_INT, POSITIVE, SEED, NumberType, restrict_numbers
 from wbmpc.cli.output import add_output_arguments, print_json
 
 # target name -> module path (each module: add_arguments, run, format_report)
@@ -19,6 +20,15 @@ BENCH_MODULES: dict[str, str] = {
     "campaign": "bench.campaign",
 }
 
+# The checked type of every numeric option of each target (the targets declare them with plain int/float).
+BENCH_NUMBERS: dict[str, dict[str, NumberType]] = {
+    "sequencer": {"repeats": COUNT, "seed": SEED},
+    "loop": {"duration": DURATION, "seed": SEED, "max_iterations": COUNT},
+    "ddp": {"nodes": COUNT, "ticks": COUNT, "repeats": COUNT, "g1_nodes": NON_NEGATIVE_INT, "seed": SEED,
+            "time_budget": POSITIVE},
+    "campaign": {"trials": COUNT, "duration": DURATION, "rounds": COUNT},
+}
+
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser("bench", help="run a benchmark (ratios against an in-run baseline)")
@@ -27,6 +37,7 @@ def register(subparsers) -> None:
         module = importlib.import_module(module_path)
         sub = targets.add_parser(name, help=(module.__doc__ or "").strip().splitlines()[0])
         module.add_arguments(sub)
+        restrict_numbers(sub, BENCH_NUMBERS.get(name, {}))
         add_output_arguments(sub, plot=False)
         sub.set_defaults(func=_runner(module))
 

@@ -1,6 +1,7 @@
 """``wbmpc campaign``: run campaigns of closed-loop trials and report on them.
 
-    wbmpc campaign push-map --workers 2 --out runs/push-map              # Fig. 6-style push map
+    wbmpc campaign push-map --workers 2 --out runs/push-map              # Fig. 6-style push map (Bolt)
+    wbmpc campaign push-map --robot g1 --out runs/push-map-g1            # another robot
     wbmpc campaign push-map --compare-timing fixed --out runs/timing     # adaptive vs fixed timing
     wbmpc campaign push-map --out runs/push-map --resume                 # after a kill: go on
     wbmpc campaign terrain --seeds 20 --backend ray                      # terrain seeds on Ray
@@ -31,44 +32,47 @@ def register(subparsers) -> None:
         TIMING_FROM,
     )
     from sim.campaigns.trial import STEP_TIMINGS
-    from wbmpc.cli.walk import _parse_assignment
+    from wbmpc.cli.arguments import COUNT, DURATION, NON_NEGATIVE, PHASE, POSITIVE, output_directory
+    from wbmpc.cli.walk import _parse_assignment, add_robot_argument
 
     campaign = subparsers.add_parser("campaign", help="campaigns of closed-loop trials (push maps, terrain), local or Ray")
     commands = campaign.add_subparsers(dest="campaign_command", metavar="CAMPAIGN", required=True)
 
     def add_run_options(parser: argparse.ArgumentParser) -> None:
-        parser.add_argument("--workers", type=int, default=None, help="parallel workers (default: 2)")
+        parser.add_argument("--workers", type=COUNT, default=None, help="parallel workers (default: 2)")
         parser.add_argument("--backend", choices=BACKENDS, default="local", help="where trials run (default: local pool)")
         parser.add_argument("--address", default=None, help="Ray cluster address (ray backend; default: start Ray here)")
-        parser.add_argument("--out", default=None, metavar="DIR", help="campaign directory (default: runs/campaigns/NAME)")
+        parser.add_argument("--out", type=output_directory, default=None, metavar="DIR",
+                            help="campaign directory (default: runs/campaigns/NAME)")
         parser.add_argument("--resume", action="store_true", help="continue the campaign in DIR (skip recorded trials)")
-        parser.add_argument("--max-trials", type=int, default=None, metavar="N", help="run at most N of the remaining trials")
+        parser.add_argument("--max-trials", type=COUNT, default=None, metavar="N", help="run at most N of the remaining trials")
         parser.add_argument("--no-progress", action="store_true", help="no progress bar")
         parser.add_argument("--no-plots", action="store_true", help="write summary.json only")
         parser.add_argument("--json", action="store_true", help="print the run and the summary as JSON")
 
     def add_trial_options(parser: argparse.ArgumentParser, duration_default) -> None:
+        add_robot_argument(parser)
         parser.add_argument("--controller", choices=("walking", "pd"), default="walking")
-        parser.add_argument("--duration", type=float, default=duration_default, help="simulated time per trial [s]")
+        parser.add_argument("--duration", type=DURATION, default=duration_default, help="simulated time per trial [s]")
         parser.add_argument(
             "--set", dest="overrides", action="append", type=_parse_assignment, default=[], metavar="NAME=VALUE",
             help="a parameter shared by every trial (scenario, runner or controller; repeatable)",
         )
 
     push = commands.add_parser("push-map", help="push-recovery map over (Fx, Fy) and gait phases (ALIP paper, Fig. 6)")
-    push.add_argument("--force-max-x", type=float, default=PUSH_FORCE_MAX, help="Fx from -F to F [N]")
-    push.add_argument("--force-max-y", type=float, default=PUSH_FORCE_MAX, help="Fy from 0 to F [N]")
-    push.add_argument("--steps-x", type=int, default=PUSH_FORCE_STEPS_X, help="force values along x")
-    push.add_argument("--steps-y", type=int, default=PUSH_FORCE_STEPS_Y, help="force values along y")
-    push.add_argument("--phases", type=float, nargs="+", default=list(PUSH_PHASES), help="gait phases in [0, 1)")
-    push.add_argument("--seeds", type=int, default=1, help="seeds per point (matter only with noise)")
-    push.add_argument("--push-after", type=float, default=PUSH_AFTER, help="walking time before the pushes [s]")
+    push.add_argument("--force-max-x", type=POSITIVE, default=PUSH_FORCE_MAX, help="Fx from -F to F [N]")
+    push.add_argument("--force-max-y", type=POSITIVE, default=PUSH_FORCE_MAX, help="Fy from 0 to F [N]")
+    push.add_argument("--steps-x", type=COUNT, default=PUSH_FORCE_STEPS_X, help="force values along x")
+    push.add_argument("--steps-y", type=COUNT, default=PUSH_FORCE_STEPS_Y, help="force values along y")
+    push.add_argument("--phases", type=PHASE, nargs="+", default=list(PUSH_PHASES), help="gait phases in [0, 1)")
+    push.add_argument("--seeds", type=COUNT, default=1, help="seeds per point (matter only with noise)")
+    push.add_argument("--push-after", type=NON_NEGATIVE, default=PUSH_AFTER, help="walking time before the pushes [s]")
     push.add_argument(
         "--compare-timing", nargs="?", const="fixed", choices=STEP_TIMINGS[1:], default=None,
         help="also run fixed step timing ('fixed': T_min = T_max = T_nom, the default; 'stiff': huge alpha_2)",
     )
     push.add_argument(
-        "--timing-from", type=float, default=TIMING_FROM,
+        "--timing-from", type=NON_NEGATIVE, default=TIMING_FROM,
         help=f"with --compare-timing: the compared timing applies from the first touchdown after this time [s] "
         f"(default {TIMING_FROM}; 0: from the start)",
     )
@@ -77,14 +81,15 @@ def register(subparsers) -> None:
     push.set_defaults(func=_run_builtin, campaign="push-map")
 
     terrain = commands.add_parser("terrain", help="walking over random box layouts, one per seed (Bolt paper, IV.C)")
-    terrain.add_argument("--seeds", type=int, default=TERRAIN_SEEDS, help="number of terrain layouts")
-    terrain.add_argument("--densities", type=float, nargs="+", default=[10.0], help="box densities [1/m²]")
+    terrain.add_argument("--seeds", type=COUNT, default=TERRAIN_SEEDS, help="number of terrain layouts")
+    terrain.add_argument("--densities", type=POSITIVE, nargs="+", default=[10.0], help="box densities [1/m²]")
     add_trial_options(terrain, TERRAIN_DURATION)
     add_run_options(terrain)
     terrain.set_defaults(func=_run_builtin, campaign="terrain")
 
     from_file = commands.add_parser("run", help="run a campaign file (TOML, see sim.campaigns.spec)")
     from_file.add_argument("file", help="campaign file")
+    add_robot_argument(from_file, default=None)
     add_run_options(from_file)
     from_file.set_defaults(func=_run_file)
 
@@ -107,28 +112,24 @@ def _spec_from_args(args: argparse.Namespace):
             steps_x=args.steps_x,
             steps_y=args.steps_y,
             phases=tuple(args.phases),
-            seeds=tuple(range(_count("--seeds", args.seeds))),
+            seeds=tuple(range(args.seeds)),
             compare_timing=args.compare_timing,
             timing_from=args.timing_from,
             controller=args.controller,
+            robot=args.robot,
             push_after=args.push_after,
             duration=args.duration,
             params=params,
         )
     return builtin_campaign(
         "terrain",
-        seeds=_count("--seeds", args.seeds),
+        seeds=args.seeds,
         densities=tuple(args.densities),
         controller=args.controller,
+        robot=args.robot,
         duration=args.duration,
         params=params,
     )
-
-
-def _count(option: str, value: int) -> int:
-    if value < 1:
-        raise ValueError(f"{option}={value} must be >= 1")
-    return value
 
 
 def _run_builtin(args: argparse.Namespace) -> int:
@@ -136,9 +137,12 @@ def _run_builtin(args: argparse.Namespace) -> int:
 
 
 def _run_file(args: argparse.Namespace) -> int:
+    import dataclasses
+
     from sim.campaigns.spec import CampaignSpec
 
-    return _run(args, CampaignSpec.from_toml(args.file))
+    spec = CampaignSpec.from_toml(args.file)
+    return _run(args, spec if args.robot is None else dataclasses.replace(spec, robot=args.robot))
 
 
 def _run(args: argparse.Namespace, spec) -> int:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import os
 
+from wbmpc.cli.arguments import DURATION, SEED, output_directory
 from wbmpc.cli.output import add_output_arguments, print_json
 
 DEMO_DURATION = 20.0  # [s] of simulated walking (the speed integral settles within ~10 s)
@@ -18,9 +19,9 @@ DEMO_DURATION = 20.0  # [s] of simulated walking (the speed integral settles wit
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser("demo", help="main job: Bolt walks in MuJoCo (sequencer + MPC + feedback), metrics")
-    parser.add_argument("--out", default="runs/demo", help="output directory (default runs/demo)")
-    parser.add_argument("--duration", type=float, default=DEMO_DURATION, help="simulated time [s]")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", type=output_directory, default="runs/demo", help="output directory (default runs/demo)")
+    parser.add_argument("--duration", type=DURATION, default=DEMO_DURATION, help="simulated time [s]")
+    parser.add_argument("--seed", type=SEED, default=0)
     add_output_arguments(parser, plot=False)
     parser.set_defaults(func=_run)
 

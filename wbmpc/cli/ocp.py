@@ -15,18 +15,20 @@ import argparse
 
 import numpy as np
 
+from wbmpc.cli.arguments import COUNT, FINITE, NON_NEGATIVE, POSITIVE
 from wbmpc.cli.output import add_output_arguments, print_json
+from wbmpc.cli.walk import add_robot_argument
 from wbmpc.walking.standing_start import solve_walking_ocp
 
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser("ocp", help="solve one whole-body walking OCP (FDDP) and report the plan")
-    parser.add_argument("--robot", default="bolt", help="robot name (default bolt)")
-    parser.add_argument("--speed", type=float, default=None, help="forward velocity command [m/s] (default: the preset's)")
-    parser.add_argument("--nodes", type=int, default=100, help="horizon length N (running nodes)")
-    parser.add_argument("--dt", type=float, default=0.01, help="node spacing [s]")
-    parser.add_argument("--iterations", type=int, default=100, help="FDDP iteration cap")
-    parser.add_argument("--foothold-weight", type=float, default=0.0,
+    add_robot_argument(parser)
+    parser.add_argument("--speed", type=FINITE, default=None, help="forward velocity command [m/s] (default: the preset's)")
+    parser.add_argument("--nodes", type=COUNT, default=100, help="horizon length N (running nodes)")
+    parser.add_argument("--dt", type=POSITIVE, default=0.01, help="node spacing [s]")
+    parser.add_argument("--iterations", type=COUNT, default=100, help="FDDP iteration cap")
+    parser.add_argument("--foothold-weight", type=NON_NEGATIVE, default=0.0,
                         help="planned-foothold tracking weight (0: footholds emerge, the paper's choice)")
     add_output_arguments(parser, plot=True)
     parser.set_defaults(func=_run)

@@ -7,6 +7,7 @@ import json
 import sys
 from typing import Any
 
+from wbmpc.cli.arguments import output_file
 from wbmpc.jsonable import to_jsonable
 
 
@@ -20,4 +21,4 @@ def add_output_arguments(parser: argparse.ArgumentParser, plot: bool = True) -> 
     """Add the common ``--json`` and (optionally) ``--plot FILE`` options to a subcommand."""
     parser.add_argument("--json", action="store_true", help="print a machine-readable result on stdout")
     if plot:
-        parser.add_argument("--plot", metavar="FILE", default=None, help="write the figure to FILE (PNG)")
+        parser.add_argument("--plot", metavar="FILE", type=output_file, default=None, help="write the figure to FILE (PNG)")

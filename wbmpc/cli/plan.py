@@ -3,6 +3,10 @@
 Every SequencerParams field can be overridden from the command line (``--alpha1``, ``--z-c``,
 ``--w-left-min``, ...; ``--vx``/``--vy`` are aliases of ``--v-x``/``--v-y``) on top of a preset
 (``--preset``) or a TOML file (``--params FILE``).
+
+``--robot NAME`` plans for a robot standing still: its left foot in stance at its reference
+position, the DCM at its CoM (at rest), t = 0, and the robot's sequencer preset ``NAME_walking``
+(unless ``--preset`` or ``--params`` is given).
 """
 
 from __future__ import annotations
@@ -12,7 +16,9 @@ import dataclasses
 
 from sequencer.horizon import FootstepPlan, FootstepSequencer
 from sequencer.params import PRESET_DIR, SequencerParams
+from wbmpc.cli.arguments import FINITE, NON_NEGATIVE
 from wbmpc.cli.output import add_output_arguments, print_json
+from wbmpc.errors import ParameterError
 
 # Table I example state (p0, zeta_hat, t) used as the default initial condition.
 TABLE_I_STANCE_FOOT = "left"
@@ -50,19 +56,23 @@ def add_params_arguments(parser: argparse.ArgumentParser) -> None:
     """Add --preset, --params FILE and one --<field> option per SequencerParams field."""
     presets = sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
     group = parser.add_argument_group("sequencer parameters (defaults: the chosen preset)")
-    group.add_argument("--preset", choices=presets, default="table_i", help="named parameter set (default table_i)")
+    group.add_argument("--preset", choices=presets, default=None,
+                       help="named parameter set (default table_i, or the --robot's NAME_walking)")
     group.add_argument("--params", metavar="FILE", default=None, help="TOML parameter file (overrides --preset)")
     for field in dataclasses.fields(SequencerParams):
         if field.name == "name":
             continue
         flags = [f"--{field.name.replace('_', '-')}"] + _ALIASES.get(field.name, [])
-        group.add_argument(*flags, dest=f"param_{field.name}", type=float, default=None, metavar="VALUE",
+        group.add_argument(*flags, dest=f"param_{field.name}", type=FINITE, default=None, metavar="VALUE",
                            help=_HELP[field.name])
 
 
 def params_from_args(args: argparse.Namespace) -> SequencerParams:
     """Build SequencerParams from --preset/--params and the per-field overrides."""
-    base = SequencerParams.from_toml(args.params) if args.params else SequencerParams.preset(args.preset)
+    if args.params:
+        base = SequencerParams.from_toml(args.params)
+    else:
+        base = SequencerParams.preset(args.preset or robot_preset(getattr(args, "robot", None)))
     overrides = {
         field.name: getattr(args, f"param_{field.name}")
         for field in dataclasses.fields(SequencerParams)
@@ -71,16 +81,48 @@ def params_from_args(args: argparse.Namespace) -> SequencerParams:
     return dataclasses.replace(base, **overrides) if overrides else base
 
 
+def robot_preset(robot: str | None) -> str:
+    """Sequencer preset of ``robot`` ("NAME_walking"), or Table I's without a robot."""
+    if robot is None:
+        return "table_i"
+    from robots.registry import load_robot
+
+    name = load_robot(robot).name  # refuses an unknown robot, listing the known ones
+    available = sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
+    if f"{name}_walking" not in available:
+        raise ParameterError(f"robot={name!r} has no sequencer preset {name}_walking (available presets: "
+                             f"{available}); give --preset or --params")
+    return f"{name}_walking"
+
+
 def add_state_arguments(parser: argparse.ArgumentParser, elapsed_name: str = "--t") -> None:
-    """Measured state: stance foot, its position, the measured DCM and the elapsed time."""
-    group = parser.add_argument_group("measured state (defaults: the Table I example)")
-    group.add_argument("--stance-foot", choices=("left", "right"), default=TABLE_I_STANCE_FOOT)
-    group.add_argument("--stance-position", nargs=2, type=float, metavar=("X", "Y"),
-                       default=list(TABLE_I_STANCE_POSITION), help="support foot p0 [m] (world)")
-    group.add_argument("--dcm", nargs=2, type=float, metavar=("X", "Y"), default=list(TABLE_I_DCM),
+    """Measured state: stance foot, its position, the measured DCM and the elapsed time (None: see state_from_args)."""
+    group = parser.add_argument_group("measured state (defaults: the Table I example, or the --robot standing)")
+    group.add_argument("--stance-foot", choices=("left", "right"), default=None)
+    group.add_argument("--stance-position", nargs=2, type=FINITE, metavar=("X", "Y"), default=None,
+                       help="support foot p0 [m] (world)")
+    group.add_argument("--dcm", nargs=2, type=FINITE, metavar=("X", "Y"), default=None,
                        help="measured DCM zeta_hat [m] (world)")
-    group.add_argument(elapsed_name, dest="elapsed", type=float, default=TABLE_I_ELAPSED,
+    group.add_argument(elapsed_name, dest="elapsed", type=NON_NEGATIVE, default=None,
                        help="time elapsed since the stance began t [s]")
+    group.add_argument("--robot", default=None, metavar="NAME",
+                       help="start from this robot standing still (feet, CoM) with its sequencer preset")
+
+
+def state_from_args(args: argparse.Namespace) -> tuple[str, tuple[float, float], tuple[float, float], float]:
+    """(stance foot, stance position [m], measured DCM [m], elapsed time [s]): the options given, the
+    rest from the --robot standing still (DCM = CoM at rest, t = 0) or from the Table I example."""
+    if args.robot is not None:
+        from robots.registry import load_robot
+
+        robot = load_robot(args.robot)
+        foot = args.stance_foot or "left"
+        defaults = (foot, tuple(robot.foot_positions_reference()[foot][:2]), tuple(robot.com_position_reference[:2]), 0.0)
+    else:
+        defaults = (TABLE_I_STANCE_FOOT, TABLE_I_STANCE_POSITION, TABLE_I_DCM, TABLE_I_ELAPSED)
+    given = (args.stance_foot, args.stance_position, args.dcm, args.elapsed)
+    foot, position, dcm, elapsed = (d if g is None else g for g, d in zip(given, defaults))
+    return foot, tuple(float(c) for c in position), tuple(float(c) for c in dcm), float(elapsed)
 
 
 def plan_table(plan: FootstepPlan) -> str:
@@ -105,10 +147,8 @@ def plan_table(plan: FootstepPlan) -> str:
 def run_plan(args: argparse.Namespace) -> int:
     params = params_from_args(args)
     sequencer = FootstepSequencer(params, backend=args.backend)
-    plan = sequencer.plan(
-        t=args.elapsed, stance_foot=args.stance_foot, stance_position=args.stance_position,
-        dcm_measured=args.dcm, t_stance_start=0.0,
-    )
+    foot, position, dcm, elapsed = state_from_args(args)
+    plan = sequencer.plan(t=elapsed, stance_foot=foot, stance_position=position, dcm_measured=dcm, t_stance_start=0.0)
     if args.plot:
         from sequencer.plots import plot_plan
 

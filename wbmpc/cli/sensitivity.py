@@ -9,8 +9,9 @@ import numpy as np
 from sensitivity.crosscheck import crosscheck
 from sensitivity.studies.fig2 import plot_fig2, run_monte_carlo
 from sequencer.step_qp import CONSTRAINT_NAMES, VARIABLE_NAMES, StepProblem
+from wbmpc.cli.arguments import COUNT, POSITIVE, SEED
 from wbmpc.cli.output import add_output_arguments, print_json
-from wbmpc.cli.plan import add_params_arguments, add_state_arguments, params_from_args
+from wbmpc.cli.plan import add_params_arguments, add_state_arguments, params_from_args, state_from_args
 
 
 def sensitivity_report(problem: StepProblem, samples: int, sigma: float, seed: int) -> dict:
@@ -55,7 +56,7 @@ def format_report(report: dict) -> str:
 
 def run_sensitivity(args: argparse.Namespace) -> int:
     params = params_from_args(args)
-    problem = StepProblem.from_params(params, args.stance_foot, args.stance_position, args.dcm, args.elapsed)
+    problem = StepProblem.from_params(params, *state_from_args(args))
     report = sensitivity_report(problem, args.samples, args.sigma, args.seed)
     study = report.pop("_study")
     if args.plot:
@@ -77,8 +78,8 @@ def register(subparsers) -> None:
     )
     add_params_arguments(parser)
     add_state_arguments(parser)
-    parser.add_argument("--samples", type=int, default=1000, help="Monte Carlo samples for Fig. 2 (default 1000)")
-    parser.add_argument("--sigma", type=float, default=0.005, help="std of each theta component [m] (default 0.005)")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--samples", type=COUNT, default=1000, help="Monte Carlo samples for Fig. 2 (default 1000)")
+    parser.add_argument("--sigma", type=POSITIVE, default=0.005, help="std of each theta component [m] (default 0.005)")
+    parser.add_argument("--seed", type=SEED, default=0, help="seed of the Monte Carlo samples")
     add_output_arguments(parser, plot=True)
     parser.set_defaults(func=run_sensitivity)

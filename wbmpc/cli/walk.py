@@ -1,11 +1,15 @@
 """``wbmpc walk`` and ``wbmpc run SCENARIO``: thin command lines over :func:`sim.run_scenario`.
 
-    wbmpc walk --speed 0.33 --duration 20 --out runs/walk --json
+    wbmpc walk --robot bolt --vx 0.3 --yaw-rate 0.2 --duration 20 --out runs/walk --json
     wbmpc run push --force 6.3 --direction 90 --plot runs/push.png
     wbmpc run terrain --seed 3 --set density=15
+    wbmpc walk --viewer                       # MuJoCo's viewer, live (needs a display)
 
-Scenario parameters have their own options where common (``--speed``, ``--force``...); any other
-parameter of the scenario, runner or controller is passed with ``--set NAME=VALUE``.
+Scenario parameters have their own options where common (``--force``...); any other parameter of
+the scenario, runner or controller is passed with ``--set NAME=VALUE``. ``--vx`` (alias
+``--speed``), ``--vy`` and ``--yaw-rate`` give ``run_scenario(..., velocity_command=(v_x, v_y,
+yaw_rate))``; a component left out is the scenario's default (``speed`` for v_x, 0 for the others).
+Without any of them the scenario's own command applies.
 """
 
 from __future__ import annotations
@@ -14,12 +18,14 @@ import argparse
 import ast
 import os
 
+from wbmpc.cli.arguments import DURATION, FINITE, NON_NEGATIVE, SEED, output_directory
 from wbmpc.cli.output import add_output_arguments, print_json
+from wbmpc.errors import ParameterError
 
 
 def _parse_assignment(text: str) -> tuple[str, object]:
     if "=" not in text:
-        raise argparse.ArgumentTypeError(f"--set {text!r}: expected NAME=VALUE")
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected NAME=VALUE")
     name, raw = text.split("=", 1)
     try:
         value = ast.literal_eval(raw)
@@ -28,28 +34,41 @@ def _parse_assignment(text: str) -> tuple[str, object]:
     return name.strip(), value
 
 
+def add_robot_argument(parser: argparse.ArgumentParser, default: str | None = "bolt") -> None:
+    """``--robot NAME``: a registered robot (an unknown name is refused with the list of known ones)."""
+    from robots.registry import available_robots
+
+    parser.add_argument("--robot", default=default, metavar="NAME",
+                        help=f"robot ({', '.join(available_robots())}; default {default})")
+
+
 def add_run_arguments(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``walk`` and ``run``."""
-    parser.add_argument("--duration", type=float, default=None, help="simulated time [s] (default: scenario's)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (terrain, noise)")
-    parser.add_argument("--out", default=None, metavar="DIR", help="write log.npz, metrics.json and figures.png")
-    parser.add_argument("--speed", type=float, default=None, help="forward velocity command [m/s]")
+    add_robot_argument(parser)
+    parser.add_argument("--duration", type=DURATION, default=None, help="simulated time [s] (default: scenario's)")
+    parser.add_argument("--seed", type=SEED, default=0, help="random seed (terrain, noise)")
+    parser.add_argument("--out", type=output_directory, default=None, metavar="DIR",
+                        help="write log.npz, metrics.json and figures.png into DIR")
+    command = parser.add_argument_group("velocity command (default: the scenario's)")
+    command.add_argument("--vx", "--speed", dest="vx", type=FINITE, default=None, metavar="V",
+                         help="forward velocity v_x [m/s] (--speed is an alias)")
+    command.add_argument("--vy", type=FINITE, default=None, metavar="V", help="lateral velocity v_y [m/s]")
+    command.add_argument("--yaw-rate", type=FINITE, default=None, metavar="W", help="yaw rate [rad/s]")
     parser.add_argument(
         "--delay-nodes", type=int, choices=(0, 1), default=None, help="apply MPC node 1 (paper) or node 0"
     )
-    parser.add_argument(
-        "--computation-delay", type=float, default=None, metavar="S", help="simulated solver latency [s] (default 0)"
-    )
+    parser.add_argument("--computation-delay", type=NON_NEGATIVE, default=None, metavar="S",
+                        help="simulated solver latency [s] (default 0)")
     parser.add_argument("--interpolate", action="store_true", help="interpolate references between nodes")
     parser.add_argument("--no-feedback", action="store_true", help="feed-forward only (no Riccati gains)")
-    parser.add_argument("--noise-q", type=float, default=None, help="configuration noise std [m, rad]")
-    parser.add_argument("--noise-v", type=float, default=None, help="velocity noise std [m/s, rad/s]")
-    parser.add_argument(
-        "--mpc-failure-at", type=float, action="append", default=None, metavar="T", help="inject an MPC failure at T [s]"
-    )
+    parser.add_argument("--noise-q", type=NON_NEGATIVE, default=None, help="configuration noise std [m, rad]")
+    parser.add_argument("--noise-v", type=NON_NEGATIVE, default=None, help="velocity noise std [m/s, rad/s]")
+    parser.add_argument("--mpc-failure-at", type=NON_NEGATIVE, action="append", default=None, metavar="T",
+                        help="inject an MPC failure at T [s] (repeatable)")
     parser.add_argument("--controller", choices=("walking", "pd"), default="walking")
-    parser.add_argument("--render", metavar="FILE", default=None,
-                        help="render an offscreen video of the run (.mp4 needs ffmpeg; .gif always works)")
+    parser.add_argument("--render", metavar="FILE", type=_video_path, default=None,
+                        help="render an offscreen video of the run (.mp4 or .gif)")
+    parser.add_argument("--viewer", action="store_true", help="show the run live in MuJoCo's viewer (needs a display)")
     parser.add_argument(
         "--set", dest="overrides", action="append", type=_parse_assignment, default=[], metavar="NAME=VALUE",
         help="any other scenario/runner/controller parameter (repeatable)",
@@ -57,8 +76,18 @@ def add_run_arguments(parser: argparse.ArgumentParser) -> None:
     add_output_arguments(parser, plot=True)
 
 
+def _video_path(text: str) -> str:
+    from sim.render import check_video_path
+
+    try:
+        check_video_path(text)
+    except ParameterError as err:
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: {err}") from None
+    return text
+
+
 def register(subparsers) -> None:
-    walk = subparsers.add_parser("walk", help="closed-loop walking of Bolt in MuJoCo (the paper's main experiment)")
+    walk = subparsers.add_parser("walk", help="closed-loop walking in MuJoCo (the paper's main experiment)")
     add_run_arguments(walk)
     walk.set_defaults(func=_run, scenario="walk")
 
@@ -66,19 +95,28 @@ def register(subparsers) -> None:
 
     run = subparsers.add_parser("run", help="run a registered closed-loop scenario")
     run.add_argument("scenario", choices=available_scenarios())
-    run.add_argument("--force", type=float, default=None, help="push: force magnitude [N]")
-    run.add_argument("--direction", type=float, default=None, help="push: direction in the plane from +x [deg]")
+    run.add_argument("--force", type=FINITE, default=None, help="push: force magnitude [N]")
+    run.add_argument("--direction", type=FINITE, default=None, help="push: direction in the plane from +x [deg]")
     add_run_arguments(run)
     run.set_defaults(func=_run)
+
+
+def velocity_command_from_args(args: argparse.Namespace) -> tuple[float, float, float] | None:
+    """(v_x, v_y, yaw_rate) when any of --vx/--speed, --vy, --yaw-rate is given, else None."""
+    if args.vx is None and args.vy is None and args.yaw_rate is None:
+        return None
+    from sim.scenarios import scenario_parameters
+
+    v_x = scenario_parameters(args.scenario)["speed"] if args.vx is None else args.vx
+    return (float(v_x), float(args.vy or 0.0), float(args.yaw_rate or 0.0))
 
 
 def params_from_args(args: argparse.Namespace) -> dict:
     """Scenario/runner/controller parameters given on the command line."""
     params: dict = {}
     for option, name in (
-        ("speed", "speed"), ("delay_nodes", "delay_nodes"), ("noise_q", "noise_q"), ("noise_v", "noise_v"),
-        ("computation_delay", "computation_delay"),
-        ("force", "force"), ("direction", "direction"),
+        ("delay_nodes", "delay_nodes"), ("noise_q", "noise_q"), ("noise_v", "noise_v"),
+        ("computation_delay", "computation_delay"), ("force", "force"), ("direction", "direction"),
     ):
         value = getattr(args, option, None)
         if value is not None:
@@ -89,30 +127,74 @@ def params_from_args(args: argparse.Namespace) -> dict:
         params["feedback"] = False
     if args.mpc_failure_at:
         params["mpc_failure_times"] = tuple(args.mpc_failure_at)
-    params.update(dict(args.overrides))
+    command = velocity_command_from_args(args)
+    if command is not None:
+        params["velocity_command"] = command
+    overrides = dict(args.overrides)
+    check_numeric_overrides(args.scenario, overrides)
+    params.update(overrides)
     params["progress"] = None if not args.json else False
     return params
 
 
+def check_numeric_overrides(scenario: str, overrides: dict) -> None:
+    """Refuse ``--set NAME=VALUE`` whose parameter is a number (declared ``float``/``int``) and VALUE is not.
+
+    The parameter's own range is checked where it is defined (scenario, runner, controller); this
+    only turns the command line's text into the declared kind, as every typed option does.
+
+    Raises:
+        ParameterError: e.g. ``--set speed='fast': speed is a number (scenario 'walk'), got a string``.
+    """
+    import dataclasses
+    import typing
+
+    from sim.runner import RunnerOptions
+    from sim.scenarios.base import scenario_class
+    from wbmpc.walking.controller import WalkingControllerConfig
+
+    owners = (("scenario " + repr(scenario), scenario_class(scenario)), ("runner", RunnerOptions),
+              ("controller", WalkingControllerConfig))
+    for name, value in overrides.items():
+        for owner, cls in owners:
+            if name not in {f.name for f in dataclasses.fields(cls)}:
+                continue
+            kind = typing.get_type_hints(cls).get(name)
+            if kind in (int, float) and (isinstance(value, bool) or not isinstance(value, (int, float))):
+                raise ParameterError(
+                    f"--set {name}={value!r}: {name} is {'an integer' if kind is int else 'a number'} ({owner}), "
+                    f"got {type(value).__name__} {value!r}"
+                )
+            break
+
+
 def _run(args: argparse.Namespace) -> int:
+    on_tick = None
+    if args.viewer:
+        from sim.render import LiveViewer, viewer_unavailable
+
+        reason = viewer_unavailable()
+        if reason is not None:
+            raise ParameterError(f"--viewer: {reason}")
+        on_tick = LiveViewer()
     if args.render:
         os.environ.setdefault("MUJOCO_GL", "egl")  # headless offscreen context; read when MuJoCo is imported
     from sim.metrics import paper_comparison
     from sim.runner import run_scenario
 
     params = params_from_args(args)
-    log = run_scenario(
-        args.scenario, duration=args.duration, seed=args.seed, out=args.out, controller=args.controller, **params
-    )
+    extra = {} if on_tick is None else {"on_tick": on_tick}
+    try:
+        log = run_scenario(args.scenario, robot=args.robot, duration=args.duration, seed=args.seed, out=args.out,
+                           controller=args.controller, **extra, **params)
+    finally:
+        if on_tick is not None:
+            on_tick.close()
     figures = []
-    if args.out:
+    for path in ([os.path.join(args.out, "figures.png")] if args.out else []) + ([args.plot] if args.plot else []):
         from sim.plots import save_figures
 
-        figures.append(save_figures(log, os.path.join(args.out, "figures.png")))
-    if args.plot:
-        from sim.plots import save_figures
-
-        figures.append(save_figures(log, args.plot))
+        figures.append(save_figures(log, path))
     if args.render:
         from sim.render import render_run
 

@@ -4,11 +4,24 @@ Workers start with the forkserver method where the platform has it (else spawn):
 which would copy the parent's threads and open files (MuJoCo, BLAS and tqdm do not survive a fork
 reliably). The forkserver preloads the simulation modules once, so each worker starts in a
 fraction of a second instead of importing Pinocchio and MuJoCo again.
+
+Workers end when the campaign process dies, even by ``kill -9`` (which runs no clean-up): each
+worker starts with :func:`end_with_campaign`. A forkserver's workers are the forkserver's children,
+and the forkserver outlives the campaign as long as a worker runs (each worker holds its "alive"
+pipe), so a parent-death signal alone would not fire: a daemon thread of each worker polls the
+campaign process and ends the worker once it is gone; on Linux the worker also asks for SIGKILL on
+its parent's death (``prctl(PR_SET_PDEATHSIG)``: immediate where the parent is the campaign, as with
+the spawn start method). A killed campaign loses only its running trials; ``--resume`` runs them again.
 """
 
 from __future__ import annotations
 
 import multiprocessing
+import os
+import signal
+import sys
+import threading
+import time
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Callable, Iterable, Iterator
@@ -16,6 +29,57 @@ from typing import Any, Callable, Iterable, Iterator
 from sim.campaigns.errors import CampaignError
 
 PRELOAD_MODULES = ["sim.campaigns.trial", "sim.runner"]
+CAMPAIGN_POLL_PERIOD = 0.5  # [s] between two checks, in each worker, that the campaign process lives
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def process_alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (a zombie, dead but not yet reaped, does not)."""
+    if sys.platform.startswith("linux"):
+        try:
+            with open(f"/proc/{pid}/stat") as stream:
+                stat = stream.read()
+        except OSError:
+            return False
+        return stat[stat.rindex(")") + 2] != "Z"  # "pid (comm) state ..."
+    if sys.platform == "win32":
+        import ctypes
+
+        handle = ctypes.windll.kernel32.OpenProcess(0x1000, False, pid)  # PROCESS_QUERY_LIMITED_INFORMATION
+        if not handle:
+            return False
+        code = ctypes.c_ulong()
+        ctypes.windll.kernel32.GetExitCodeProcess(handle, ctypes.byref(code))
+        ctypes.windll.kernel32.CloseHandle(handle)
+        return code.value == 259  # STILL_ACTIVE
+    try:
+        os.kill(pid, 0)  # POSIX: signal 0 checks existence only
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def end_with_campaign(campaign_pid: int, poll_period: float = CAMPAIGN_POLL_PERIOD) -> None:
+    """Pool worker initializer: end this worker (``os._exit``) when process ``campaign_pid`` is gone.
+
+    A daemon thread checks every ``poll_period`` seconds; on Linux the worker is also SIGKILLed
+    at once when its parent process dies (``prctl(PR_SET_PDEATHSIG)``).
+    """
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+
+    def watch() -> None:
+        while process_alive(campaign_pid):
+            time.sleep(poll_period)
+        os._exit(1)
+
+    if not process_alive(campaign_pid):  # died before the watch started
+        os._exit(1)
+    threading.Thread(target=watch, name="end-with-campaign", daemon=True).start()
 
 
 def start_method() -> str:
@@ -42,7 +106,8 @@ class LocalPoolBackend:
 
     def _executor(self) -> ProcessPoolExecutor:
         if self._pool is None:
-            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=self._context)
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=self._context,
+                                             initializer=end_with_campaign, initargs=(os.getpid(),))
         return self._pool
 
     def map_unordered(self, function: Callable[[Any], Any], items: Iterable[Any]) -> Iterator[Any]:
