@@ -46,8 +46,11 @@ def load_robot(name: str) -> RobotDescription:
     """
     if isinstance(name, RobotDescription):
         return name
-    try:
-        builder = _BUILDERS[name]
-    except (KeyError, TypeError):
-        raise ParameterError(f"robot={name!r} is not known; available robots: {', '.join(available_robots())}") from None
-    return builder()
+    check_robot_name(name)
+    return _BUILDERS[name]()
+
+
+def check_robot_name(name: str) -> None:
+    """Raise ParameterError (listing the available robots) unless ``name`` is a registered robot."""
+    if not isinstance(name, str) or name not in _BUILDERS:
+        raise ParameterError(f"robot={name!r} is not known; available robots: {', '.join(available_robots())}")

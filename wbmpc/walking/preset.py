@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
+from robots.registry import check_robot_name
 from sequencer.params import SequencerParams
 from sequencer.planner import VelocityCommand
 from wbmpc.config import read_toml
@@ -192,6 +193,7 @@ def load_walking_preset(robot: str, overrides: Mapping[str, Any] | None = None) 
         ParameterError: the robot has no walking preset (the message lists those that do), the
             file is not valid, an override names no field, or a value is out of its range.
     """
+    check_robot_name(robot)
     available = available_walking_presets()
     if robot not in available:
         raise ParameterError(
