@@ -174,9 +174,11 @@ def run_scenario(
                 float(t) for t in np.atleast_1d(controller_options["mpc_failure_times"]))
         preset = load_walking_preset(robot, controller_options)
         ctrl = WalkingController(preset)
-        check_commands(preset, scenario)
     else:
         ctrl = JointPDController(**controller_options)
+    if isinstance(ctrl, WalkingController):
+        preset = ctrl.preset
+        check_commands(preset, scenario)
     if preset is None and robot in available_walking_presets():
         preset = load_walking_preset(robot)  # the robot's fall thresholds
 

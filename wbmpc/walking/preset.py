@@ -186,8 +186,16 @@ def _apply_override(tables: dict[str, dict[str, Any]], key: str, value: Any) -> 
     table[path[-1]] = value
 
 
-def load_walking_preset(robot: str, overrides: Mapping[str, Any] | None = None) -> WalkingPreset:
+def load_walking_preset(robot: str, overrides: Mapping[str, Any] | None = None,
+                        path: str | Path | None = None) -> WalkingPreset:
     """The walking preset of ``robot`` with ``overrides`` applied (see the module docstring).
+
+    Args:
+        robot: a registered robot name.
+        overrides: values replacing the file's (``"section.field"`` keys, bare controller fields,
+            whole sections).
+        path: a preset file to read instead of ``wbmpc/walking/presets/<robot>.toml`` (a robot
+            of your own, or a variant of a preset).
 
     Raises:
         ParameterError: the robot has no walking preset (the message lists those that do), the
@@ -195,12 +203,12 @@ def load_walking_preset(robot: str, overrides: Mapping[str, Any] | None = None) 
     """
     check_robot_name(robot)
     available = available_walking_presets()
-    if robot not in available:
+    if path is None and robot not in available:
         raise ParameterError(
             f"robot={robot!r} has no walking preset yet (robots that walk: {', '.join(available)}); "
             f"add wbmpc/walking/presets/{robot}.toml to make it walk (docs/extending.md)"
         )
-    path = PRESET_DIR / f"{robot}.toml"
+    path = PRESET_DIR / f"{robot}.toml" if path is None else Path(path)
     data = read_toml(path, "walking preset")
     missing = [s for s in SECTIONS if s not in data]
     extra = sorted(set(data) - set(SECTIONS))
