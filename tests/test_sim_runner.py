@@ -170,3 +170,10 @@ def test_cli_run_prints_metrics_as_json(capsys, tmp_path):
     code = main(["run", "walk", "--controller", "pd", "--set", "sped=0.3", "--duration", "0.1"])
     assert code == 2  # unknown parameter: one-line error, exit code 2
     assert "unknown parameter(s) ['sped']" in capsys.readouterr().err
+
+
+def test_the_fall_detector_knows_each_robots_feet():
+    """The G1's sole spheres are its feet (not a body contact, which would be a fall at t = 0)."""
+    log = run_scenario("walk", robot="g1", controller="pd", duration=0.1, seed=0, progress=False, kp=200.0, kd=5.0)
+    assert log.status == "completed", log.fall_reason
+    assert log.ticks["foot_contact"][-1].tolist() == [True, True]

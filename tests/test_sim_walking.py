@@ -89,3 +89,22 @@ def test_same_seed_same_walking_log():
     for key in ("x", "tau", "dcm", "feet"):
         np.testing.assert_array_equal(a.ticks[key], b.ticks[key], err_msg=key)
     np.testing.assert_array_equal(a.replans["mpc_cost"], b.replans["mpc_cost"])
+
+
+@pytest.mark.slow
+def test_bolt_walks_sideways_on_a_lateral_command():
+    """v_y = 0.1 m/s (heading frame): Bolt steps to the left, without turning."""
+    log = run_scenario("walk", duration=3.0, seed=0, velocity_command=(0.0, 0.1, 0.0), ramp_time=1.0, progress=False)
+    assert log.status == "completed", (log.fall_time, log.fall_reason)
+    moved = log.ticks["x"][-1, :2] - log.ticks["x"][0, :2]
+    assert 0.12 < moved[1] < 0.35 and abs(moved[0]) < 0.08, moved
+    assert np.all(log.replans["sequencer_v_y"][log.replans["t"] >= 1.0] == pytest.approx(0.1))
+
+
+def test_a_command_the_robot_cannot_follow_is_refused_before_the_run():
+    with pytest.raises(ParameterError, match=r"yaw_rate=0.2 rad/s for robot 'bolt' must be 0 rad/s \(Bolt's legs"):
+        run_scenario("walk", duration=0.1, velocity_command=(0.2, 0.0, 0.2))
+    with pytest.raises(ParameterError, match=r"v_x=0.65 m/s for robot 'bolt' must be in \[-0.3, 0.5\] m/s"):
+        run_scenario("walk", duration=0.1, speed=0.65)
+    with pytest.raises(ParameterError, match=r"and \['lateral_speed'\] both set the command: give one"):
+        run_scenario("walk", duration=0.1, velocity_command=(0.0, 0.1, 0.0), lateral_speed=0.3)

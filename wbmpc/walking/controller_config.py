@@ -34,8 +34,8 @@ class WalkingControllerConfig:
             slower (docs/closed_loop.md). Three recover more pushes (push map 27.1 % against
             21.4 %, docs/campaigns.md).
         mpc_horizon_end: how the MPC's warm start fills the node entering at the end of the
-            horizon: "rollout" (default) or "repeat" (see ``wbmpc.walking.WalkingMPC``). With "repeat",
-            1 iteration per update falls (see ``max_iterations``).
+            horizon: "repeat" (default, as ``wbmpc.ocp.mpc.RecedingHorizonMPC``) or "rollout". Bolt's
+            preset uses "rollout": with "repeat", 1 iteration per update falls (see ``max_iterations``).
         mpc_prepare: after each update, compute the next update's contact dynamics derivatives
             ahead (``WalkingMPC.prepare``): the same torques, ~2 ms less between measurement and
             torque (the ``mpc_tick_time`` metric), the same work per cycle (``mpc_prepare_time``).
@@ -120,7 +120,7 @@ class WalkingControllerConfig:
     node_dt: float = 0.01
     replan_period: float = 0.01
     max_iterations: int = 1
-    mpc_horizon_end: str = "rollout"
+    mpc_horizon_end: str = "repeat"
     mpc_prepare: bool = True
     mpc_time_budget: float | None = None
     delay_nodes: int = 1
