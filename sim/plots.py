@@ -132,10 +132,11 @@ def plot_plane(log, ax=None):
     figure_width, figure_height = ax.figure.get_size_inches()
     aspect = (bbox.height * figure_height) / (bbox.width * figure_width)
     xlim, ylim, equal = plane_limits(np.concatenate(xs), np.concatenate(ys), aspect)
-    ax.set_xlim(*xlim)
-    ax.set_ylim(*ylim)
-    if equal:
+    if equal:  # matplotlib widens the shorter extent to the panel's shape
         ax.set_aspect("equal", adjustable="datalim")
+    else:
+        ax.set_xlim(*xlim)
+        ax.set_ylim(*ylim)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]" if equal else "y [m] (scale ≠ x)")
     ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), fontsize=7, ncol=4, frameon=False)  # above the data

@@ -72,12 +72,15 @@ def test_set_with_a_word_for_a_number_is_one_line(capsys):
     assert main(["walk", "--set", "speed=fast", "--duration", "0.1"]) == 2
     err = capsys.readouterr().err
     assert err == "wbmpc walk: error: --set speed='fast': speed is a number (scenario 'walk'), got str 'fast'\n"
+    assert main(["walk", "--set", "robot=g1"]) == 2
+    assert "--set robot=...: robot is not a scenario/runner/controller parameter; use --robot" in capsys.readouterr().err
 
 
 def test_unknown_robot_is_one_line_on_every_subcommand_that_takes_one(capsys):
     for argv in (["walk", "--robot", "robby", "--duration", "0.05"], ["run", "push", "--robot", "robby"],
                  ["plan", "--robot", "robby"], ["ocp", "--robot", "robby"],
-                 ["campaign", "push-map", "--robot", "robby", "--backend", "inline"]):
+                 ["campaign", "push-map", "--robot", "robby", "--backend", "inline"],
+                 ["bench", "loop", "--robot", "robby", "--baseline", "none"]):
         assert main(argv) == 2, argv
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "robot='robby' is not known; available robots: bolt" in err, err

@@ -101,6 +101,11 @@ def register(subparsers) -> None:
     run.set_defaults(func=_run)
 
 
+# run_scenario's own arguments -> the option that gives each (not --set NAME=VALUE)
+RUN_SCENARIO_OPTIONS = {"robot": "--robot", "duration": "--duration", "seed": "--seed", "out": "--out",
+                        "controller": "--controller", "on_tick": "--viewer"}
+
+
 def velocity_command_from_args(args: argparse.Namespace) -> tuple[float, float, float] | None:
     """(v_x, v_y, yaw_rate) when any of --vx/--speed, --vy, --yaw-rate is given, else None."""
     if args.vx is None and args.vy is None and args.yaw_rate is None:
@@ -131,6 +136,10 @@ def params_from_args(args: argparse.Namespace) -> dict:
     if command is not None:
         params["velocity_command"] = command
     overrides = dict(args.overrides)
+    own = sorted(set(overrides) & set(RUN_SCENARIO_OPTIONS))
+    if own:
+        raise ParameterError(f"--set {own[0]}=...: {own[0]} is not a scenario/runner/controller parameter; "
+                             f"use {RUN_SCENARIO_OPTIONS[own[0]]}")
     check_numeric_overrides(args.scenario, overrides)
     params.update(overrides)
     params["progress"] = None if not args.json else False
@@ -177,7 +186,7 @@ def _run(args: argparse.Namespace) -> int:
         if reason is not None:
             raise ParameterError(f"--viewer: {reason}")
         on_tick = LiveViewer()
-    if args.render:
+    if args.render and not args.viewer:  # the viewer needs MuJoCo's default (windowed) GL
         os.environ.setdefault("MUJOCO_GL", "egl")  # headless offscreen context; read when MuJoCo is imported
     from sim.metrics import paper_comparison
     from sim.runner import run_scenario
