@@ -2,7 +2,7 @@
 
     wbmpc ocp --speed 0.33 --nodes 100 --iterations 100 --json --plot runs/ocp.png
 
-The footsteps come from the DCM sequencer (Algorithm 1, ``SequencerParams.bolt_walking()``)
+The footsteps come from the robot's walking preset's DCM planner (Algorithm 1)
 sampled on the OCP grid; the terminal CoM reference is the plan's LIPM prediction at the end of
 the horizon (eq. 24). Prints the FDDP log, the cost of every named term, the swing apex
 heights, the CoM displacement and the torque peak; ``--plot`` draws foot heights, CoM and

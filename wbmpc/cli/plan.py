@@ -5,8 +5,8 @@ Every SequencerParams field can be overridden from the command line (``--alpha1`
 (``--preset``) or a TOML file (``--params FILE``).
 
 ``--robot NAME`` plans for a robot standing still: its left foot in stance at its reference
-position, the DCM at its CoM (at rest), t = 0, and the robot's sequencer preset ``NAME_walking``
-(unless ``--preset`` or ``--params`` is given).
+position, the DCM at its CoM (at rest), t = 0, with the planner of the robot's walking preset
+(``wbmpc/walking/presets/NAME.toml``; unless ``--preset`` or ``--params`` is given).
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ from sequencer.horizon import FootstepPlan, FootstepSequencer
 from sequencer.params import PRESET_DIR, SequencerParams
 from wbmpc.cli.arguments import FINITE, NON_NEGATIVE
 from wbmpc.cli.output import add_output_arguments, print_json
-from wbmpc.errors import ParameterError
 
 # Table I example state (p0, zeta_hat, t) used as the default initial condition.
 TABLE_I_STANCE_FOOT = "left"
@@ -57,7 +56,7 @@ def add_params_arguments(parser: argparse.ArgumentParser) -> None:
     presets = sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
     group = parser.add_argument_group("sequencer parameters (defaults: the chosen preset)")
     group.add_argument("--preset", choices=presets, default=None,
-                       help="named parameter set (default table_i, or the --robot's NAME_walking)")
+                       help="named parameter set (default table_i, or the --robot's walking preset)")
     group.add_argument("--params", metavar="FILE", default=None, help="TOML parameter file (overrides --preset)")
     for field in dataclasses.fields(SequencerParams):
         if field.name == "name":
@@ -69,30 +68,21 @@ def add_params_arguments(parser: argparse.ArgumentParser) -> None:
 
 def params_from_args(args: argparse.Namespace) -> SequencerParams:
     """Build SequencerParams from --preset/--params and the per-field overrides."""
+    robot = getattr(args, "robot", None)
     if args.params:
         base = SequencerParams.from_toml(args.params)
+    elif args.preset is None and robot is not None:
+        from wbmpc.walking.preset import load_walking_preset
+
+        base = load_walking_preset(robot).planner  # the planner the robot walks with
     else:
-        base = SequencerParams.preset(args.preset or robot_preset(getattr(args, "robot", None)))
+        base = SequencerParams.preset(args.preset or "table_i")
     overrides = {
         field.name: getattr(args, f"param_{field.name}")
         for field in dataclasses.fields(SequencerParams)
         if field.name != "name" and getattr(args, f"param_{field.name}", None) is not None
     }
     return dataclasses.replace(base, **overrides) if overrides else base
-
-
-def robot_preset(robot: str | None) -> str:
-    """Sequencer preset of ``robot`` ("NAME_walking"), or Table I's without a robot."""
-    if robot is None:
-        return "table_i"
-    from robots.registry import load_robot
-
-    name = load_robot(robot).name  # refuses an unknown robot, listing the known ones
-    available = sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
-    if f"{name}_walking" not in available:
-        raise ParameterError(f"robot={name!r} has no sequencer preset {name}_walking (available presets: "
-                             f"{available}); give --preset or --params")
-    return f"{name}_walking"
 
 
 def add_state_arguments(parser: argparse.ArgumentParser, elapsed_name: str = "--t") -> None:
