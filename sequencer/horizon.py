@@ -274,9 +274,9 @@ class FootstepSequencer:
         self._gamma_lo0 = math.exp(omega * params.t_min)
         self._width_bounds = {foot: params.width_bounds(foot) for foot in FEET}
         self._max_steps = int(math.ceil(params.horizon / params.t_min)) + 2
-        self._gait_key = None
-        self._gait: tuple[NominalGait, dict] | None = None
-        self.nominal_gait()
+        own_key = (params.v_x, params.v_y, params.swing_drift, params.dcm_offset_bias)
+        self._own_gait = self._build_gait_tables(own_key)  # the parameters' own command and corrections
+        self._gait_key, self._gait = own_key, self._own_gait  # the last distinct one asked for
 
     def nominal_gait(self, velocity=None, corrections: LipmCorrections | None = None) -> NominalGait:
         """Nominal steps and aimed offsets for ``velocity`` (v_x, v_y) [m/s] (None: the params') and
@@ -291,6 +291,8 @@ class FootstepSequencer:
 
     def _gait_tables(self, velocity, corrections) -> tuple[NominalGait, dict]:
         """(gait, stance foot -> (w_nom, (b_x, b_y), (w_min, w_max))): the gait and what one step QP reads of it."""
+        if velocity is None and corrections is None:
+            return self._own_gait
         params = self.params
         v_x, v_y = (params.v_x, params.v_y) if velocity is None else velocity
         if corrections is None:
@@ -298,12 +300,14 @@ class FootstepSequencer:
         else:
             key = (v_x, v_y, corrections.swing_drift, corrections.dcm_offset_bias)
         if key != self._gait_key:
-            gait = params.nominal_gait(*key)
-            per_stance = {
-                foot: (w_nom, b_nom, self._width_bounds[foot]) for foot, (w_nom, b_nom) in gait.per_stance.items()
-            }
-            self._gait, self._gait_key = (gait, per_stance), key
+            self._gait, self._gait_key = self._build_gait_tables(key), key
         return self._gait
+
+    def _build_gait_tables(self, key: tuple[float, float, float, float]) -> tuple[NominalGait, dict]:
+        """The gait tables of (v_x, v_y, swing_drift, dcm_offset_bias); raises ParameterError out of range."""
+        gait = self.params.nominal_gait(*key)
+        per_stance = {foot: (w_nom, b_nom, self._width_bounds[foot]) for foot, (w_nom, b_nom) in gait.per_stance.items()}
+        return gait, per_stance
 
     def problem(self, stance_foot: str, stance_position, dcm_measured, elapsed: float,
                 gait: NominalGait | None = None) -> StepProblem:
