@@ -419,7 +419,7 @@ class FootstepSequencer:
         rotate = yaw != 0.0 or yaw_rate != 0.0  # else the world frame is every stance's heading frame
         p0x, p0y = float(p0[0]), float(p0[1])
         zx, zy = float(dcm[0]), float(dcm[1])
-        steps = []
+        steps, vectors = [], []  # (foot, touchdown, stance start, active bits, yaw), (p_T, b_T, zeta_T)
         for _ in range(self._max_steps):
             w_nom, (bnx, bny), (w_lo, w_hi) = per_stance[stance]
             if elapsed > 0.0:
@@ -447,14 +447,16 @@ class FootstepSequencer:
             yaw = yaw + yaw_rate * duration
             landing = "right" if stance == "left" else "left"
             zx, zy = px + bx, py + by
-            steps.append(
-                PlannedStep(landing, np.array((px, py)), touchdown, np.array((bx, by)), np.array((zx, zy)),
-                            stance_start, _ACTIVE_NAMES[bits], yaw)
-            )
+            steps.append((landing, touchdown, stance_start, bits, yaw))
+            vectors.append((px, py, bx, by, zx, zy))
             if touchdown >= t_end:
                 break
             stance, p0x, p0y, stance_start, elapsed = landing, px, py, touchdown, 0.0
-        return steps
+        values = np.array(vectors)  # one array for all steps: their vectors are rows of it
+        return [
+            PlannedStep(landing, values[k, 0:2], touchdown, values[k, 2:4], values[k, 4:6], start, _ACTIVE_NAMES[bits], yaw)
+            for k, (landing, touchdown, start, bits, yaw) in enumerate(steps)
+        ]
 
     def _plan_backend(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, gait) -> list[PlannedStep]:
         t_end = t + self.params.horizon
