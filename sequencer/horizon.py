@@ -274,9 +274,9 @@ class FootstepSequencer:
         self._gamma_lo0 = math.exp(omega * params.t_min)
         self._width_bounds = {foot: params.width_bounds(foot) for foot in FEET}
         self._max_steps = int(math.ceil(params.horizon / params.t_min)) + 2
-        self._gait_key = None
-        self._gait: tuple[NominalGait, dict] | None = None
-        self.nominal_gait()
+        own_key = (params.v_x, params.v_y, params.swing_drift, params.dcm_offset_bias)
+        self._own_gait = self._build_gait_tables(own_key)  # the parameters' own command and corrections
+        self._gait_key, self._gait = own_key, self._own_gait  # the last distinct one asked for
 
     def nominal_gait(self, velocity=None, corrections: LipmCorrections | None = None) -> NominalGait:
         """Nominal steps and aimed offsets for ``velocity`` (v_x, v_y) [m/s] (None: the params') and
@@ -291,6 +291,8 @@ class FootstepSequencer:
 
     def _gait_tables(self, velocity, corrections) -> tuple[NominalGait, dict]:
         """(gait, stance foot -> (w_nom, (b_x, b_y), (w_min, w_max))): the gait and what one step QP reads of it."""
+        if velocity is None and corrections is None:
+            return self._own_gait
         params = self.params
         v_x, v_y = (params.v_x, params.v_y) if velocity is None else velocity
         if corrections is None:
@@ -298,12 +300,14 @@ class FootstepSequencer:
         else:
             key = (v_x, v_y, corrections.swing_drift, corrections.dcm_offset_bias)
         if key != self._gait_key:
-            gait = params.nominal_gait(*key)
-            per_stance = {
-                foot: (w_nom, b_nom, self._width_bounds[foot]) for foot, (w_nom, b_nom) in gait.per_stance.items()
-            }
-            self._gait, self._gait_key = (gait, per_stance), key
+            self._gait, self._gait_key = self._build_gait_tables(key), key
         return self._gait
+
+    def _build_gait_tables(self, key: tuple[float, float, float, float]) -> tuple[NominalGait, dict]:
+        """The gait tables of (v_x, v_y, swing_drift, dcm_offset_bias); raises ParameterError out of range."""
+        gait = self.params.nominal_gait(*key)
+        per_stance = {foot: (w_nom, b_nom, self._width_bounds[foot]) for foot, (w_nom, b_nom) in gait.per_stance.items()}
+        return gait, per_stance
 
     def problem(self, stance_foot: str, stance_position, dcm_measured, elapsed: float,
                 gait: NominalGait | None = None) -> StepProblem:
@@ -415,7 +419,7 @@ class FootstepSequencer:
         rotate = yaw != 0.0 or yaw_rate != 0.0  # else the world frame is every stance's heading frame
         p0x, p0y = float(p0[0]), float(p0[1])
         zx, zy = float(dcm[0]), float(dcm[1])
-        steps = []
+        steps, vectors = [], []  # (foot, touchdown, stance start, active bits, yaw), (p_T, b_T, zeta_T)
         for _ in range(self._max_steps):
             w_nom, (bnx, bny), (w_lo, w_hi) = per_stance[stance]
             if elapsed > 0.0:
@@ -443,14 +447,16 @@ class FootstepSequencer:
             yaw = yaw + yaw_rate * duration
             landing = "right" if stance == "left" else "left"
             zx, zy = px + bx, py + by
-            steps.append(
-                PlannedStep(landing, np.array((px, py)), touchdown, np.array((bx, by)), np.array((zx, zy)),
-                            stance_start, _ACTIVE_NAMES[bits], yaw)
-            )
+            steps.append((landing, touchdown, stance_start, bits, yaw))
+            vectors.append((px, py, bx, by, zx, zy))
             if touchdown >= t_end:
                 break
             stance, p0x, p0y, stance_start, elapsed = landing, px, py, touchdown, 0.0
-        return steps
+        values = np.array(vectors)  # one array for all steps: their vectors are rows of it
+        return [
+            PlannedStep(landing, values[k, 0:2], touchdown, values[k, 2:4], values[k, 4:6], start, _ACTIVE_NAMES[bits], yaw)
+            for k, (landing, touchdown, start, bits, yaw) in enumerate(steps)
+        ]
 
     def _plan_backend(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, gait) -> list[PlannedStep]:
         t_end = t + self.params.horizon

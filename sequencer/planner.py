@@ -25,8 +25,12 @@ from wbmpc.errors import ParameterError
 
 
 def _finite_vector(name: str, value, size: int) -> np.ndarray:
-    array = np.array(value, dtype=float).reshape(-1)
-    if array.shape != (size,) or not np.all(np.isfinite(array)):
+    """A read-only float copy of ``value``, shape (size,); built at every replan, so checked on floats."""
+    try:
+        array = np.array(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name}={value!r} must be {size} finite numbers") from None
+    if array.shape != (size,) or not all(map(math.isfinite, array.tolist())):
         raise ParameterError(f"{name}={value!r} must be {size} finite numbers")
     array.setflags(write=False)
     return array

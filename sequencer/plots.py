@@ -11,7 +11,8 @@ FOOT_COLORS = {"left": "tab:red", "right": "tab:blue"}
 
 
 def plot_plan(plan: FootstepPlan, params: SequencerParams, path: str, com_xy=None, title: str = "") -> None:
-    """Write a PNG with the planned footholds, their bound boxes (eqs. 4a-4d) and the LIPM DCM/CoM.
+    """Write a PNG with the planned footholds, their bound boxes (eqs. 4a-4d, turned with each stance's
+    heading) and the LIPM DCM/CoM.
 
     Args:
         plan: the FootstepPlan to draw.
@@ -37,17 +38,19 @@ def plot_plan(plan: FootstepPlan, params: SequencerParams, path: str, com_xy=Non
     ax_xy.plot(*plan.dcm_measured, "o", color="tab:green", mfc="none", ms=9, label="measured DCM")
     ax_xy.plot(*plan.stance_position, "s", color=FOOT_COLORS[plan.stance_foot], ms=9, mfc="none",
                label=f"stance foot ({plan.stance_foot})")
-    previous, stance = plan.stance_position, plan.stance_foot
+    previous, stance, yaw = plan.stance_position, plan.stance_foot, plan.stance_yaw
     for k, step in enumerate(plan.steps):
         w_lo, w_hi = params.width_bounds(stance)
+        c, s = np.cos(yaw), np.sin(yaw)  # the bounds hold in the stance's heading frame
+        corner = previous + np.array((c * params.l_min - s * w_lo, s * params.l_min + c * w_lo))
         ax_xy.add_patch(
-            Rectangle((previous[0] + params.l_min, previous[1] + w_lo), params.l_max - params.l_min, w_hi - w_lo,
+            Rectangle(tuple(corner), params.l_max - params.l_min, w_hi - w_lo, angle=float(np.degrees(yaw)),
                       fill=False, ls=":", lw=0.7, color=FOOT_COLORS[step.foot], alpha=0.6)
         )
         ax_xy.plot(*step.position, "o", color=FOOT_COLORS[step.foot], ms=7)
         ax_xy.annotate(str(k + 1), step.position, textcoords="offset points", xytext=(4, 4), fontsize=7)
         ax_xy.plot(*step.dcm_at_touchdown, "x", color="tab:green", ms=6)
-        previous, stance = step.position, step.foot
+        previous, stance, yaw = step.position, step.foot, step.yaw
     ax_xy.plot([], [], "o", color=FOOT_COLORS["left"], label="left footholds")
     ax_xy.plot([], [], "o", color=FOOT_COLORS["right"], label="right footholds")
     ax_xy.plot([], [], ":", color="gray", label="step bounds (4a-4d)")

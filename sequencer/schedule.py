@@ -59,11 +59,10 @@ class ContactSchedule:
             raise ParameterError(f"dt={self.dt} s must be a finite positive number")
         n_feet = len(self.feet)
         rows = self.in_contact.shape[0]
-        in_contact = np.asarray(self.in_contact, dtype=bool)
         if self.touchdown_yaw is None:
-            object.__setattr__(self, "touchdown_yaw", np.where(in_contact, np.nan, 0.0))
+            object.__setattr__(self, "touchdown_yaw", np.where(np.asarray(self.in_contact, dtype=bool), np.nan, 0.0))
         if self.contact_yaw is None:
-            object.__setattr__(self, "contact_yaw", np.where(in_contact, 0.0, np.nan))
+            object.__setattr__(self, "contact_yaw", np.where(np.asarray(self.in_contact, dtype=bool), 0.0, np.nan))
         expected = {
             "in_contact": (rows, n_feet),
             "swing_phase": (rows, n_feet),
@@ -135,9 +134,12 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
         )
     feet = tuple(plan.feet)
     column = {foot: j for j, foot in enumerate(feet)}
-    unknown = sorted({plan.stance_foot, *(step.foot for step in plan.steps)} - set(column))
-    if unknown:
-        raise ParameterError(f"the plan's stance and steps use feet {unknown} that are not in its feet {feet}")
+    try:
+        stance_column = column[plan.stance_foot]
+        landing_columns = [column[step.foot] for step in plan.steps]
+    except KeyError:
+        unknown = sorted({plan.stance_foot, *(step.foot for step in plan.steps)} - set(column))
+        raise ParameterError(f"the plan's stance and steps use feet {unknown} that are not in its feet {feet}") from None
     times = t0 + dt * np.arange(n_nodes + 1)
     touchdowns = plan.touchdown_times
     if times[-1] >= touchdowns[-1]:
@@ -148,9 +150,8 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
     # index of the stance interval of each node: 0 = current stance, k = after the k-th touchdown
     shift = 0.5 * dt if rounding == "nearest" else 0.0
     interval = np.searchsorted(touchdowns, times + shift, side="right")
-    landing_column = np.array([column[step.foot] for step in plan.steps])
     rows = np.arange(n_nodes + 1)
-    node_interval = interval
+    node_interval, node_times = interval, times
     start = np.concatenate([[plan.t_stance_start], touchdowns])[interval]  # the previous touchdown
     end = touchdowns[interval]
     double_support = float(plan.double_support)
@@ -163,11 +164,12 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
             )
         swinging = times + shift >= start
         rows, interval, start, end = rows[swinging], interval[swinging], start[swinging], end[swinging]
-    swing = landing_column[interval]
+        node_times = times[swinging]
+    swing = np.array(landing_columns)[interval]
     in_contact = np.ones((n_nodes + 1, len(feet)), dtype=bool)
     in_contact[rows, swing] = False
     swing_phase = np.full((n_nodes + 1, len(feet)), np.nan)
-    swing_phase[rows, swing] = np.clip((times[rows] - start) / (end - start), 0.0, 1.0)
+    swing_phase[rows, swing] = np.clip((node_times - start) / (end - start), 0.0, 1.0)
     swing_duration = np.full((n_nodes + 1, len(feet)), np.nan)
     swing_duration[rows, swing] = end - start
     touchdown_position = np.full((n_nodes + 1, len(feet), 2), np.nan)
@@ -175,12 +177,15 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
     touchdown_yaw = np.full((n_nodes + 1, len(feet)), np.nan)
     touchdown_yaw[rows, swing] = plan.yaws[interval]
     # yaw of the foothold each foot stands on in each stance interval (NaN: it landed before the plan)
-    standing_yaw = np.full((int(node_interval[-1]) + 1, len(feet)), np.nan)
-    standing_yaw[0, column[plan.stance_foot]] = plan.stance_yaw
-    for i in range(1, standing_yaw.shape[0]):
-        standing_yaw[i] = standing_yaw[i - 1]
-        standing_yaw[i, landing_column[i - 1]] = plan.steps[i - 1].yaw
-    contact_yaw = np.where(in_contact, standing_yaw[node_interval], np.nan)
+    standing = [np.nan] * len(feet)
+    standing[stance_column] = plan.stance_yaw
+    standing_yaw = [standing]
+    for step, j in zip(plan.steps[: int(node_interval[-1])], landing_columns):
+        standing = standing.copy()
+        standing[j] = step.yaw
+        standing_yaw.append(standing)
+    contact_yaw = np.array(standing_yaw)[node_interval]
+    contact_yaw[rows, swing] = np.nan
     return ContactSchedule(
         t0=t0, dt=dt, feet=feet, in_contact=in_contact, swing_phase=swing_phase,
         swing_duration=swing_duration, touchdown_position=touchdown_position, touchdown_yaw=touchdown_yaw,

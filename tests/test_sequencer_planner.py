@@ -28,6 +28,8 @@ def test_stance_and_reduced_state_are_validated_and_read_only():
     assert stance.position.shape == (2,) and not stance.position.flags.writeable
     with pytest.raises(ParameterError, match=r"stance position=\[0.1, 0.2, 0.3\] must be 2 finite numbers"):
         StanceState("left", [0.1, 0.2, 0.3], 0.0, 0.0)
+    with pytest.raises(ParameterError, match=r"stance position='here' must be 2 finite numbers"):
+        StanceState("left", "here", 0.0, 0.0)
     with pytest.raises(ParameterError, match=r"stance yaw=inf must be finite"):
         StanceState("left", [0.0, 0.0], float("inf"), 0.0)
     state = ReducedState([0, 0, 0.3], [0.1, 0, 0], [0.02, 0.0])
