@@ -313,22 +313,8 @@ class FootstepSequencer:
                 gait: NominalGait | None = None) -> StepProblem:
         """The one-step QP (eqs. 2-5) for this sequencer's weights and bounds and ``gait``'s nominal
         values (None: the parameters' own), with p0 and the DCM in the frame the QP is written in."""
-        params = self.params
         gait = self.nominal_gait() if gait is None else gait
-        return StepProblem(
-            stance_foot=stance_foot,
-            p0=np.asarray(stance_position, dtype=float),
-            dcm_measured=np.asarray(dcm_measured, dtype=float),
-            elapsed=float(elapsed),
-            omega=params.omega,
-            alpha=np.array([params.alpha1, params.alpha2, params.alpha3]),
-            step_nominal=np.array([gait.step_length, gait.step_width(stance_foot)]),
-            t_nom=params.t_nom,
-            b_nominal=np.array(gait.dcm_offset(stance_foot)),
-            length_bounds=(params.l_min, params.l_max),
-            width_bounds=params.width_bounds(stance_foot),
-            time_bounds=(params.t_min, params.t_max),
-        )
+        return StepProblem.from_params(self.params, stance_foot, stance_position, dcm_measured, elapsed, gait)
 
     def plan(
         self,

@@ -123,11 +123,16 @@ class NominalGait:
 
     def step_width(self, stance_foot: str) -> float:
         """Nominal lateral step p_T,y - p_0,y from ``stance_foot`` [m]."""
-        return self.per_stance[stance_foot][0]
+        return self._stance(stance_foot)[0]
 
     def dcm_offset(self, stance_foot: str) -> tuple[float, float]:
         """Aimed DCM offset (b_x, b_y) at the touchdown ending a ``stance_foot`` stance [m]."""
-        return self.per_stance[stance_foot][1]
+        return self._stance(stance_foot)[1]
+
+    def _stance(self, stance_foot: str):
+        if stance_foot not in self.per_stance:
+            stance_sign(stance_foot)  # raises the one-line error naming the foot
+        return self.per_stance[stance_foot]
 
 
 def nominal_gait(

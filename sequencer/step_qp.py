@@ -112,9 +112,12 @@ class StepProblem:
 
     @classmethod
     def from_params(
-        cls, params, stance_foot: str, p0, dcm_measured, elapsed: float
+        cls, params, stance_foot: str, p0, dcm_measured, elapsed: float, gait=None
     ) -> "StepProblem":
-        """Build the QP of eqs. (2)-(5) for ``params`` (a SequencerParams) and one stance."""
+        """Build the QP of eqs. (2)-(5) for ``params`` (a SequencerParams) and one stance, with the
+        nominal step and offset of ``gait`` (a ``sequencer.nominal.NominalGait``; None: the
+        parameters' own command and corrections)."""
+        gait = params.nominal_gait() if gait is None else gait
         return cls(
             stance_foot=stance_foot,
             p0=np.asarray(p0, dtype=float),
@@ -122,9 +125,9 @@ class StepProblem:
             elapsed=float(elapsed),
             omega=params.omega,
             alpha=np.array([params.alpha1, params.alpha2, params.alpha3]),
-            step_nominal=np.array([params.l_nom, params.w_nom(stance_foot)]),
+            step_nominal=np.array([gait.step_length, gait.step_width(stance_foot)]),
             t_nom=params.t_nom,
-            b_nominal=np.array(params.b_nom(stance_foot)),
+            b_nominal=np.array(gait.dcm_offset(stance_foot)),
             length_bounds=(params.l_min, params.l_max),
             width_bounds=params.width_bounds(stance_foot),
             time_bounds=(params.t_min, params.t_max),
