@@ -46,7 +46,7 @@ from wbmpc.ocp.integrator import IntegratedActionModelEuler
 from wbmpc.ocp.kernels.costs import cost_rows_value
 from wbmpc.ocp.kernels.feedback import rollout_node_start
 from wbmpc.ocp.kernels.frames import FrameKinematics, frame_kinematics_support
-from wbmpc.ocp.kernels.integration import free_flyer_euler_jacobians, free_flyer_euler_step
+from wbmpc.ocp.kernels.integration import euler_transition_jacobians, free_flyer_euler_step
 from wbmpc.ocp.kernels.lie import free_flyer_dintegrate, free_flyer_state_difference, free_flyer_state_jacobians
 from wbmpc.ocp.problem import RolloutError, ShootingProblem
 from wbmpc.ocp.residuals import ResidualControl, ResidualFrameHeight, ResidualFrameTranslation, ResidualState
@@ -638,7 +638,7 @@ def batched_cost_derivatives(xs, us, dt, term_kind, term_row, term_slot, term_sc
     nq = xs.shape[1] - nv
     for k in range(dt.size):
         free_flyer_dintegrate(xs[k, :nq], euler_dx[k, :nv], J_q, J_dq)
-        free_flyer_euler_jacobians(da_dx[k], da_du[k], J_q, J_dq, dt[k], Fx[k], Fu[k])
+        euler_transition_jacobians(da_dx[k], da_du[k], J_q, J_dq, dt[k], 6, Fx[k], Fu[k])
         _fill_residual_rows(k, xs[k], us[k], term_kind, term_row, term_slot, term_scale, reference,
                             state_residual, frame_position, r)
         value = cost_rows_value(r, row_term, term_scale[k], w[k], lb[k], ub[k], term_cost[k])

@@ -14,7 +14,11 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.kernels.lie import free_flyer_state_difference, free_flyer_state_differences
+from wbmpc.ocp.kernels.lie import (
+    free_flyer_ddifference_second,
+    free_flyer_state_difference,
+    free_flyer_state_differences,
+)
 
 
 class StateMultibody:
@@ -96,9 +100,16 @@ class StateMultibody:
         J1[nv:, nv:] = np.eye(nv)
         return J0, J1
 
-    def Jdiff_second_q(self, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
-        """Configuration block of ∂(x1 ⊖ x0)/∂x1, shape (nv, nv) (the velocity block is identity)."""
-        return pin.dDifference(self.pinocchio, q0, q1, pin.ARG1)
+    def Jdiff_second_q(self, q0: np.ndarray, q1: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """Configuration block of ∂(x1 ⊖ x0)/∂x1, shape (nv, nv) (the velocity block is identity);
+        compiled for a free flyer (the kernel the batched problem uses), Pinocchio otherwise and
+        near a half-turn relative rotation."""
+        if out is None:
+            out = np.empty((self.nv, self.nv))
+        if self._compiled_difference and free_flyer_ddifference_second(q0, q1, out):
+            return out
+        out[:] = pin.dDifference(self.pinocchio, q0, q1, pin.ARG1)
+        return out
 
     def Jintegrate(self, x: np.ndarray, dx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Jacobians of x ⊕ dx with respect to x and dx, each shape (ndx, ndx)."""

@@ -28,7 +28,7 @@ class ResidualState:
 
     def calcDiff(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
         nq, nv = self.state.nq, self.state.nv
-        data.Rx[:nv, :nv] = self.state.Jdiff_second_q(self.reference[:nq], x[:nq])
+        self.state.Jdiff_second_q(self.reference[:nq], x[:nq], out=data.Rx[:nv, :nv])
 
     def createData(self) -> ResidualData:
         data = ResidualData(self.nr, self.state.ndx, self.nu)
