@@ -238,20 +238,14 @@ class BatchedShootingProblem(ShootingProblem):
         """(constraint models or None without contacts, Pinocchio data, constraint datas, proximal
         settings) of a node's contact set; the data is shared by every node with that set (one per
         set keeps it in cache)."""
-        for name in dam._moving_references:  # Baumgarte position reference (Kp > 0) may have moved
-            dam.constraint_models[name].joint2_placement = dam.contacts[name].reference_placement()
+        dam.update_moving_references()
         key = dam.active_key
         entry = self._contact_sets.get(key)
         if entry is not None and not dam.nc:
             return (None,) + entry
         if entry is None:
             pdata = self._pin_model.createData()
-            constraint_datas = pin.StdVec_RigidConstraintData()
-            for constraint in dam.active_constraints:
-                constraint_datas.append(constraint.createData())
-            if dam.nc:
-                pin.initConstraintDynamics(self._pin_model, pdata, dam.active_constraints, constraint_datas)
-            entry = self._contact_sets[key] = (pdata, constraint_datas, dam.proximal_settings)
+            entry = self._contact_sets[key] = (pdata, dam.create_constraint_datas(pdata), dam.proximal_settings)
         return (dam.active_constraints if dam.nc else None, *entry)
 
     # ----------------------------------------------------------------- preparation
