@@ -197,6 +197,10 @@ class BatchedShootingProblem(ShootingProblem):
         self._prepared_da_du = np.zeros((N, nv, nu))
         self.prepared_used = 0  # nodes the last calcDiff took from the preparation
         self._detached = False
+        # (residual, active mask (N,), references, residual rows (N, nr), Jacobian nonzeros) of
+        # each term: views of the stacked arrays, written in place
+        self._term_arguments = [(residual, self._term_active[:, j], self._references[j], self._r[:, self._term_rows[j]],
+                                 self._values[:, self._term_values[j]]) for j, residual in enumerate(self._terms)]
         self.sync()
 
     def detach(self) -> None:
@@ -376,12 +380,10 @@ class BatchedShootingProblem(ShootingProblem):
         h = self._horizon
         h.xs, h.us = xs[:N], us
         self._frame_kinematics(xs, jacobians)
-        active = self._term_active
-        for j, residual in enumerate(self._terms):
-            mask = active[:, j]
-            residual.batch_calc(h, mask, self._references[j], self._r[:, self._term_rows[j]])
+        for residual, mask, references, r, values in self._term_arguments:
+            residual.batch_calc(h, mask, references, r)
             if jacobians:
-                residual.batch_calc_diff(h, mask, self._references[j], self._values[:, self._term_values[j]])
+                residual.batch_calc_diff(h, mask, references, values)
 
     def _running_cost(self, xs, us) -> float:
         self._residuals(xs, us, jacobians=False)
