@@ -26,10 +26,12 @@ def bolt():
 
 
 def _twin_problems(ocp: WalkingOCP) -> tuple[ShootingProblem, BatchedShootingProblem]:
-    """A node-wise and a batched problem over the same node models."""
+    """A node-wise and a batched problem over the same node models (the OCP's own batched one,
+    synced with the models)."""
     p = ocp.problem
-    return (ShootingProblem(p.x0, p.running_models, p.terminal_model),
-            BatchedShootingProblem(p.x0, p.running_models, p.terminal_model))
+    assert isinstance(p, BatchedShootingProblem)
+    p.sync()
+    return ShootingProblem(p.x0, p.running_models, p.terminal_model), p
 
 
 def _random_trajectory(robot, n_nodes: int, nu: int, seed: int):
@@ -151,25 +153,42 @@ def test_solves_take_the_same_iterates(bolt):
 
 
 @pytest.mark.parametrize("config", [BATCHED_TERMS, WalkingOCPConfig(foothold_weight=1e5, touchdown_height_weight=1e5)])
-def test_update_fast_path_equals_a_full_sync(bolt, config):
-    """WalkingOCP.update writes the frame terms' columns and the changed contact sets directly;
-    a full sync() from the node models it updated reads the same batched configuration."""
+def test_updates_are_read_from_the_node_models(bolt, config):
+    """After every WalkingOCP.update (contact sets, activity, references moving with the
+    schedule) the batched problem evaluates what the node-wise pipeline evaluates on its models."""
     ocp = WalkingOCP(bolt, config, n_nodes=40, dt=0.01)
-    problem = ocp.problem
-    x0 = standing_state(bolt)
+    nodes, batched = ShootingProblem(ocp.problem.x0, ocp.problem.running_models, ocp.problem.terminal_model), \
+        ocp.problem
+    xs, us = _random_trajectory(bolt, 40, ocp.nu, seed=8)
     for t0, step_duration in ((0.0, 0.3), (0.01, 0.3), (0.13, 0.27), (0.29, 0.3)):
-        ocp.update(x0, alternating_schedule(t0, 0.01, 40, step_duration=step_duration), np.array([0.1, 0.0, 0.3]))
-        fast = (problem._term_scale.copy(), problem._reference.copy(), problem._frame_needed.copy(),
-                list(problem._node_dynamics))
-        problem.sync()
-        np.testing.assert_array_equal(fast[0], problem._term_scale)
-        active = problem._term_scale != 0.0
-        np.testing.assert_array_equal(fast[1][active], problem._reference[active])
-        np.testing.assert_array_equal(fast[2], problem._frame_needed)
-        for k, (entry_fast, entry_full) in enumerate(zip(fast[3], problem._node_dynamics)):
-            assert all(a is b for a, b in zip(entry_fast, entry_full)), k
-    assert active[:, problem.term_index("left_foothold")].any()
+        ocp.update(standing_state(bolt), alternating_schedule(t0, 0.01, 40, step_duration=step_duration),
+                   np.array([0.1, 0.0, 0.3]))
+        assert batched.calcDiff(xs, us) == pytest.approx(nodes.calc_and_diff(xs, us), rel=1e-13)
+        _assert_same(nodes, batched)
+        assert batched.term_costs() == pytest.approx(nodes.term_costs(), rel=1e-12, abs=1e-14)
+    assert batched.term_costs()["left_foothold"] > 0 or batched.term_costs()["right_foothold"] > 0
+    # a reference written into a node residual is seen without sync (the batched rows are its storage)
+    item = ocp.problem.running_models[3].differential.costs.costs["state_regularization"]
+    item.cost.residual.reference[7] += 0.1
+    assert batched.calc(xs, us) == pytest.approx(nodes.calc(xs, us), rel=1e-13)
     with pytest.raises(ParameterError, match="no running cost term 'nose_height'"):
-        problem.term_index("nose_height")
-    with pytest.raises(ParameterError, match="'state_regularization' is not a frame term"):
-        problem.set_term_columns({"state_regularization": (np.zeros(40), None)})
+        batched.term_index("nose_height")
+
+
+def test_a_term_without_batched_evaluation_is_an_error_naming_it(bolt):
+    ocp = WalkingOCP(bolt, WalkingOCPConfig(contact_force_weight=1e-2, evaluation="nodes"), 5, 0.01)
+    p = ocp.problem
+    with pytest.raises(ParameterError, match=r"cost 'left_contact_force' \(ResidualContactForce\) cannot be batched"):
+        BatchedShootingProblem(p.x0, p.running_models, p.terminal_model)
+
+
+def test_a_second_batched_problem_over_the_same_models_detaches_the_first(bolt):
+    ocp = WalkingOCP(bolt, BATCHED_TERMS, 5, 0.01)
+    ocp.update(standing_state(bolt), alternating_schedule(0.0, 0.01, 5), np.array([0.1, 0.0, 0.3]))
+    first = ocp.problem
+    p = first
+    second = BatchedShootingProblem(p.x0, p.running_models, p.terminal_model)
+    xs, us = _random_trajectory(bolt, 5, ocp.nu, seed=9)
+    second.calc(xs, us)
+    with pytest.raises(ParameterError, match="bound by a newer BatchedShootingProblem"):
+        first.calc(xs, us)

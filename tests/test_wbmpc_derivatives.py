@@ -1,4 +1,5 @@
-"""calc/calcDiff of the wbmpc models and residuals against finite differences at random states."""
+"""calc/calcDiff of the wbmpc models and residuals against the library's numdiff (central differences on
+the state manifold) at random states, block by block (base/joints × position/velocity)."""
 
 from __future__ import annotations
 
@@ -10,10 +11,15 @@ from wbmpc_fixtures import alternating_schedule, random_state, standing_state
 
 from robots import load_robot
 from wbmpc.ocp.activations import ActivationQuadraticBarrier, ActivationWeightedQuad
+from wbmpc.ocp.numdiff import ActionModelNumDiff, tangent_jacobian, vector_jacobian
 from wbmpc.ocp.state import StateMultibody
 from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig
 
-EPS = 1e-7
+EPS = float(np.finfo(float).eps)
+RTOL = EPS ** (1.0 / 3.0)
+"""Relative tolerance of a block: the relative step of the central differences."""
+NOISE = 10.0 * EPS ** (2.0 / 3.0)
+"""Floor relative to the whole matrix: rounding noise of central differences (eps/h, h = eps^(1/3))."""
 ALL_TERMS = WalkingOCPConfig(foothold_weight=100.0, contact_force_weight=1e-2, friction_cone_weight=10.0,
                              touchdown_height_weight=1e5, touchdown_velocity_weight=1e3,
                              baumgarte_gains=(20.0, 40.0))
@@ -24,62 +30,58 @@ def bolt():
     return load_robot("bolt")
 
 
-def _tangent_fd(state: StateMultibody, f, x, eps=EPS):
-    """Columns ∂f/∂dx by forward differences along the tangent space of x (f returns a vector)."""
-    f0 = f(x)
-    J = np.zeros((f0.size, state.ndx))
-    for i in range(state.ndx):
-        dx = np.zeros(state.ndx)
-        dx[i] = eps
-        J[:, i] = (f(state.integrate(x, dx)) - f0) / eps
-    return J
+def _tangent_blocks(state: StateMultibody) -> dict[str, slice]:
+    """Blocks of a tangent vector: base and joints × position and velocity."""
+    nv = state.nv
+    return {"base q": slice(0, 6), "joint q": slice(6, nv), "base v": slice(nv, nv + 6),
+            "joint v": slice(nv + 6, 2 * nv)}
 
 
-def _control_fd(f, u, eps=EPS):
-    f0 = f(u)
-    J = np.zeros((f0.size, u.size))
-    for i in range(u.size):
-        du = np.zeros(u.size)
-        du[i] = eps
-        J[:, i] = (f(u + du) - f0) / eps
-    return J
+WHOLE = {"": slice(None)}
 
 
-def _dynamics_fd(model, state: StateMultibody, x, u, xnext):
-    """Finite-difference (Fx, Fu) of a node's next state at (x, u), as tangents at ``xnext``."""
+def _assert_blocks_close(actual, expected, name, rows: dict, cols: dict, rtol: float = RTOL):
+    """Every block (rows × cols) of ``actual`` within rtol of its own magnitude in ``expected``
+    (numdiff), plus the rounding noise of the whole matrix."""
+    actual = np.atleast_2d(actual)
+    expected = np.atleast_2d(expected)
+    noise = NOISE * float(np.max(np.abs(expected)))
+    for row_name, r in rows.items():
+        for col_name, c in cols.items():
+            a, e = actual[r, c], expected[r, c]
+            if e.size == 0:
+                continue
+            scale = float(np.max(np.abs(e)))
+            err = float(np.max(np.abs(a - e)))
+            tol = rtol * scale + noise
+            assert err <= tol, (f"{name} [{row_name}, {col_name}]: max error {err:.3e} > {tol:.3e} "
+                                f"(block scale {scale:.3e})")
 
-    def xnext_of_x(xx):
-        d = model.createData()
-        model.calc(d, xx, u)
-        return state.diff(xnext, d.xnext)
 
-    def xnext_of_u(uu):
-        d = model.createData()
-        model.calc(d, x, uu)
-        return state.diff(xnext, d.xnext)
-
-    return _tangent_fd(state, xnext_of_x, x), _control_fd(xnext_of_u, u)
-
-
-def _assert_close(actual, expected, name, rtol=1e-4):
-    scale = max(1.0, float(np.max(np.abs(expected))))
-    err = float(np.max(np.abs(actual - expected)))
-    assert err <= rtol * scale, f"{name}: max error {err:.3e} (scale {scale:.3e})"
+def _dynamics_fd(model, x, u):
+    """Numdiff Fx, Fu, Lx, Lu of a node at (x, u)."""
+    numdiff = ActionModelNumDiff(model)
+    data = numdiff.createData()
+    numdiff.calcDiff(data, x, u)
+    return data
 
 
 def test_state_jacobians_match_finite_differences(bolt):
     state = StateMultibody(bolt.pinocchio_model)
     rng = np.random.default_rng(1)
     x0, x1 = random_state(bolt, rng), random_state(bolt, rng)
+    blocks = _tangent_blocks(state)
     J0, J1 = state.Jdiff(x0, x1)
-    _assert_close(J0, _tangent_fd(state, lambda x: state.diff(x, x1), x0), "Jdiff first")
-    _assert_close(J1, _tangent_fd(state, lambda x: state.diff(x0, x), x1), "Jdiff second")
+    _assert_blocks_close(J0, tangent_jacobian(state, lambda x: state.diff(x, x1), x0), "Jdiff first", blocks, blocks)
+    _assert_blocks_close(J1, tangent_jacobian(state, lambda x: state.diff(x0, x), x1), "Jdiff second", blocks, blocks)
     dx = 0.1 * rng.standard_normal(state.ndx)
     Ji0, Ji1 = state.Jintegrate(x0, dx)
-    _assert_close(Ji0, _tangent_fd(state, lambda x: state.diff(state.integrate(x0, dx), state.integrate(x, dx)), x0),
-                  "Jintegrate first")
-    _assert_close(Ji1, _control_fd(lambda d: state.diff(state.integrate(x0, dx), state.integrate(x0, d)), dx),
-                  "Jintegrate second")
+    _assert_blocks_close(Ji0, tangent_jacobian(
+        state, lambda x: state.diff(state.integrate(x0, dx), state.integrate(x, dx)), x0), "Jintegrate first",
+        blocks, blocks)
+    _assert_blocks_close(Ji1, vector_jacobian(
+        lambda d: state.diff(state.integrate(x0, dx), state.integrate(x0, d)), dx), "Jintegrate second",
+        blocks, blocks)
     np.testing.assert_allclose(state.diff(x0, state.integrate(x0, dx)), dx, atol=1e-12)
 
 
@@ -102,22 +104,12 @@ def test_integrated_node_derivatives_match_finite_differences(bolt, walking_node
     u = 0.5 * rng.standard_normal(model.nu)
     model.calc(data, x, u)
     model.calcDiff(data, x, u)
-
-    def cost_of_x(xx):
-        d = model.createData()
-        model.calc(d, xx, u)
-        return np.array([d.cost])
-
-    def cost_of_u(uu):
-        d = model.createData()
-        model.calc(d, x, uu)
-        return np.array([d.cost])
-
-    Fx, Fu = _dynamics_fd(model, state, x, u, data.xnext)
-    _assert_close(data.Fx, Fx, "Fx")
-    _assert_close(data.Fu, Fu, "Fu")
-    _assert_close(data.Lx, _tangent_fd(state, cost_of_x, x)[0], "Lx", rtol=1e-3)
-    _assert_close(data.Lu, _control_fd(cost_of_u, u)[0], "Lu", rtol=1e-3)
+    numdiff = _dynamics_fd(model, x, u)
+    blocks = _tangent_blocks(state)
+    _assert_blocks_close(data.Fx, numdiff.Fx, "Fx", blocks, blocks)
+    _assert_blocks_close(data.Fu, numdiff.Fu, "Fu", blocks, WHOLE)
+    _assert_blocks_close(data.Lx, numdiff.Lx, "Lx", WHOLE, blocks)
+    _assert_blocks_close(data.Lu, numdiff.Lu, "Lu", WHOLE, WHOLE)
 
 
 def test_every_residual_jacobian_matches_finite_differences(bolt, walking_nodes):
@@ -154,8 +146,9 @@ def test_every_residual_jacobian_matches_finite_differences(bolt, walking_nodes)
                 return rd.r.copy()
 
             rdata = data.costs.terms[name].residual
-            _assert_close(rdata.Rx, _tangent_fd(state, r_of_x, x), f"node {k} {name} Rx")
-            _assert_close(rdata.Ru, _control_fd(r_of_u, u), f"node {k} {name} Ru")
+            _assert_blocks_close(rdata.Rx, tangent_jacobian(state, r_of_x, x), f"node {k} {name} Rx", WHOLE,
+                                 _tangent_blocks(state))
+            _assert_blocks_close(rdata.Ru, vector_jacobian(r_of_u, u), f"node {k} {name} Ru", WHOLE, WHOLE)
             checked.add(name)
     kinds = {name.split("_", 1)[1] if name.startswith(("left_", "right_")) else name for name in checked}
     assert kinds >= {"state_regularization", "control_regularization", "control_bounds", "height", "foothold",
@@ -170,13 +163,8 @@ def test_terminal_node_com_and_state_gradient(bolt, walking_nodes):
     data = model.createData()
     model.calc(data, x)
     model.calcDiff(data, x)
-
-    def cost_of_x(xx):
-        d = model.createData()
-        model.calc(d, xx)
-        return np.array([d.cost])
-
-    _assert_close(data.Lx, _tangent_fd(state, cost_of_x, x)[0], "terminal Lx", rtol=1e-3)
+    numdiff = _dynamics_fd(model, x, None)
+    _assert_blocks_close(data.Lx, numdiff.Lx, "terminal Lx", WHOLE, _tangent_blocks(state))
     np.testing.assert_allclose(data.xnext, x)
 
 
@@ -194,7 +182,7 @@ def test_activation_gradients():
             activation.calc(d, rr)
             return np.array([d.a_value])
 
-        _assert_close(data.Ar, _control_fd(a_of, r)[0], type(activation).__name__)
+        _assert_blocks_close(data.Ar, vector_jacobian(a_of, r)[0], type(activation).__name__, WHOLE, WHOLE)
 
 
 def test_bad_inputs_raise_clear_errors(bolt):
@@ -235,7 +223,8 @@ def test_terminal_residuals_match_finite_differences(bolt, walking_nodes):
             residual.calc(rd, xx, None, d.shared)
             return rd.r.copy()
 
-        _assert_close(data.costs.terms[name].residual.Rx, _tangent_fd(state, r_of_x, x), f"terminal {name} Rx")
+        _assert_blocks_close(data.costs.terms[name].residual.Rx, tangent_jacobian(state, r_of_x, x),
+                             f"terminal {name} Rx", WHOLE, _tangent_blocks(state))
 
 
 @pytest.mark.parametrize("backend", ["pinocchio", "kkt"])
@@ -255,9 +244,10 @@ def test_flat_foot_contact_dynamics_match_finite_differences(backend):
     model.calc(data, x, u)
     model.calcDiff(data, x, u)
 
-    Fx, Fu = _dynamics_fd(model, state, x, u, data.xnext)
-    _assert_close(data.Fx, Fx, "G1 Fx", rtol=1e-3)
-    _assert_close(data.Fu, Fu, "G1 Fu", rtol=1e-3)
+    numdiff = _dynamics_fd(model, x, u)
+    blocks = _tangent_blocks(state)
+    _assert_blocks_close(data.Fx, numdiff.Fx, "G1 Fx", blocks, blocks)
+    _assert_blocks_close(data.Fu, numdiff.Fu, "G1 Fu", blocks, WHOLE)
 
 
 def test_compiled_state_difference_matches_pinocchio(bolt):
@@ -293,6 +283,7 @@ def test_flight_node_after_stance_matches_finite_differences(bolt, backend):
     model.calcDiff(data, x, u)
     state = ocp.state
 
-    Fx, Fu = _dynamics_fd(model, state, x, u, data.xnext)
-    _assert_close(data.Fx, Fx, "flight Fx")
-    _assert_close(data.Fu, Fu, "flight Fu")
+    numdiff = _dynamics_fd(model, x, u)
+    blocks = _tangent_blocks(state)
+    _assert_blocks_close(data.Fx, numdiff.Fx, "flight Fx", blocks, blocks)
+    _assert_blocks_close(data.Fu, numdiff.Fu, "flight Fu", blocks, WHOLE)

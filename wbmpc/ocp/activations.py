@@ -3,7 +3,8 @@
 Every activation here has a diagonal Hessian, so ``data.Arr`` stores only its diagonal (nr,).
 All three are instances of one row-wise form, a = ½ Σ_i w_i e_i² with the dead-zone error
 e_i = min(r_i − lb_i, 0) + max(r_i − ub_i, 0) (quadratics: lb = ub = 0); ``row_parameters()``
-returns (w, lb, ub) so a cost sum can evaluate all its terms in one compiled pass.
+returns (w, lb, ub) so a cost sum can evaluate all its terms in one compiled pass. That form is
+written once, :func:`wbmpc.ocp.kernels.costs.dead_zone`; calc and calcDiff here call it too.
 
 - :class:`ActivationQuad`: a = ½‖r‖².
 - :class:`ActivationWeightedQuad`: a = ½ rᵀ diag(w) r.
@@ -16,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from wbmpc.errors import ParameterError
+from wbmpc.ocp.kernels.costs import dead_zone_rows
 
 
 class ActivationData:
@@ -27,27 +29,34 @@ class ActivationData:
         self.Arr = np.zeros(nr)
 
 
-class ActivationQuad:
-    """a(r) = ½‖r‖²."""
+class _RowwiseDeadZone:
+    """a(r) = ½ Σ_i w_i e_i², e_i = min(r_i − lb_i, 0) + max(r_i − ub_i, 0) (row parameters w, lb, ub)."""
 
-    def __init__(self, nr: int):
-        self.nr = nr
+    def __init__(self, w: np.ndarray, lb: np.ndarray, ub: np.ndarray):
+        self._w, self._lb, self._ub = w, lb, ub
+        self.nr = w.size
 
     def calc(self, data: ActivationData, r: np.ndarray) -> None:
-        data.a_value = 0.5 * float(r @ r)
+        data.a_value = dead_zone_rows(np.asarray(r, dtype=float), self._w, self._lb, self._ub, data.Ar, data.Arr)
 
     def calcDiff(self, data: ActivationData, r: np.ndarray) -> None:
-        data.Ar[:] = r
-        data.Arr[:] = 1.0
+        dead_zone_rows(np.asarray(r, dtype=float), self._w, self._lb, self._ub, data.Ar, data.Arr)
 
     def createData(self) -> ActivationData:
         return ActivationData(self.nr)
 
     def row_parameters(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return np.ones(self.nr), np.zeros(self.nr), np.zeros(self.nr)
+        return self._w.copy(), self._lb.copy(), self._ub.copy()
 
 
-class ActivationWeightedQuad:
+class ActivationQuad(_RowwiseDeadZone):
+    """a(r) = ½‖r‖²."""
+
+    def __init__(self, nr: int):
+        super().__init__(np.ones(nr), np.zeros(nr), np.zeros(nr))
+
+
+class ActivationWeightedQuad(_RowwiseDeadZone):
     """a(r) = ½ rᵀ diag(weights) r, weights (nr,) ≥ 0."""
 
     def __init__(self, weights: np.ndarray):
@@ -55,24 +64,10 @@ class ActivationWeightedQuad:
         if np.any(weights < 0) or not np.all(np.isfinite(weights)):
             raise ParameterError(f"activation weights={weights} must be finite and >= 0")
         self.weights = weights
-        self.nr = weights.size
-
-    def calc(self, data: ActivationData, r: np.ndarray) -> None:
-        data.Ar[:] = self.weights * r
-        data.a_value = 0.5 * float(r @ data.Ar)
-
-    def calcDiff(self, data: ActivationData, r: np.ndarray) -> None:
-        np.multiply(self.weights, r, out=data.Ar)
-        data.Arr[:] = self.weights
-
-    def createData(self) -> ActivationData:
-        return ActivationData(self.nr)
-
-    def row_parameters(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return self.weights.copy(), np.zeros(self.nr), np.zeros(self.nr)
+        super().__init__(weights, np.zeros(weights.size), np.zeros(weights.size))
 
 
-class ActivationQuadraticBarrier:
+class ActivationQuadraticBarrier(_RowwiseDeadZone):
     """a(r) = ½‖min(r − lb, 0)‖² + ½‖max(r − ub, 0)‖²; zero while lb ≤ r ≤ ub.
 
     Args:
@@ -89,21 +84,4 @@ class ActivationQuadraticBarrier:
             raise ParameterError(f"barrier bounds need lower <= upper, got lower={lower}, upper={upper}")
         self.lower = lower
         self.upper = upper
-        self.nr = lower.size
-
-    def calc(self, data: ActivationData, r: np.ndarray) -> None:
-        below = np.minimum(r - self.lower, 0.0)
-        above = np.maximum(r - self.upper, 0.0)
-        data.a_value = 0.5 * float(below @ below) + 0.5 * float(above @ above)
-
-    def calcDiff(self, data: ActivationData, r: np.ndarray) -> None:
-        below = r - self.lower
-        above = r - self.upper
-        data.Ar[:] = np.minimum(below, 0.0) + np.maximum(above, 0.0)
-        data.Arr[:] = (below <= 0.0) | (above >= 0.0)
-
-    def createData(self) -> ActivationData:
-        return ActivationData(self.nr)
-
-    def row_parameters(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return np.ones(self.nr), self.lower.copy(), self.upper.copy()
+        super().__init__(np.ones(lower.size), lower, upper)

@@ -1,5 +1,6 @@
 """A shooting problem evaluated over the whole horizon at once: the same function as
-:class:`~wbmpc.ocp.problem.ShootingProblem`, with the per-node Python work cut to the Pinocchio calls.
+:class:`~wbmpc.ocp.problem.ShootingProblem`, from the same definitions, with the per-node Python
+work cut to the Pinocchio calls.
 
 The node-by-node pipeline (action model -> differential model -> cost sum -> residuals) makes
 about 25 Python calls per node and keeps one Pinocchio data per node; over a 100-node horizon that
@@ -9,23 +10,27 @@ reads the same node models (contacts, cost terms, weights, references) and evalu
 - a Python loop over the nodes doing only what needs Pinocchio: contact-constrained dynamics
   (``constraintDynamics`` with the node's contact set, or ABA without contacts) and, in
   :meth:`calcDiff`, its derivatives; one Pinocchio data per contact set, so it stays in cache;
-  the Euler step (and, in the rollout, the feedback update) are compiled (:mod:`wbmpc.ocp.kernels.lie`);
-- compiled passes over all nodes for everything else: the frame kinematics of the active frame
-  terms (:mod:`wbmpc.ocp.kernels.frames`), residual rows, activations, cost values and Gauss-Newton
-  derivatives (assembled per residual kind), the Lie-group Jacobians of the Euler step and of the
-  state residual, Euler transition Jacobians, the dt scaling.
+  the Euler step (and, in the rollout, the feedback law) are the compiled kernels the node-wise
+  model calls (:mod:`wbmpc.ocp.kernels.integration`, :mod:`wbmpc.ocp.kernels.feedback`);
+- one Python call per cost term: each residual declares its batched evaluation
+  (:class:`~wbmpc.ocp.residuals.base.BatchedResidual`: its rows and Jacobian nonzeros at every
+  active node, by the compiled rows its node-wise ``calc`` uses), reading the frame kinematics of
+  the active frame terms computed for all nodes in one compiled pass (:mod:`wbmpc.ocp.kernels.frames`);
+- one compiled pass over the nodes running what the node-wise models run per node: the Euler
+  transition Jacobians, the cost value, the Gauss-Newton derivatives of the cost rows
+  (:mod:`wbmpc.ocp.kernels.costs`) and their dt scaling.
 
-The compiled Jacobian of exp6 is exact where Pinocchio's ``Jexp6`` loses up to ~6e-8 (base
-rotations of 1e-5..1e-2 rad per node, see :mod:`wbmpc.ocp.kernels.lie`), so the two evaluations agree
-to rounding except there, by that much.
+The node models stay the only configuration: every batched term's per-node references are rows
+of one array the node residuals write into (``bind_reference``), and :meth:`sync` reads the
+contact sets and the cost terms' weights and activity.
 
 Supported nodes: :class:`~wbmpc.ocp.integrator.IntegratedActionModelEuler` over
 :class:`~wbmpc.ocp.dynamics.DifferentialActionModelContactFwdDynamics` (Pinocchio backend) on a
-free-flyer robot with 1-dof joints, every running node with the same cost terms (switched on
-and off per node), each term one of: state (:class:`~wbmpc.ocp.residuals.ResidualState`), control
-(:class:`~wbmpc.ocp.residuals.ResidualControl`), frame height and frame translation. The terminal
-node, any model, is evaluated node-wise. :func:`batched_evaluation_support` says whether a
-problem qualifies and why not; :class:`~wbmpc.walking.WalkingOCP` uses this problem when it does.
+free-flyer robot with 1-dof revolute joints, every running node with the same cost terms
+(switched on and off per node), each term's residual a
+:class:`~wbmpc.ocp.residuals.base.BatchedResidual`. A term without a batched evaluation is an
+error naming it (:func:`batched_evaluation_support` says why a problem does not qualify). The
+terminal node, any model, is evaluated node-wise.
 
 After :meth:`calc` / :meth:`calcDiff` the stacked arrays (``xnext``, ``Fx``, ``Fu``, ``Lx``, ...,
 which the node datas view) and :meth:`node_costs` / :meth:`term_costs` hold the results; the
@@ -43,18 +48,21 @@ from numba import njit
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.dynamics import DifferentialActionModelContactFwdDynamics
 from wbmpc.ocp.integrator import IntegratedActionModelEuler
-from wbmpc.ocp.kernels.costs import cost_rows_value
+from wbmpc.ocp.kernels.costs import cost_rows_derivatives, cost_rows_value, scale_cost_derivatives
 from wbmpc.ocp.kernels.feedback import rollout_node_start
 from wbmpc.ocp.kernels.frames import FrameKinematics, frame_kinematics_support
-from wbmpc.ocp.kernels.integration import free_flyer_euler_jacobians, free_flyer_euler_step
-from wbmpc.ocp.kernels.lie import free_flyer_dintegrate, free_flyer_state_difference, free_flyer_state_jacobians
+from wbmpc.ocp.kernels.integration import euler_transition_jacobians, free_flyer_euler_step
+from wbmpc.ocp.kernels.lie import free_flyer_dintegrate
 from wbmpc.ocp.problem import RolloutError, ShootingProblem
-from wbmpc.ocp.residuals import ResidualControl, ResidualFrameHeight, ResidualFrameTranslation, ResidualState
+from wbmpc.ocp.residuals.base import BatchedResidual, HorizonData
 
-# residual kinds of the compiled pass
-STATE, CONTROL, FRAME_HEIGHT, FRAME_TRANSLATION = 0, 1, 2, 3
-_KINDS = {ResidualState: STATE, ResidualControl: CONTROL, ResidualFrameHeight: FRAME_HEIGHT,
-          ResidualFrameTranslation: FRAME_TRANSLATION}
+
+def _unbatched_term(name: str, residual) -> str | None:
+    """Why the cost term ``name`` cannot be batched, or None."""
+    if isinstance(residual, BatchedResidual):
+        return None
+    why = getattr(residual, "batch_unsupported", "it declares no batched evaluation")
+    return f"cost {name!r} ({type(residual).__name__}) cannot be batched: {why}"
 
 
 def batched_evaluation_support(problem: ShootingProblem) -> str | None:
@@ -65,7 +73,7 @@ def batched_evaluation_support(problem: ShootingProblem) -> str | None:
     reason = frame_kinematics_support(state.pinocchio)
     if reason is not None:
         return reason
-    names = None
+    signatures = None
     for k, model in enumerate(problem.running_models):
         if type(model) is not IntegratedActionModelEuler:
             return f"running node {k} is a {type(model).__name__}, not an IntegratedActionModelEuler"
@@ -73,14 +81,22 @@ def batched_evaluation_support(problem: ShootingProblem) -> str | None:
         if type(dam) is not DifferentialActionModelContactFwdDynamics or dam.backend != "pinocchio":
             return f"running node {k} is not contact forward dynamics with the Pinocchio backend"
         items = dam.costs.costs
-        if names is None:
+        if signatures is None:
+            for name, item in items.items():
+                reason = _unbatched_term(name, item.cost.residual)
+                if reason is not None:
+                    return reason
             names = list(items)
+            signatures = [item.cost.residual.batch_signature() for item in items.values()]
         elif list(items) != names:
             return f"running node {k} has the cost terms {list(items)}, node 0 has {names}"
-        for name, item in items.items():
-            residual_type = type(item.cost.residual)
-            if residual_type not in _KINDS:
-                return f"cost {name!r} has a {residual_type.__name__} residual (batched: {[t.__name__ for t in _KINDS]})"
+        else:
+            for (name, item), signature in zip(items.items(), signatures):
+                reason = _unbatched_term(name, item.cost.residual)
+                if reason is not None:
+                    return reason
+                if item.cost.residual.batch_signature() != signature:
+                    return f"cost {name!r} differs at running node {k} from node 0 (residual type, size or frame)"
     return None
 
 
@@ -88,9 +104,10 @@ class BatchedShootingProblem(ShootingProblem):
     """Drop-in :class:`~wbmpc.ocp.problem.ShootingProblem` with horizon-batched evaluation.
 
     Same constructor; raises :class:`~wbmpc.errors.ParameterError` when the nodes are not
-    supported (see :func:`batched_evaluation_support`). Call :meth:`sync` after changing the node
-    models (contact sets, cost activity, weights, references) and before the next evaluation;
-    :meth:`~wbmpc.walking.WalkingOCP.update` does it.
+    supported (see :func:`batched_evaluation_support`). References written into the node
+    residuals are seen at once; call :meth:`sync` after changing the node models' contact sets or
+    cost terms' weights and activity, before the next evaluation
+    (:meth:`~wbmpc.walking.WalkingOCP.update` does).
     """
 
     def __init__(self, x0: np.ndarray, running_models: list, terminal_model):
@@ -104,36 +121,59 @@ class BatchedShootingProblem(ShootingProblem):
         first = self.running_models[0].differential.costs
         first_data = self.running_datas[0].differential.costs
         self._term_names = list(first.costs)
-        n_terms = len(self._term_names)
+        self._terms = [item.cost.residual for item in first.costs.values()]  # each term's batched evaluation
+        n_terms = len(self._terms)
         nr = first_data.r.size
-        # term layout (identical at every running node): kind, first row, frame slot
-        self._term_kind = np.zeros(n_terms, dtype=np.int64)
-        self._term_row = np.zeros(n_terms, dtype=np.int64)
-        self._term_slot = np.full(n_terms, -1, dtype=np.int64)
-        frame_ids: list[int] = []
-        for j, (name, item) in enumerate(first.costs.items()):
-            residual = item.cost.residual
-            self._term_kind[j] = _KINDS[type(residual)]
-            self._term_row[j] = first_data.rows[name].start
-            if self._term_kind[j] in (FRAME_HEIGHT, FRAME_TRANSLATION):
-                if residual.frame_id not in frame_ids:
-                    frame_ids.append(residual.frame_id)
-                self._term_slot[j] = frame_ids.index(residual.frame_id)
-        self._kinematics = FrameKinematics(self._pin_model, frame_ids) if frame_ids else None
-        self._state_terms = [j for j in range(n_terms) if self._term_kind[j] == STATE]
         self._row_term = first_data.row_term.copy()
+        self._term_rows = [first_data.rows[name] for name in self._term_names]
+        # Jacobian nonzeros of all terms, row-major (the pattern of cost_rows_derivatives)
+        rows, cols, self._term_values = [], [], []
+        for residual, term_rows in zip(self._terms, self._term_rows):
+            r_rows, r_cols = residual.jacobian_pattern()
+            start = sum(len(c) for c in cols)
+            rows.append(r_rows + term_rows.start)
+            cols.append(r_cols)
+            self._term_values.append(slice(start, start + r_cols.size))
+        rows, cols = np.concatenate(rows), np.concatenate(cols)
+        if np.any(np.diff(rows) < 0) or np.any((np.diff(rows) == 0) & (np.diff(cols) <= 0)):
+            raise ParameterError("a residual's jacobian_pattern() is not row-major with increasing columns")
+        self._cols = cols
+        self._row_start = np.searchsorted(rows, np.arange(nr + 1)).astype(np.int64)
+        self._values = np.zeros((N, cols.size))
+        self._r = np.zeros((N, nr))
+        # every term's per-node references: rows of one array, shared with the node residuals
+        self._references = []
+        for j, residual in enumerate(self._terms):
+            storage = np.zeros((N, np.size(residual.reference)))
+            for k, model in enumerate(self.running_models):
+                model.differential.costs.costs[self._term_names[j]].cost.residual.bind_reference(storage[k], self)
+            self._references.append(storage)
+        self._items = [item for m in self.running_models for item in m.differential.costs.costs.values()]
+        frame_ids: list[int] = []
+        for residual in self._terms:
+            for frame_id in residual.batch_frames:
+                if frame_id not in frame_ids:
+                    frame_ids.append(frame_id)
+        self._frame_terms = [[j for j, residual in enumerate(self._terms) if frame_id in residual.batch_frames]
+                             for frame_id in frame_ids]
+        self._kinematics = FrameKinematics(self._pin_model, frame_ids) if frame_ids else None
+        n_frames = max(len(frame_ids), 1)
+        self._horizon = HorizonData(xs=np.zeros((N, nx)), us=np.zeros((N, nu)),
+                                    frame_slot={f: s for s, f in enumerate(frame_ids)},
+                                    frame_position=np.zeros((N, n_frames, 3)),
+                                    frame_jacobian=np.zeros((N, n_frames, 3, nv)))
         self._w = np.stack([d.differential.costs.w for d in self.running_datas])
         self._lb = np.stack([d.differential.costs.lb for d in self.running_datas])
         self._ub = np.stack([d.differential.costs.ub for d in self.running_datas])
         self._dt = np.array([m.dt for m in self.running_models])
         # per-node configuration, refreshed by sync()
         self._term_scale = np.zeros((N, n_terms))
-        self._reference = np.zeros((N, n_terms, max(nx, nu, 3)))
-        self._frame_needed = np.zeros((N, max(len(frame_ids), 1)), dtype=np.bool_)  # frames of active terms
+        self._term_active = np.zeros((N, n_terms), dtype=np.bool_)
+        self._frame_needed = np.zeros((N, n_frames), dtype=np.bool_)  # frames of active terms
         # per node: (constraint models or None, Pinocchio data, constraint datas, proximal settings)
         self._node_dynamics: list = [None] * N
+        self._node_contact_keys: list = [None] * N
         self._contact_sets: dict = {}
-        self._node_terms = None
         # evaluation buffers
         self._tau = np.zeros(nv)
         self._euler_dx = np.zeros((N, ndx))
@@ -141,14 +181,10 @@ class BatchedShootingProblem(ShootingProblem):
         self._da_du = np.zeros((N, nv, nu))
         self._J_q = np.zeros((nv, nv))  # scratch of the compiled pass
         self._J_dq = np.zeros((nv, nv))
-        self._state_residual = np.zeros((N, n_terms, ndx))
-        self._state_jacobian = np.zeros((N, n_terms, nv, nv))
-        self._frame_position = np.zeros((N, max(len(frame_ids), 1), 3))
-        self._frame_jacobian = np.zeros((N, max(len(frame_ids), 1), 3, nv))
+        self._gradient = np.zeros(ndx + nu)
+        self._hessian = np.zeros((ndx + nu, ndx + nu))
         self._node_cost = np.zeros(N)
         self._term_cost = np.zeros((N, n_terms))
-        self._scratch_r = np.zeros(nr)
-        self._difference_ok = np.ones(N, dtype=np.bool_)
         self._no_gaps = np.zeros((N + 1, ndx))
         # dynamics prepared ahead for the next calcDiff (see prepare_dynamics)
         self._prepared = np.zeros(N, dtype=np.bool_)
@@ -160,37 +196,40 @@ class BatchedShootingProblem(ShootingProblem):
         self._prepared_da_dx = np.zeros((N, nv, ndx))
         self._prepared_da_du = np.zeros((N, nv, nu))
         self.prepared_used = 0  # nodes the last calcDiff took from the preparation
+        self._detached = False
+        # (residual, active mask (N,), references, residual rows (N, nr), Jacobian nonzeros) of
+        # each term: views of the stacked arrays, written in place
+        self._term_arguments = [(residual, self._term_active[:, j], self._references[j], self._r[:, self._term_rows[j]],
+                                 self._values[:, self._term_values[j]]) for j, residual in enumerate(self._terms)]
         self.sync()
+
+    def detach(self) -> None:
+        """Called when another batched problem took over these node models' references: every
+        later evaluation of this one raises (it would read stale references)."""
+        self._detached = True
+
+    def _check_attached(self) -> None:
+        if self._detached:
+            raise ParameterError("this BatchedShootingProblem's node models were bound by a newer "
+                                 "BatchedShootingProblem: evaluate that one (or build the models anew)")
 
     # ----------------------------------------------------------------- configuration
     def sync(self) -> None:
-        """Read the node models' contact sets, cost activity, weights and references."""
-        nx, nu = self.nx, self.nu
-        scale, reference = self._term_scale, self._reference
-        if self._node_terms is None:  # (j, kind, item) per node, in term order
-            self._node_terms = [
-                [(j, int(self._term_kind[j]), m.differential.costs.costs[name])
-                 for j, name in enumerate(self._term_names)] for m in self.running_models]
+        """Read the node models' contact sets (nodes whose set is unchanged are skipped) and their
+        cost terms' weights and activity (references need no sync: the node residuals write into
+        the batched arrays)."""
+        keys = self._node_contact_keys
         for k, model in enumerate(self.running_models):
-            row_scale = scale[k]
-            row_reference = reference[k]
-            for j, kind, item in self._node_terms[k]:
-                if not item.active or item.weight == 0.0:
-                    row_scale[j] = 0.0
-                    continue
-                row_scale[j] = item.weight
-                residual = item.cost.residual
-                if kind == FRAME_HEIGHT:
-                    row_reference[j, 0] = residual.reference
-                elif kind == FRAME_TRANSLATION:
-                    row_reference[j, :3] = residual.reference
-                elif kind == STATE:
-                    row_reference[j, :nx] = residual.reference
-                else:
-                    row_reference[j, :nu] = residual.reference
-            self._node_dynamics[k] = self._dynamics_of(model.differential)
-        self._node_contact_keys = [m.differential.active_key for m in self.running_models]
-        self._refresh_frame_needed()
+            dam = model.differential
+            if dam.active_key != keys[k] or dam._moving_references:
+                self._node_dynamics[k] = self._dynamics_of(dam)
+                keys[k] = dam.active_key
+        scale = self._term_scale
+        scale.reshape(-1)[:] = [item.weight if item.active else 0.0 for item in self._items]
+        np.not_equal(scale, 0.0, out=self._term_active)
+        needed = self._frame_needed
+        for s, terms in enumerate(self._frame_terms):
+            np.any(self._term_active[:, terms], axis=1, out=needed[:, s])
 
     def term_index(self, name: str) -> int:
         """Column of the running cost term ``name`` in the batched arrays."""
@@ -199,62 +238,18 @@ class BatchedShootingProblem(ShootingProblem):
         except ValueError:
             raise ParameterError(f"no running cost term {name!r}; terms: {self._term_names}") from None
 
-    def sync_contacts(self) -> None:
-        """Read the node models' contact sets only (the part of :meth:`sync` that
-        :meth:`set_term_columns` does not cover); nodes whose contact set is unchanged are skipped."""
-        keys = self._node_contact_keys
-        for k, model in enumerate(self.running_models):
-            dam = model.differential
-            if dam.active_key != keys[k] or dam._moving_references:
-                self._node_dynamics[k] = self._dynamics_of(dam)
-                keys[k] = dam.active_key
-
-    def set_term_columns(self, columns: dict) -> None:
-        """Write the activity, weight and reference of frame terms over the whole horizon at once:
-        ``columns[name] = (scale (N,), reference (N, d) or None)`` with scale = weight where the
-        term is active and 0 elsewhere, d = 1 (frame height) or 3 (frame translation).
-
-        The fast path of :meth:`sync` for a caller that updates the node models from the same
-        arrays (:meth:`wbmpc.walking.WalkingOCP.update`); the result is the one :meth:`sync`
-        would read from them (tested).
-        """
-        for name, (scale, reference) in columns.items():
-            j = self.term_index(name)
-            kind = self._term_kind[j]
-            if kind not in (FRAME_HEIGHT, FRAME_TRANSLATION):
-                raise ParameterError(f"set_term_columns: {name!r} is not a frame term")
-            self._term_scale[:, j] = scale
-            if reference is not None:
-                d = 1 if kind == FRAME_HEIGHT else 3
-                self._reference[:, j, :d] = np.asarray(reference, dtype=float).reshape(self.T, d)
-        self._refresh_frame_needed()
-
-    def _refresh_frame_needed(self) -> None:
-        """The frames whose kinematics each node needs: those of its active frame terms."""
-        needed = self._frame_needed
-        needed[:] = False
-        for j in range(len(self._term_names)):
-            if self._term_kind[j] in (FRAME_HEIGHT, FRAME_TRANSLATION):
-                needed[:, self._term_slot[j]] |= self._term_scale[:, j] != 0.0
-
     def _dynamics_of(self, dam) -> tuple:
         """(constraint models or None without contacts, Pinocchio data, constraint datas, proximal
         settings) of a node's contact set; the data is shared by every node with that set (one per
         set keeps it in cache)."""
-        for name in dam._moving_references:  # Baumgarte position reference (Kp > 0) may have moved
-            dam.constraint_models[name].joint2_placement = dam.contacts[name].reference_placement()
+        dam.update_moving_references()
         key = dam.active_key
         entry = self._contact_sets.get(key)
         if entry is not None and not dam.nc:
             return (None,) + entry
         if entry is None:
             pdata = self._pin_model.createData()
-            constraint_datas = pin.StdVec_RigidConstraintData()
-            for constraint in dam.active_constraints:
-                constraint_datas.append(constraint.createData())
-            if dam.nc:
-                pin.initConstraintDynamics(self._pin_model, pdata, dam.active_constraints, constraint_datas)
-            entry = self._contact_sets[key] = (pdata, constraint_datas, dam.proximal_settings)
+            entry = self._contact_sets[key] = (pdata, dam.create_constraint_datas(pdata), dam.proximal_settings)
         return (dam.active_constraints if dam.nc else None, *entry)
 
     # ----------------------------------------------------------------- preparation
@@ -375,42 +370,32 @@ class BatchedShootingProblem(ShootingProblem):
     def _frame_kinematics(self, xs: np.ndarray, jacobians: bool) -> None:
         """Positions (and LOCAL_WORLD_ALIGNED Jacobians) of the frames of the active frame terms."""
         if self._kinematics is not None:
-            self._kinematics.evaluate(xs[:self.T, :self.state.nq], self._frame_needed, self._frame_position,
-                                      self._frame_jacobian if jacobians else None)
+            h = self._horizon
+            self._kinematics.evaluate(xs[:self.T, :self.state.nq], self._frame_needed, h.frame_position,
+                                      h.frame_jacobian if jacobians else None)
 
-    def _state_residuals(self, xs: np.ndarray) -> None:
-        """x ⊖ x_ref of every active state term (compiled; Pinocchio near a half turn)."""
-        for j in self._state_terms:
-            ok = state_residuals(self._reference[:, j, :self.nx], xs, self.state.nq, self._term_scale[:, j],
-                                 self._state_residual[:, j], self._difference_ok)
-            if not ok:
-                for k in np.flatnonzero(~self._difference_ok):
-                    self.state.diff(self._reference[k, j, :self.nx], xs[k], out=self._state_residual[k, j])
-
-    def _state_jacobians(self, xs: np.ndarray) -> None:
-        """∂(x ⊖ x_ref)/∂q of every active state term (compiled; Pinocchio near a half turn)."""
-        nq = self.state.nq
-        for j in self._state_terms:
-            ok = free_flyer_state_jacobians(self._reference[:, j, :self.nx], xs, self._term_scale[:, j],
-                                            self._state_jacobian[:, j], self._difference_ok)
-            if not ok:
-                for k in np.flatnonzero(~self._difference_ok):
-                    self._state_jacobian[k, j] = pin.dDifference(self._pin_model, self._reference[k, j, :nq],
-                                                                 xs[k, :nq], pin.ARG1)
+    def _residuals(self, xs: np.ndarray, us: np.ndarray, jacobians: bool) -> None:
+        """Every term's residual rows (and Jacobian nonzeros) at the nodes where it is active."""
+        N = self.T
+        h = self._horizon
+        h.xs, h.us = xs[:N], us
+        self._frame_kinematics(xs, jacobians)
+        for residual, mask, references, r, values in self._term_arguments:
+            residual.batch_calc(h, mask, references, r)
+            if jacobians:
+                residual.batch_calc_diff(h, mask, references, values)
 
     def _running_cost(self, xs, us) -> float:
-        self._state_residuals(xs)
-        return batched_cost_values(xs, us, self._dt, self._term_kind, self._term_row, self._term_slot,
-                                   self._term_scale, self._reference, self._row_term, self._w, self._lb, self._ub,
-                                   self._state_residual, self._frame_position, self._scratch_r,
-                                   self._node_cost, self._term_cost)
+        self._residuals(xs, us, jacobians=False)
+        return horizon_costs(self._dt, self._r, self._row_term, self._term_scale, self._w, self._lb, self._ub,
+                             self._node_cost, self._term_cost)
 
     def calc(self, xs, us) -> float:
         """Next states (``xnext``) and costs of every node; returns the total cost."""
+        self._check_attached()
         xs, us = np.asarray(xs, dtype=float), np.asarray(us, dtype=float)
         for k in range(self.T):
             self._node_dynamics_calc(k, xs[k], us[k])
-        self._frame_kinematics(xs, jacobians=False)
         cost = self._running_cost(xs, us)
         self.terminal_model.calc(self.terminal_data, xs[-1])
         self.cost = cost + self.terminal_data.cost
@@ -420,6 +405,7 @@ class BatchedShootingProblem(ShootingProblem):
         """Derivatives of every node (values too: calc is not needed first); returns the total
         cost. Nodes prepared by :meth:`prepare_dynamics` at these (x, u, contact set) take the
         prepared dynamics."""
+        self._check_attached()
         xs, us = np.asarray(xs, dtype=float), np.asarray(us, dtype=float)
         dynamics, dts, euler_dx, xnext, da_dx, da_du = (self._node_dynamics, self._dt, self._euler_dx, self.xnext,
                                                          self._da_dx, self._da_du)
@@ -427,14 +413,12 @@ class BatchedShootingProblem(ShootingProblem):
         nodes = range(self.T) if prepared is None else np.flatnonzero(~prepared).tolist()
         for k in nodes:
             self._dynamics_and_derivatives(dynamics[k], dts[k], xs[k], us[k], xnext[k], euler_dx[k], da_dx[k], da_du[k])
-        self._frame_kinematics(xs, jacobians=True)
-        self._state_residuals(xs)
-        self._state_jacobians(xs)
-        cost = batched_cost_derivatives(
-            xs, us, self._dt, self._term_kind, self._term_row, self._term_slot, self._term_scale, self._reference,
-            self._row_term, self._w, self._lb, self._ub, self._state_residual, self._state_jacobian,
-            self._frame_position, self._frame_jacobian, self._da_dx, self._da_du, self._euler_dx, self._J_q, self._J_dq,
-            self._scratch_r, self._node_cost, self._term_cost, self.Fx, self.Fu, self.Lx, self.Lu, self.Lxx, self.Luu)
+        self._residuals(xs, us, jacobians=True)
+        cost = horizon_derivatives(
+            xs, self._dt, self._euler_dx, self._da_dx, self._da_du, self._J_q, self._J_dq, self._r, self._values,
+            self._row_start, self._cols, self._row_term, self._term_scale, self._w, self._lb, self._ub,
+            self._gradient, self._hessian, self._node_cost, self._term_cost,
+            self.Fx, self.Fu, self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu)
         self.terminal_model.calc(self.terminal_data, xs[-1])
         self.terminal_model.calcDiff(self.terminal_data, xs[-1])
         self.cost = cost + self.terminal_data.cost
@@ -445,6 +429,7 @@ class BatchedShootingProblem(ShootingProblem):
 
     def forward_rollout(self, xs, us, k, K, fs, alpha, xs_try, us_try, dx) -> float:
         """The FDDP rollout of :meth:`ShootingProblem.forward_rollout`, node costs batched."""
+        self._check_attached()
         N = self.T
         closing = not (alpha == 1.0 or fs is None)
         gaps = self._no_gaps if fs is None else fs
@@ -474,7 +459,6 @@ class BatchedShootingProblem(ShootingProblem):
             xs_try[N] = xnext
         if not np.isfinite(xs_try).all():
             raise RolloutError("rollout diverged (state not finite)")
-        self._frame_kinematics(xs_try, jacobians=False)
         cost = self._running_cost(xs_try, us_try)
         self.terminal_model.calc(self.terminal_data, xs_try[N])
         cost += self.terminal_data.cost
@@ -496,154 +480,34 @@ class BatchedShootingProblem(ShootingProblem):
 
 
 @njit(cache=True)
-def state_residuals(references, xs, nq, scale, out, ok):
-    """out[k] = xs[k] ⊖ references[k] (compiled free-flyer difference) where scale[k] != 0;
-    ok[k] False where Pinocchio must take over (half-turn); returns True if none did."""
-    all_ok = True
-    for k in range(out.shape[0]):
-        ok[k] = True
-        if scale[k] == 0.0:
-            continue
-        if not free_flyer_state_difference(references[k], xs[k], nq, out[k]):
-            ok[k] = False
-            all_ok = False
-    return all_ok
-
-
-@njit(cache=True)
-def _fill_residual_rows(k, x, u, term_kind, term_row, term_slot, term_scale, reference, state_residual,
-                        frame_position, r):
-    """Residual rows r (nr,) of node k's active terms from the precomputed state residuals and frame positions."""
-    for j in range(term_kind.size):
-        if term_scale[k, j] == 0.0:
-            continue
-        row = term_row[j]
-        kind = term_kind[j]
-        if kind == 0:  # state
-            ndx = state_residual.shape[2]
-            for i in range(ndx):
-                r[row + i] = state_residual[k, j, i]
-        elif kind == 1:  # control
-            for i in range(u.size):
-                r[row + i] = u[i] - reference[k, j, i]
-        elif kind == 2:  # frame height
-            r[row] = frame_position[k, term_slot[j], 2] - reference[k, j, 0]
-        else:  # frame translation
-            for i in range(3):
-                r[row + i] = frame_position[k, term_slot[j], i] - reference[k, j, i]
-
-
-@njit(cache=True)
-def batched_cost_values(xs, us, dt, term_kind, term_row, term_slot, term_scale, reference, row_term, w, lb, ub,
-                        state_residual, frame_position, r, node_cost, term_cost):
-    """Cost of every running node (dt-scaled, node_cost (N,)) and of its terms (unscaled,
-    term_cost (N, n_terms)); returns the total running cost."""
+def horizon_costs(dt, r, row_term, term_scale, w, lb, ub, node_cost, term_cost):
+    """The cost of every running node from its residual rows r (N, nr), as the node-wise cost sum
+    and Euler model compute it: node_cost (N,) dt-scaled, term_cost (N, n_terms) unscaled;
+    returns the total running cost."""
     total = 0.0
     for k in range(dt.size):
-        _fill_residual_rows(k, xs[k], us[k], term_kind, term_row, term_slot, term_scale, reference,
-                            state_residual, frame_position, r)
-        value = cost_rows_value(r, row_term, term_scale[k], w[k], lb[k], ub[k], term_cost[k])
-        node_cost[k] = dt[k] * value
+        node_cost[k] = dt[k] * cost_rows_value(r[k], row_term, term_scale[k], w[k], lb[k], ub[k], term_cost[k])
         total += node_cost[k]
     return total
 
 
 @njit(cache=True)
-def _row_coefficients(r, w, lb, ub, scale):
-    """Gradient and Hessian coefficients (c, h) of one residual row under the dead-zone activation."""
-    below = r - lb
-    above = r - ub
-    e = min(below, 0.0) + max(above, 0.0)
-    h = scale * w if (below <= 0.0 or above >= 0.0) else 0.0
-    return scale * w * e, h
-
-
-@njit(cache=True)
-def _add_frame_rows(J, rows, first_row, r, w, lb, ub, scale, Lx, Lxx):
-    """Rows ``rows`` of a frame Jacobian J (3, nv) with residual rows r[first_row:]: Jᵀ c, Jᵀ diag(h) J."""
-    nv = J.shape[1]
-    for a in range(rows.size):
-        i = first_row + a
-        c, h = _row_coefficients(r[i], w[i], lb[i], ub[i], scale)
-        Jrow = J[rows[a]]
-        for b in range(nv):
-            Lx[b] += c * Jrow[b]
-            if h != 0.0 and Jrow[b] != 0.0:
-                hb = h * Jrow[b]
-                for d in range(nv):
-                    Lxx[b, d] += hb * Jrow[d]
-
-
-@njit(cache=True)
-def _node_cost_derivatives(k, dt, term_kind, term_row, term_slot, term_scale, w, lb, ub, r, state_jacobian,
-                           frame_jacobian, Lx, Lu, Lxx, Luu):
-    """dt-scaled Gauss-Newton gradient and Hessian of node k from its residual rows r, term by
-    term with the residuals' structure (the state residual's configuration Jacobian is identity
-    outside its 6×6 base block; controls enter only Lu, Luu; frames only the configuration block).
-    Lxu stays zero: no supported residual couples x and u."""
-    nv = Lxx.shape[0] // 2
-    nu = Lu.size
-    Lx[:] = 0.0
-    Lu[:] = 0.0
-    Lxx[:, :] = 0.0
-    Luu[:, :] = 0.0
-    z_row = np.array([2])
-    xyz_rows = np.array([0, 1, 2])
-    for j in range(term_kind.size):
-        scale = dt * term_scale[k, j]
-        if scale == 0.0:
-            continue
-        row = term_row[j]
-        kind = term_kind[j]
-        if kind == 0:  # state: r = x ⊖ x_ref, Rx = [[B, 0, 0], [0, I, 0], [0, 0, I]]
-            B = state_jacobian[k, j]
-            c = np.empty(6)
-            h = np.empty(6)
-            for i in range(6):
-                c[i], h[i] = _row_coefficients(r[row + i], w[k, row + i], lb[k, row + i], ub[k, row + i], scale)
-            for a in range(6):
-                g = 0.0
-                for m in range(6):
-                    g += B[m, a] * c[m]
-                Lx[a] += g
-                for b in range(6):
-                    s = 0.0
-                    for m in range(6):
-                        s += B[m, a] * h[m] * B[m, b]
-                    Lxx[a, b] += s
-            for i in range(6, 2 * nv):
-                ci, hi = _row_coefficients(r[row + i], w[k, row + i], lb[k, row + i], ub[k, row + i], scale)
-                Lx[i] += ci
-                Lxx[i, i] += hi
-        elif kind == 1:  # control: Ru = I
-            for i in range(nu):
-                ci, hi = _row_coefficients(r[row + i], w[k, row + i], lb[k, row + i], ub[k, row + i], scale)
-                Lu[i] += ci
-                Luu[i, i] += hi
-        elif kind == 2:  # frame height: z row of the world-aligned linear Jacobian
-            _add_frame_rows(frame_jacobian[k, term_slot[j]], z_row, row, r, w[k], lb[k], ub[k], scale, Lx, Lxx)
-        else:  # frame translation
-            _add_frame_rows(frame_jacobian[k, term_slot[j]], xyz_rows, row, r, w[k], lb[k], ub[k], scale, Lx, Lxx)
-
-
-@njit(cache=True)
-def batched_cost_derivatives(xs, us, dt, term_kind, term_row, term_slot, term_scale, reference, row_term, w, lb, ub,
-                             state_residual, state_jacobian, frame_position, frame_jacobian, da_dx, da_du, euler_dx,
-                             J_q, J_dq, r, node_cost, term_cost, Fx, Fu, Lx, Lu, Lxx, Luu):
-    """Values and derivatives of every running node: Euler transition Jacobians Fx (N, ndx, ndx),
-    Fu (N, ndx, nu), Gauss-Newton cost derivatives (dt-scaled); returns the total running cost."""
-    ndx = state_residual.shape[2]
-    nv = ndx // 2
-    total = 0.0
+def horizon_derivatives(xs, dt, euler_dx, da_dx, da_du, J_q, J_dq, r, values, row_start, cols, row_term, term_scale,
+                        w, lb, ub, gradient, hessian, node_cost, term_cost, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu):
+    """Per running node, what :meth:`IntegratedActionModelEuler.calcDiff` runs after the dynamics:
+    the Euler transition Jacobians Fx (N, ndx, ndx), Fu (N, ndx, nu), the cost value and its
+    Gauss-Newton derivatives from the residual rows r (N, nr) and Jacobian nonzeros values
+    (N, nnz), dt-scaled; returns the total running cost."""
+    nv = da_dx.shape[1]
+    ndx = 2 * nv
     nq = xs.shape[1] - nv
+    total = 0.0
     for k in range(dt.size):
         free_flyer_dintegrate(xs[k, :nq], euler_dx[k, :nv], J_q, J_dq)
-        free_flyer_euler_jacobians(da_dx[k], da_du[k], J_q, J_dq, dt[k], Fx[k], Fu[k])
-        _fill_residual_rows(k, xs[k], us[k], term_kind, term_row, term_slot, term_scale, reference,
-                            state_residual, frame_position, r)
-        value = cost_rows_value(r, row_term, term_scale[k], w[k], lb[k], ub[k], term_cost[k])
-        node_cost[k] = dt[k] * value
+        euler_transition_jacobians(da_dx[k], da_du[k], J_q, J_dq, dt[k], 6, Fx[k], Fu[k])
+        node_cost[k] = dt[k] * cost_rows_value(r[k], row_term, term_scale[k], w[k], lb[k], ub[k], term_cost[k])
         total += node_cost[k]
-        _node_cost_derivatives(k, dt[k], term_kind, term_row, term_slot, term_scale, w, lb, ub, r, state_jacobian,
-                               frame_jacobian, Lx[k], Lu[k], Lxx[k], Luu[k])
+        cost_rows_derivatives(r[k], values[k], row_start, cols, row_term, term_scale[k], w[k], lb[k], ub[k],
+                              gradient, hessian, False)
+        scale_cost_derivatives(dt[k], gradient, hessian, ndx, Lx[k], Lu[k], Lxx[k], Lxu[k], Luu[k])
     return total

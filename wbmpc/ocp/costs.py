@@ -108,8 +108,8 @@ class CostModelSum:
         for _, item, residual, rdata in data.loop:
             if item.active:
                 residual.calcDiff(rdata, x, u, shared)
-        cost_rows_derivatives(data.r, data.R, data.row_term, data.term_scale, data.w, data.lb, data.ub,
-                              data.gradient, data.hessian)
+        cost_rows_derivatives(data.r, data.R_values, data.R_row_start, data.R_cols, data.row_term, data.term_scale,
+                              data.w, data.lb, data.ub, data.gradient, data.hessian)
 
     def term_costs(self, data: "CostDataSum") -> dict[str, float]:
         """Cost of every term by name after calc (inactive terms report 0)."""
@@ -149,6 +149,10 @@ class CostDataSum:
         # (term index, item, residual model, residual data) in order, for the evaluation loops
         self.loop = [(j, item, item.cost.residual, self.terms[name].residual)
                      for j, (name, item) in enumerate(model.costs.items())]
+        n = ndx + nu  # R as the dense row pattern of cost_rows_derivatives
+        self.R_values = self.R.reshape(-1)
+        self.R_row_start = np.arange(0, nr_total * n + 1, n, dtype=np.int64)
+        self.R_cols = np.tile(np.arange(n, dtype=np.int64), nr_total)
         self.gradient = np.zeros(ndx + nu)
         self.hessian = np.zeros((ndx + nu, ndx + nu))
         self.cost = 0.0

@@ -93,6 +93,22 @@ class DifferentialActionModelContactFwdDynamics:
             row += self.contacts[name].nc
         self._moving_references = [name for name in self.active_contacts if self.contacts[name].gains[0] != 0.0]
 
+    def update_moving_references(self) -> None:
+        """Move the Baumgarte position reference of every active contact with Kp > 0 to the
+        contact's current reference placement (it may have moved since the last evaluation)."""
+        for name in self._moving_references:
+            self.constraint_models[name].joint2_placement = self.contacts[name].reference_placement()
+
+    def create_constraint_datas(self, pdata: pin.Data) -> pin.StdVec_RigidConstraintData:
+        """Constraint datas of the active contact set, initialised with ``pdata`` for
+        ``constraintDynamics`` (the node datas and the batched problem's per-set cache use it)."""
+        constraint_datas = pin.StdVec_RigidConstraintData()
+        for constraint in self.active_constraints:
+            constraint_datas.append(constraint.createData())
+        if self.nc:
+            pin.initConstraintDynamics(self.state.pinocchio, pdata, self.active_constraints, constraint_datas)
+        return constraint_datas
+
     def createData(self) -> "DifferentialActionDataContactFwdDynamics":
         return DifferentialActionDataContactFwdDynamics(self)
 
@@ -152,8 +168,7 @@ class DifferentialActionModelContactFwdDynamics:
     def _calc_constraint_dynamics(self, data, q, v, u) -> None:
         """Pinocchio backend of calc: constraintDynamics with the active RigidConstraintModels."""
         pdata, constraint_datas = data.select_pinocchio(self)
-        for name in self._moving_references:  # the Baumgarte position reference may have moved
-            self.constraint_models[name].joint2_placement = self.contacts[name].reference_placement()
+        self.update_moving_references()
         data.tau[6:] = u
         data.xout[:] = pin.constraintDynamics(self.state.pinocchio, pdata, q, v, data.tau, self.active_constraints,
                                               constraint_datas, self.proximal_settings)
@@ -307,11 +322,7 @@ class DifferentialActionDataContactFwdDynamics:
             if pdata is None:
                 pdata = self._constraint_pinocchio = self._model.createData()
             if self._constraint_key != model.active_key:
-                constraint_datas = pin.StdVec_RigidConstraintData()
-                for constraint in model.active_constraints:
-                    constraint_datas.append(constraint.createData())
-                pin.initConstraintDynamics(self._model, pdata, model.active_constraints, constraint_datas)
-                self._constraint_datas = constraint_datas
+                self._constraint_datas = model.create_constraint_datas(pdata)
                 self._constraint_key = model.active_key
         if self.pinocchio is not pdata:
             self.pinocchio = pdata

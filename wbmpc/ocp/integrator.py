@@ -2,7 +2,9 @@
 
     v⁺ = v + a dt,   q⁺ = q ⊕ (v dt + a dt²),   l = dt · l_continuous(x, u)
 
-(Crocoddyl's IntegratedActionModelEuler). A node built with ``dt = 0`` is a terminal node: it
+(Crocoddyl's IntegratedActionModelEuler). The step and its Jacobians are the compiled kernels of
+:mod:`wbmpc.ocp.kernels.integration`, which the batched problem calls too (free-flyer robots use
+the compiled Lie-group operations, others Pinocchio's). A node built with ``dt = 0`` is a terminal node: it
 is evaluated with ``u=None``, its cost is the differential model's cost unscaled and x⁺ = x.
 """
 
@@ -13,7 +15,8 @@ import pinocchio as pin
 
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.kernels.costs import scale_cost_derivatives
-from wbmpc.ocp.kernels.integration import euler_step_tangent, euler_transition_jacobians
+from wbmpc.ocp.kernels.integration import euler_step_tangent, euler_transition_jacobians, free_flyer_euler_step
+from wbmpc.ocp.kernels.lie import free_flyer_dintegrate
 
 
 class IntegratedActionModelEuler:
@@ -48,8 +51,11 @@ class IntegratedActionModelEuler:
         state = self.state
         nq, nv = state.nq, state.nv
         dt = self.dt
-        euler_step_tangent(x[nq:], dd.xout, dt, data.dx, data.xnext[nq:])
-        data.xnext[:nq] = pin.integrate(state.pinocchio, x[:nq], data.dx[:nv])
+        if state._compiled_difference:
+            free_flyer_euler_step(x, dd.xout, dt, data.dx, data.xnext)
+        else:
+            euler_step_tangent(x[nq:], dd.xout, dt, data.dx, data.xnext[nq:])
+            data.xnext[:nq] = pin.integrate(state.pinocchio, x[:nq], data.dx[:nv])
         data.cost = dt * dd.cost
 
     def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
@@ -69,9 +75,14 @@ class IntegratedActionModelEuler:
         dt = self.dt
         q = x[:nq]
         dq = data.dx[:nv]
-        J_dq = pin.dIntegrate(model, q, dq, pin.ARG1)
-        J_q = pin.dIntegrate(model, q, dq, pin.ARG0)
-        euler_transition_jacobians(dd.Fx, dd.Fu, J_q, J_dq, dt, data.Fx, data.Fu)
+        if state._compiled_difference:
+            J_q, J_dq, n_base = data.J_q, data.J_dq, 6
+            free_flyer_dintegrate(q, dq, J_q, J_dq)
+        else:
+            J_dq = pin.dIntegrate(model, q, dq, pin.ARG1)
+            J_q = pin.dIntegrate(model, q, dq, pin.ARG0)
+            n_base = nv
+        euler_transition_jacobians(dd.Fx, dd.Fu, J_q, J_dq, dt, n_base, data.Fx, data.Fu)
         costs = dd.costs
         scale_cost_derivatives(dt, costs.gradient, costs.hessian, state.ndx,
                                data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu)
@@ -85,6 +96,8 @@ class IntegratedActionDataEuler:
         ndx, nu = state.ndx, model.nu
         self.differential = model.differential.createData()
         self.dx = np.zeros(ndx)
+        self.J_q = np.zeros((state.nv, state.nv))  # Jacobians of q ⊕ dq (compiled free-flyer path)
+        self.J_dq = np.zeros((state.nv, state.nv))
         self.xnext = np.zeros(state.nx)
         self.cost = 0.0
         self.Fx = np.zeros((ndx, ndx))

@@ -14,7 +14,8 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.kernels.lie import free_flyer_state_difference, free_flyer_state_differences
+from wbmpc.ocp.kernels.lie import free_flyer_ddifference_second, free_flyer_state_difference
+from wbmpc.ocp.kernels.residuals import state_difference_many
 
 
 class StateMultibody:
@@ -40,6 +41,7 @@ class StateMultibody:
         self._compiled_difference = (
             pinocchio_model.njoints >= 2 and pinocchio_model.joints[1].nq == 7 and pinocchio_model.joints[1].nv == 6
             and self.nq == self.nv + 1)
+        self._all_rows = self._rows_ok = None  # masks of diff_many
 
     def zero(self) -> np.ndarray:
         """Neutral configuration and zero velocity, shape (nx,)."""
@@ -66,13 +68,18 @@ class StateMultibody:
         return out
 
     def diff_many(self, X0: np.ndarray, X1: np.ndarray, out: np.ndarray) -> np.ndarray:
-        """Row-wise X1[k] ⊖ X0[k] of (T, nx) arrays into out (T, ndx) (one compiled call)."""
-        start = 0
+        """Row-wise X1[k] ⊖ X0[k] of (T, nx) arrays into out (T, ndx) (one compiled call, the loop
+        the batched state residual runs)."""
+        T = out.shape[0]
         if self._compiled_difference:
-            start = free_flyer_state_differences(X0, X1, self.nq, out)
-            if start < 0:
+            if self._all_rows is None or self._all_rows.size != T:
+                self._all_rows, self._rows_ok = np.ones(T, dtype=np.bool_), np.ones(T, dtype=np.bool_)
+            if state_difference_many(X0, X1, self.nq, self._all_rows, out, self._rows_ok):
                 return out
-        for k in range(start, out.shape[0]):
+            rows = np.flatnonzero(~self._rows_ok)
+        else:
+            rows = range(T)
+        for k in rows:
             self.diff(X0[k], X1[k], out=out[k])
         return out
 
@@ -96,9 +103,16 @@ class StateMultibody:
         J1[nv:, nv:] = np.eye(nv)
         return J0, J1
 
-    def Jdiff_second_q(self, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
-        """Configuration block of ∂(x1 ⊖ x0)/∂x1, shape (nv, nv) (the velocity block is identity)."""
-        return pin.dDifference(self.pinocchio, q0, q1, pin.ARG1)
+    def Jdiff_second_q(self, q0: np.ndarray, q1: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """Configuration block of ∂(x1 ⊖ x0)/∂x1, shape (nv, nv) (the velocity block is identity);
+        compiled for a free flyer (the kernel the batched problem uses), Pinocchio otherwise and
+        near a half-turn relative rotation."""
+        if out is None:
+            out = np.empty((self.nv, self.nv))
+        if self._compiled_difference and free_flyer_ddifference_second(q0, q1, out):
+            return out
+        out[:] = pin.dDifference(self.pinocchio, q0, q1, pin.ARG1)
+        return out
 
     def Jintegrate(self, x: np.ndarray, dx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Jacobians of x ⊕ dx with respect to x and dx, each shape (ndx, ndx)."""

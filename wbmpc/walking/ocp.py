@@ -365,28 +365,8 @@ class WalkingOCP:
                 if cone is not None:
                     cone.active = not swing
         self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
-        if self.evaluation == "batched":  # the same arrays, written over the horizon at once
-            self.problem.sync_contacts()
-            self.problem.set_term_columns(self._frame_term_columns(in_contact, heights, last_swing, touchdown))
-
-    def _frame_term_columns(self, in_contact, heights, last_swing, touchdown) -> dict:
-        """The frame terms' (weight where active, reference) over the running nodes, as the update
-        wrote them into the node models (BatchedShootingProblem.set_term_columns)."""
-        N = self.n_nodes
-        items = self.problem.running_models[0].differential.costs.costs
-        columns = {}
-        for j, foot in enumerate(self.feet):
-            swing, last = ~in_contact[:N, j], last_swing[:N, j]
-            columns[f"{foot}_height"] = (items[f"{foot}_height"].weight * swing, heights[:N, j])
-            if f"{foot}_touchdown_height" in items:
-                columns[f"{foot}_touchdown_height"] = (items[f"{foot}_touchdown_height"].weight * last,
-                                                       np.full(N, self.ground_height))
-            if f"{foot}_foothold" in items:
-                foothold = np.zeros((N, 3))
-                foothold[last, :2] = touchdown[:N, j][last]
-                foothold[:, 2] = self.ground_height
-                columns[f"{foot}_foothold"] = (items[f"{foot}_foothold"].weight * last, foothold)
-        return columns
+        if self.evaluation == "batched":  # contact sets, weights and activity (references are shared)
+            self.problem.sync()
 
 
 def quasi_static_controls(ocp: WalkingOCP, x: np.ndarray) -> np.ndarray:

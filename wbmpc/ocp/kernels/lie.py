@@ -2,9 +2,9 @@
 
 Pinocchio conventions: q = [p (3) world, quaternion (x, y, z, w), joint angles], tangent
 dq = [v (3), ω (3) in the base frame, joint increments]; q ⊕ dq = M(q) exp6(v, ω) on the base.
-These replace ``pin.integrate``, ``pin.dIntegrate`` and ``pin.dDifference`` in the batched
-evaluation (:mod:`wbmpc.ocp.batched_problem`), where a binding call per node costs more than the
-arithmetic. They agree with Pinocchio to rounding (see tests/test_wbmpc_lie_kernels.py).
+These replace ``pin.integrate``, ``pin.dIntegrate`` and ``pin.dDifference`` in the node-wise models
+and the batched evaluation (:mod:`wbmpc.ocp.batched_problem`), where a binding call per node costs
+more than the arithmetic. They agree with Pinocchio to rounding (see tests/test_wbmpc_lie_kernels.py).
 
 The SE(3) Jacobians follow Barfoot's closed forms (State Estimation for Robotics, sec. 7.1.5):
 exp6's right Jacobian J_r(ξ) = J_l(−ξ) = [[J3, Q], [0, J3]] with the SO(3) right Jacobian J3 and
@@ -351,31 +351,6 @@ def free_flyer_state_difference(x0, x1, nq, out):
     for i in range(nv):
         out[nv + i] = x1[nq + i] - x0[nq + i]
     return True
-
-
-@njit(cache=True)
-def free_flyer_state_differences(X0, X1, nq, out):
-    """out[k] = X1[k] ⊖ X0[k] for every row; returns the first row needing Pinocchio (half turn), or −1."""
-    for k in range(out.shape[0]):
-        if not free_flyer_state_difference(X0[k], X1[k], nq, out[k]):
-            return k
-    return -1
-
-
-@njit(cache=True)
-def free_flyer_state_jacobians(references, xs, scale, out, ok):
-    """out[k] = ∂(xs[k] ⊖ references[k])/∂q (nv, nv) where scale[k] != 0; ok[k] False where
-    Pinocchio must take over (half turn); returns True if none did."""
-    all_ok = True
-    nq = xs.shape[1] - out.shape[1]
-    for k in range(out.shape[0]):
-        ok[k] = True
-        if scale[k] == 0.0:
-            continue
-        if not free_flyer_ddifference_second(references[k, :nq], xs[k, :nq], out[k]):
-            ok[k] = False
-            all_ok = False
-    return all_ok
 
 
 @njit(cache=True)

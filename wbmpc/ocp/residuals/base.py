@@ -29,3 +29,67 @@ class ResidualData:
         self.r = np.zeros(nr)
         self.Rx = np.zeros((nr, ndx))
         self.Ru = np.zeros((nr, nu))
+
+
+@dataclass
+class HorizonData:
+    """What a residual's batched evaluation reads over the N running nodes of a horizon.
+
+    Attributes:
+        xs: states (N, nx) of the evaluation; us: controls (N, nu).
+        frame_slot: frame id -> slot s of frame_position (N, n_frames, 3) [m, world] and
+            frame_jacobian (N, n_frames, 3, nv) (LOCAL_WORLD_ALIGNED linear rows), computed for
+            the nodes where a term needing the frame is active (Jacobians in calcDiff only).
+    """
+
+    xs: np.ndarray
+    us: np.ndarray
+    frame_slot: dict
+    frame_position: np.ndarray
+    frame_jacobian: np.ndarray
+
+
+class BatchedResidual:
+    """A residual that declares its own batched evaluation (what
+    :class:`~wbmpc.ocp.batched_problem.BatchedShootingProblem` needs of every running term).
+
+    A subclass keeps its reference in ``self._reference`` (1-D array; ``reference`` reads it and
+    writes into it, never rebinds it, so the batched problem can make it a row of its stacked
+    references with :meth:`bind_reference`) and implements:
+
+    - ``jacobian_pattern()`` -> (rows, cols): the structural nonzeros of [Rx Ru] (columns
+      0..ndx−1 the state tangent, ndx.. the control), row-major;
+    - ``batch_calc(horizon, mask, references, r)``: r (N, nr) at the nodes with mask (N,);
+    - ``batch_calc_diff(horizon, mask, references, values)``: the pattern's values (N, nnz);
+    - ``batch_frames``: frame ids whose kinematics it reads from the horizon (default none);
+    - ``batch_signature()``: what must be equal at every node for one batched term.
+
+    Both evaluations call the same compiled rows (:mod:`wbmpc.ocp.kernels.residuals`).
+    """
+
+    batch_frames: tuple = ()
+
+    @property
+    def reference(self) -> np.ndarray:
+        return self._reference
+
+    @reference.setter
+    def reference(self, value) -> None:
+        self._reference[:] = value
+
+    _reference_owner = None
+
+    def bind_reference(self, storage: np.ndarray, owner=None) -> None:
+        """Keep the reference in ``storage`` (same size) from now on, starting from its value.
+
+        ``owner`` (the batched problem holding ``storage``) is told by ``owner.detach()`` when
+        another one binds the reference later: it no longer sees the node models' references."""
+        previous = self._reference_owner
+        if previous is not None and previous is not owner:
+            previous.detach()
+        storage[:] = self._reference
+        self._reference = storage
+        self._reference_owner = owner
+
+    def batch_signature(self) -> tuple:
+        return (type(self), self.nr, self.batch_frames)

@@ -17,6 +17,9 @@ class ResidualCoMPosition:
         nu: control dimension.
     """
 
+    #: why :class:`~wbmpc.ocp.batched_problem.BatchedShootingProblem` cannot batch this term
+    batch_unsupported = "the compiled horizon kinematics does not compute the centre of mass"
+
     def __init__(self, state: StateMultibody, reference_world: np.ndarray, nu: int):
         self.state = state
         self.reference = np.asarray(reference_world, dtype=float).reshape(3).copy()

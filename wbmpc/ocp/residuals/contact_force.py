@@ -21,6 +21,9 @@ class ResidualContactForce:
         nu: control dimension.
     """
 
+    #: why :class:`~wbmpc.ocp.batched_problem.BatchedShootingProblem` cannot batch this term
+    batch_unsupported = "it reads the contact forces of the node's dynamics data, not kept per node when batched"
+
     uses_contact_forces = True  # reads the force derivatives the dynamics computes
 
     def __init__(self, state: StateMultibody, contact_name: str, force_reference: np.ndarray, nu: int):

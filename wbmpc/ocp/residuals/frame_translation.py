@@ -5,11 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from wbmpc.ocp.residuals.base import DataCollector, ResidualData
+from wbmpc.ocp.kernels.residuals import frame_jacobian_rows_many, frame_rows_many, subtract_rows
+from wbmpc.ocp.residuals.base import BatchedResidual, DataCollector, HorizonData, ResidualData
 from wbmpc.ocp.state import StateMultibody
 
+_XYZ = np.array([0, 1, 2], dtype=np.int64)
 
-class ResidualFrameTranslation:
+
+class ResidualFrameTranslation(BatchedResidual):
     """r(x) = oMf.translation − reference (world frame), Rx = [oRf J_local[:3], 0].
 
     Args:
@@ -22,13 +25,14 @@ class ResidualFrameTranslation:
     def __init__(self, state: StateMultibody, frame_id: int, reference_world: np.ndarray, nu: int):
         self.state = state
         self.frame_id = int(frame_id)
-        self.reference = np.asarray(reference_world, dtype=float).reshape(3).copy()
+        self.batch_frames = (self.frame_id,)
+        self._reference = np.asarray(reference_world, dtype=float).reshape(3).copy()
         self.nr = 3
         self.nu = nu
 
     def calc(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
         placement = pin.updateFramePlacement(self.state.pinocchio, shared.pinocchio, self.frame_id)
-        np.subtract(placement.translation, self.reference, out=data.r)
+        subtract_rows(placement.translation, self._reference, data.r)
 
     def calcDiff(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
         pdata = shared.pinocchio
@@ -37,3 +41,14 @@ class ResidualFrameTranslation:
 
     def createData(self) -> ResidualData:
         return ResidualData(self.nr, self.state.ndx, self.nu)
+
+    def jacobian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        nv = self.state.nv
+        return np.repeat(np.arange(3, dtype=np.int64), nv), np.tile(np.arange(nv, dtype=np.int64), 3)
+
+    def batch_calc(self, horizon: HorizonData, mask: np.ndarray, references: np.ndarray, r: np.ndarray) -> None:
+        frame_rows_many(horizon.frame_position[:, horizon.frame_slot[self.frame_id]], _XYZ, references, mask, r)
+
+    def batch_calc_diff(self, horizon: HorizonData, mask: np.ndarray, references: np.ndarray,
+                        values: np.ndarray) -> None:
+        frame_jacobian_rows_many(horizon.frame_jacobian[:, horizon.frame_slot[self.frame_id]], _XYZ, mask, values)

@@ -28,6 +28,9 @@ class ResidualFrameVelocity:
         nu: control dimension.
     """
 
+    #: why :class:`~wbmpc.ocp.batched_problem.BatchedShootingProblem` cannot batch this term
+    batch_unsupported = "the compiled horizon kinematics computes frame positions and their Jacobians, not frame velocities"
+
     def __init__(self, state: StateMultibody, frame_id: int, nu: int, reference: np.ndarray | None = None):
         self.state = state
         self.frame_id = int(frame_id)

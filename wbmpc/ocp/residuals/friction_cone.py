@@ -55,6 +55,9 @@ class ResidualFrictionCone:
         nu: control dimension.
     """
 
+    #: why :class:`~wbmpc.ocp.batched_problem.BatchedShootingProblem` cannot batch this term
+    batch_unsupported = "it reads the contact forces of the node's dynamics data, not kept per node when batched"
+
     uses_contact_forces = True  # reads the force derivatives the dynamics computes
 
     def __init__(self, state: StateMultibody, contact_name: str, mu: float, nu: int, n_facets: int = 4,
