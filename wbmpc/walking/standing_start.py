@@ -32,6 +32,7 @@ def solve_walking_ocp(robot_name: str = "bolt", speed: float | None = None, n_no
     from robots import load_robot
     from sequencer import FootstepSequencer, contact_schedule
     from wbmpc.errors import ParameterError
+    from wbmpc.ocp.blas import limit_blas_threads
     from wbmpc.ocp.solvers import SolverFDDP
     from wbmpc.walking.ocp import WalkingOCP, quasi_static_controls
     from wbmpc.walking.preset import load_walking_preset
@@ -59,7 +60,8 @@ def solve_walking_ocp(robot_name: str = "bolt", speed: float | None = None, n_no
     ocp.update(x0, schedule, com_terminal)
     solver = SolverFDDP(ocp.problem)
     u0 = quasi_static_controls(ocp, x0)
-    converged = solver.solve([x0] * (n_nodes + 1), [u0] * n_nodes, maxiter=iterations)
+    with limit_blas_threads(1):  # small dense blocks: threads only contend (docs/benchmarks.md)
+        converged = solver.solve([x0] * (n_nodes + 1), [u0] * n_nodes, maxiter=iterations)
     ocp.problem.calc(solver.xs, solver.us)
     heights = np.zeros((n_nodes + 1, len(feet)))
     coms = np.zeros((n_nodes + 1, 3))
