@@ -20,7 +20,7 @@ import pytest
 matplotlib.use("Agg")
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
-DOC_PAGES = ["api.md", "extending.md"]
+DOC_PAGES = ["api.md", "extending.md", "closed_loop.md", "sequencer.md"]
 DOCTEST_MODULES = ["robots"]
 
 _BLOCK = re.compile(r"^```python\n(.*?)^```", re.MULTILINE | re.DOTALL)
