@@ -176,9 +176,10 @@ def run_scenario(
         ctrl = WalkingController(preset)
     else:
         ctrl = JointPDController(**controller_options)
-    if isinstance(ctrl, WalkingController):
+    if isinstance(ctrl, WalkingController):  # refuse, before the first tick, what it cannot follow
         preset = ctrl.preset
-        check_commands(preset, scenario)
+        for command in scenario.commands():
+            ctrl.check_command(command)
     if preset is None and robot in available_walking_presets():
         preset = load_walking_preset(robot)  # the robot's fall thresholds
 
@@ -197,18 +198,6 @@ def run_scenario(
         },
     )
     return _ClosedLoop(scenario, ctrl, options, robot, duration, int(seed), log, out, preset, on_tick).run()
-
-
-def check_commands(preset: WalkingPreset, scenario) -> None:
-    """Refuse, before the first tick, a scenario command the robot's walking preset cannot follow:
-    outside the preset's ``[command]`` range or outside what its planner can plan."""
-    from sequencer.dcm_planner import DcmFootstepPlanner
-
-    planner = DcmFootstepPlanner(preset.planner)
-    for value in scenario.commands():
-        command = VelocityCommand.from_tuple(value)
-        preset.command.check(command, preset.robot)
-        planner.check_command(command)
 
 
 def _jsonable_param(value: Any) -> Any:

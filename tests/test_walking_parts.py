@@ -264,3 +264,16 @@ def test_command_range_refuses_with_the_reason():
     with pytest.raises(ParameterError, match=r"yaw_rate=0.3 rad/s for robot 'bolt' must be 0 rad/s \(Bolt's legs have "
                                              r"no hip yaw"):
         command.check(VelocityCommand(0.3, 0.0, 0.3), "bolt")
+
+
+def test_a_custom_planners_command_limit_is_checked_before_the_run():
+    """run_scenario asks the controller's own planner, not the preset's, before the first tick."""
+    from sequencer.dcm_planner import DcmFootstepPlanner
+    from sim import run_scenario
+    from wbmpc.walking import WalkingController
+
+    preset = load_walking_preset("bolt")
+    short = DcmFootstepPlanner(dataclasses.replace(preset.planner, l_max=0.09, v_x=0.2))  # |v_x| <= 0.3 m/s
+    with pytest.raises(ParameterError, match=r"v_x=0.4"):
+        run_scenario("walk", duration=0.1, velocity_command=(0.4, 0.0, 0.0),
+                     controller=WalkingController(preset, planner=short))

@@ -65,7 +65,7 @@ class WalkingController:
             :class:`wbmpc.ocp.mpc.MPCSolver`'s interface, the MPC's solver (the benchmarks pass
             Crocoddyl's FDDP behind an adapter); None = the library's FDDP.
         planner: a :class:`sequencer.planner.FootstepPlanner` to use instead of the preset's DCM
-            planner (the preset's ``[planner]`` then only fixes nothing of the plan).
+            planner (the preset's ``[planner]`` is then not used).
     """
 
     def __init__(self, preset: WalkingPreset | None = None, mpc_solver=None, planner=None) -> None:
@@ -73,8 +73,8 @@ class WalkingController:
         self.config: WalkingControllerConfig = self.preset.controller
         self.replan_period = self.config.replan_period
         self.mpc_solver = mpc_solver
-        self._planner = planner
-        self.omega = float(self.preset.omega if planner is None else planner.omega)
+        self.planner = self._make_planner(self.preset.planner) if planner is None else planner
+        self.omega = float(self.planner.omega)
         self.command = VelocityCommand()
         self.timers = ControllerTimers()
         self.planning: PlanningStage | None = None  # built by reset (it needs the robot)
@@ -88,7 +88,7 @@ class WalkingController:
         cfg, preset = self.config, self.preset
         if robot.name != preset.robot:
             raise ParameterError(f"robot {robot.name!r} cannot walk with the walking preset of {preset.robot!r}")
-        planner = self._planner if self._planner is not None else self._make_planner(preset.planner)
+        planner = self.planner
         switch = None
         if cfg.sequencer_params_from is not None:
             switch = (float(cfg.sequencer_params_from[0]), self._make_planner(cfg.sequencer_params_from[1]))
@@ -106,6 +106,13 @@ class WalkingController:
         self.last_status = "none"
         self.timers = ControllerTimers()
         self._pending_failures = sorted(float(t) for t in cfg.mpc_failure_times)
+
+    def check_command(self, command) -> None:
+        """Raise ParameterError (naming the component, its value and the allowed range) when the
+        robot's preset (``[command]``) or the planner cannot follow ``command``; called before a run."""
+        command = VelocityCommand.from_tuple(command)
+        self.preset.command.check(command, self.preset.robot)
+        self.planner.check_command(command)
 
     def set_velocity_command(self, command) -> None:
         """The walking command (v_x [m/s], v_y [m/s], yaw_rate [rad/s]) in the heading frame
