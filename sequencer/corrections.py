@@ -28,12 +28,23 @@ SWING_DRIFT_MAX = 0.9
 DCM_OFFSET_BIAS_MAX = 0.05
 """Largest |dcm_offset_bias| [m] a plan accepts."""
 
+STANCE_DRIFT_MAX = 0.1
+"""Largest |stance_drift| [m] a plan accepts."""
+
 
 def check_swing_drift(value) -> float:
     """``value`` as a float; ParameterError unless it is a real number in [0, SWING_DRIFT_MAX]."""
     value = _real("swing_drift", value)
     if not 0.0 <= value <= SWING_DRIFT_MAX:
         raise ParameterError(f"swing_drift={value} must be in [0, {SWING_DRIFT_MAX}]")
+    return value
+
+
+def check_stance_drift(value) -> float:
+    """``value`` as a float [m]; ParameterError unless |value| <= STANCE_DRIFT_MAX."""
+    value = _real("stance_drift", value)
+    if not abs(value) <= STANCE_DRIFT_MAX:
+        raise ParameterError(f"stance_drift={value} m must be in [-{STANCE_DRIFT_MAX}, {STANCE_DRIFT_MAX}] m")
     return value
 
 
@@ -62,6 +73,8 @@ class LipmCorrections:
     Attributes:
         swing_drift: κ in [0, 0.9] [-], 0 = the paper's LIPM.
         dcm_offset_bias: sagittal touchdown offset bias [m], |.| <= 0.05, 0 = none.
+        stance_drift: d [m], |.| <= 0.1, forward DCM gain beyond the LIPM over a stance whatever
+            the step length (0 = the paper's LIPM); what the walking controller identifies.
 
     Example::
 
@@ -70,16 +83,27 @@ class LipmCorrections:
         corrections.swing_drift = 0.2                       # the next plan uses it
     """
 
-    __slots__ = ("_swing_drift", "_dcm_offset_bias")
+    __slots__ = ("_swing_drift", "_dcm_offset_bias", "_stance_drift")
 
-    def __init__(self, swing_drift: float = 0.0, dcm_offset_bias: float = 0.0) -> None:
+    def __init__(self, swing_drift: float = 0.0, dcm_offset_bias: float = 0.0, stance_drift: float = 0.0) -> None:
         self.swing_drift = swing_drift
         self.dcm_offset_bias = dcm_offset_bias
+        self.stance_drift = stance_drift
 
     @classmethod
     def from_params(cls, params) -> "LipmCorrections":
-        """Corrections starting from a SequencerParams' ``swing_drift`` and ``dcm_offset_bias``."""
-        return cls(params.swing_drift, params.dcm_offset_bias)
+        """Corrections starting from a SequencerParams' ``swing_drift``, ``dcm_offset_bias`` and
+        ``stance_drift``."""
+        return cls(params.swing_drift, params.dcm_offset_bias, params.stance_drift)
+
+    @property
+    def stance_drift(self) -> float:
+        """d [m], forward DCM gain beyond the LIPM over a stance, whatever the step length."""
+        return self._stance_drift
+
+    @stance_drift.setter
+    def stance_drift(self, value: float) -> None:
+        self._stance_drift = check_stance_drift(value)
 
     @property
     def swing_drift(self) -> float:
@@ -99,12 +123,13 @@ class LipmCorrections:
     def dcm_offset_bias(self, value: float) -> None:
         self._dcm_offset_bias = check_dcm_offset_bias(value)
 
-    def as_tuple(self) -> tuple[float, float]:
-        """(swing_drift [-], dcm_offset_bias [m])."""
-        return (self._swing_drift, self._dcm_offset_bias)
+    def as_tuple(self) -> tuple[float, float, float]:
+        """(swing_drift [-], dcm_offset_bias [m], stance_drift [m])."""
+        return (self._swing_drift, self._dcm_offset_bias, self._stance_drift)
 
     def __repr__(self) -> str:
-        return f"LipmCorrections(swing_drift={self._swing_drift!r}, dcm_offset_bias={self._dcm_offset_bias!r})"
+        return (f"LipmCorrections(swing_drift={self._swing_drift!r}, dcm_offset_bias={self._dcm_offset_bias!r}, "
+                f"stance_drift={self._stance_drift!r})")
 
     def __eq__(self, other) -> bool:
         if not isinstance(other, LipmCorrections):

@@ -274,13 +274,13 @@ class FootstepSequencer:
         self._gamma_lo0 = math.exp(omega * params.t_min)
         self._width_bounds = {foot: params.width_bounds(foot) for foot in FEET}
         self._max_steps = int(math.ceil(params.horizon / params.t_min)) + 2
-        own_key = (params.v_x, params.v_y, params.swing_drift, params.dcm_offset_bias)
+        own_key = (params.v_x, params.v_y, params.swing_drift, params.dcm_offset_bias, params.stance_drift)
         self._own_gait = self._build_gait_tables(own_key)  # the parameters' own command and corrections
         self._gait_key, self._gait = own_key, self._own_gait  # the last distinct one asked for
 
     def nominal_gait(self, velocity=None, corrections: LipmCorrections | None = None) -> NominalGait:
         """Nominal steps and aimed offsets for ``velocity`` (v_x, v_y) [m/s] (None: the params') and
-        ``corrections`` (None: the params' swing_drift and dcm_offset_bias).
+        ``corrections`` (None: the params' swing_drift, dcm_offset_bias and stance_drift).
 
         The last distinct (command, corrections) is kept: a repeated call costs one comparison.
 
@@ -296,15 +296,16 @@ class FootstepSequencer:
         params = self.params
         v_x, v_y = (params.v_x, params.v_y) if velocity is None else velocity
         if corrections is None:
-            key = (v_x, v_y, params.swing_drift, params.dcm_offset_bias)
+            key = (v_x, v_y, params.swing_drift, params.dcm_offset_bias, params.stance_drift)
         else:
-            key = (v_x, v_y, corrections.swing_drift, corrections.dcm_offset_bias)
+            key = (v_x, v_y, *corrections.as_tuple())
         if key != self._gait_key:
             self._gait, self._gait_key = self._build_gait_tables(key), key
         return self._gait
 
-    def _build_gait_tables(self, key: tuple[float, float, float, float]) -> tuple[NominalGait, dict]:
-        """The gait tables of (v_x, v_y, swing_drift, dcm_offset_bias); raises ParameterError out of range."""
+    def _build_gait_tables(self, key: tuple[float, ...]) -> tuple[NominalGait, dict]:
+        """The gait tables of (v_x, v_y, swing_drift, dcm_offset_bias, stance_drift); raises
+        ParameterError out of range."""
         gait = self.params.nominal_gait(*key)
         per_stance = {foot: (w_nom, b_nom, self._width_bounds[foot]) for foot, (w_nom, b_nom) in gait.per_stance.items()}
         return gait, per_stance

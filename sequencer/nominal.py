@@ -63,9 +63,12 @@ def nominal_step_width(pelvis_width: float, v_y: float, t_nom: float, stance_foo
 
 def nominal_dcm_offset(
     omega: float, step_length: float, pelvis_width: float, v_y: float, t_nom: float, stance_foot: str,
-    swing_drift: float = 0.0,
+    swing_drift: float = 0.0, stance_drift: float = 0.0,
 ) -> tuple[float, float]:
     """Nominal DCM offset at touchdown ``(b_x, b_y)`` [m], relative to the landing foot.
+
+    The sagittal offset is that of the periodic gait (1 − κ) L + d + b_x = b_x E, E = exp(ω T_nom):
+    b_x = ((1 − κ) L − d) / (E − 1), with the LIPM's drift over a stance modelled as κ L + d.
 
     Args:
         omega: LIPM natural frequency sqrt(g / z_c) [1/s], > 0.
@@ -76,27 +79,30 @@ def nominal_dcm_offset(
         stance_foot: ``"left"`` or ``"right"``, the foot in stance during the planned step.
         swing_drift: kappa in [0, 1), forward DCM gain per unit of step length beyond the LIPM
             (0: the pure LIPM, the paper's sequencer).
+        stance_drift: d [m], forward DCM gain beyond the LIPM over a stance, whatever the step
+            length (0: the pure LIPM).
     """
     if not (omega > 0 and t_nom > 0):
         raise ParameterError(f"omega={omega} 1/s and t_nom={t_nom} s must both be > 0")
     if not (0.0 <= swing_drift < 1.0):
         raise ParameterError(f"swing_drift={swing_drift} must be in [0, 1)")
     growth = math.exp(omega * t_nom)
-    b_x = (1.0 - swing_drift) * step_length / (growth - 1.0)
+    b_x = ((1.0 - swing_drift) * step_length - stance_drift) / (growth - 1.0)
     b_y = stance_sign(stance_foot) * pelvis_width / (1.0 + growth) - v_y * t_nom / (1.0 - growth)
     return b_x, b_y
 
 
 def aimed_dcm_offset(
     omega: float, step_length: float, pelvis_width: float, v_y: float, t_nom: float, stance_foot: str,
-    swing_drift: float = 0.0, dcm_offset_bias: float = 0.0,
+    swing_drift: float = 0.0, dcm_offset_bias: float = 0.0, stance_drift: float = 0.0,
 ) -> tuple[float, float]:
     """The DCM offset the step QP aims at [m]: :func:`nominal_dcm_offset` minus ``dcm_offset_bias`` in x.
 
     ``dcm_offset_bias`` [m] is how far ahead of the planned offset the DCM is, on average, when
     the foot lands; aiming that much short makes the next stance start from the nominal offset.
     """
-    b_x, b_y = nominal_dcm_offset(omega, step_length, pelvis_width, v_y, t_nom, stance_foot, swing_drift)
+    b_x, b_y = nominal_dcm_offset(omega, step_length, pelvis_width, v_y, t_nom, stance_foot, swing_drift,
+                                  stance_drift)
     return b_x - dcm_offset_bias, b_y
 
 
@@ -108,7 +114,8 @@ class NominalGait:
 
     Attributes:
         v_x, v_y: velocity command [m/s] the gait was computed for.
-        swing_drift: κ [-]; dcm_offset_bias: [m] (the LIPM corrections it was computed with).
+        swing_drift: κ [-]; dcm_offset_bias, stance_drift: [m] (the LIPM corrections it was
+            computed with).
         step_length: l_nom = v_x t_nom [m].
         per_stance: stance foot -> (w_nom [m], (b_x, b_y) [m]): the nominal lateral step
             p_T,y - p_0,y and the aimed DCM offset at the touchdown ending that stance.
@@ -118,6 +125,7 @@ class NominalGait:
     v_y: float
     swing_drift: float
     dcm_offset_bias: float
+    stance_drift: float
     step_length: float
     per_stance: dict
 
@@ -137,9 +145,11 @@ class NominalGait:
 
 def nominal_gait(
     omega: float, t_nom: float, pelvis_width: float, v_x: float, v_y: float,
-    swing_drift: float = 0.0, dcm_offset_bias: float = 0.0, feet: tuple[str, ...] = FEET,
+    swing_drift: float = 0.0, dcm_offset_bias: float = 0.0, stance_drift: float = 0.0,
+    feet: tuple[str, ...] = FEET,
 ) -> NominalGait:
-    """The :class:`NominalGait` of command (v_x, v_y) [m/s] with LIPM corrections (κ [-], bias [m]).
+    """The :class:`NominalGait` of command (v_x, v_y) [m/s] with LIPM corrections (κ [-], bias [m],
+    stance drift [m]).
 
     Computed with the same operations as ``SequencerParams.l_nom``, ``w_nom`` and ``b_nom``, so a
     gait built from a parameter set's own values equals them bit for bit.
@@ -148,8 +158,9 @@ def nominal_gait(
     per_stance = {
         foot: (
             nominal_step_width(pelvis_width, v_y, t_nom, foot),
-            aimed_dcm_offset(omega, step_length, pelvis_width, v_y, t_nom, foot, swing_drift, dcm_offset_bias),
+            aimed_dcm_offset(omega, step_length, pelvis_width, v_y, t_nom, foot, swing_drift, dcm_offset_bias,
+                             stance_drift),
         )
         for foot in feet
     }
-    return NominalGait(v_x, v_y, swing_drift, dcm_offset_bias, step_length, per_stance)
+    return NominalGait(v_x, v_y, swing_drift, dcm_offset_bias, stance_drift, step_length, per_stance)

@@ -116,7 +116,7 @@ def test_corrections_are_read_live_and_equal_a_sequencer_built_with_them():
 
 def test_lipm_corrections_are_validated_on_assignment():
     corrections = LipmCorrections()
-    assert corrections.as_tuple() == (0.0, 0.0)
+    assert corrections.as_tuple() == (0.0, 0.0, 0.0)
     with pytest.raises(ParameterError, match=r"swing_drift=0.95 must be in \[0, 0.9\]"):
         corrections.swing_drift = 0.95
     with pytest.raises(ParameterError, match=r"dcm_offset_bias=-0.06 m must be in \[-0.05, 0.05\] m"):
@@ -125,7 +125,7 @@ def test_lipm_corrections_are_validated_on_assignment():
         LipmCorrections(swing_drift="high")
     with pytest.raises(ParameterError, match=r"dcm_offset_bias=nan must be finite"):
         LipmCorrections(dcm_offset_bias=float("nan"))
-    assert corrections.as_tuple() == (0.0, 0.0)  # a refused value leaves the old one
+    assert corrections.as_tuple() == (0.0, 0.0, 0.0)  # a refused value leaves the old one
     with pytest.raises(ParameterError, match=r"corrections must be a LipmCorrections or None, got dict"):
         DcmFootstepPlanner(SequencerParams.table_i(), corrections={"swing_drift": 0.1})
 

@@ -114,13 +114,12 @@ def test_speed_integral_acts_on_the_forward_speed_with_anti_windup():
 def _estimator(corrections, gain=0.5):
     config = WalkingControllerConfig()
     return LipmCorrectionEstimator(corrections, omega=np.sqrt(9.81 / 0.295), gain=gain,
-                                   swing_drift_max=config.swing_drift_max, offset_bias_max=config.dcm_offset_bias_max,
-                                   min_step=config.lipm_correction_min_step, max_error=config.lipm_correction_max_error,
-                                   max_slide=config.lipm_correction_max_slide)
+                                   stance_drift_max=config.stance_drift_max, offset_bias_max=config.dcm_offset_bias_max,
+                                   max_error=config.lipm_correction_max_error, max_slide=config.lipm_correction_max_slide)
 
 
 def test_lipm_corrections_are_identified_from_undisturbed_steps_only():
-    """Swing drift kappa = DCM gained over the LIPM / step length; offset bias = measured - planned b_T."""
+    """Stance drift = DCM gained over the LIPM over the stance [m]; offset bias = measured - planned b_T."""
     corrections = LipmCorrections()
     estimator = _estimator(corrections)
     omega, duration, length, kappa, epsilon = estimator.omega, 0.3, 0.1, 0.2, 0.003
@@ -133,16 +132,31 @@ def test_lipm_corrections_are_identified_from_undisturbed_steps_only():
     measured = landing + planned + np.array([epsilon, 0.0])
     assert measured[0] - stance[0] == pytest.approx(b0 * np.exp(omega * duration) + kappa * length)
     assert estimator.touchdown(duration, measured, landing, 0.0, planned, 0.0)
-    assert corrections.swing_drift == pytest.approx(0.5 * kappa, rel=1e-9)
+    assert corrections.stance_drift == pytest.approx(0.5 * kappa * length, rel=1e-9)
+    assert corrections.swing_drift == 0.0  # no longer identified (set by hand only)
     assert corrections.dcm_offset_bias == pytest.approx(0.5 * epsilon, rel=1e-9)
-    before = (corrections.swing_drift, corrections.dcm_offset_bias)
+    before = (corrections.stance_drift, corrections.dcm_offset_bias)
     # a pushed step (DCM 3 cm off the plan at touchdown) changes nothing, nor does the next one
     assert not estimator.touchdown(0.6, landing + [0.1, 0.1] + [0.05, -0.01], landing + [0.1, 0.1], 0.0,
                                    np.array([0.02, -0.01]), 0.0)
     assert not estimator.touchdown(0.9, landing + [0.2, 0.0] + [0.02, 0.01], landing + [0.2, 0.0], 0.0,
                                    np.array([0.02, 0.01]), 0.0)
-    assert (corrections.swing_drift, corrections.dcm_offset_bias) == before
+    assert (corrections.stance_drift, corrections.dcm_offset_bias) == before
     assert len(estimator.steps) == 1
+
+
+def test_the_stance_drift_is_identified_stepping_in_place_and_backwards():
+    """A drift that does not vanish with the step: identified from zero-length and backward steps."""
+    for length, drift in ((0.0, 0.005), (-0.06, -0.008)):
+        corrections = LipmCorrections()
+        estimator = _estimator(corrections)
+        omega, duration = estimator.omega, 0.3
+        stance, landing = np.array([1.0, 0.05]), np.array([1.0 + length, -0.05])
+        planned = np.array([0.004, 0.015])
+        b0 = (landing[0] + planned[0] - stance[0] - drift) / np.exp(omega * duration)
+        estimator.touchdown(0.0, stance + np.array([b0, 0.0]), stance, 0.0, np.array([b0, 0.0]), 0.0)
+        assert estimator.touchdown(duration, landing + planned, landing, 0.0, planned, 0.0)
+        assert corrections.stance_drift == pytest.approx(0.5 * drift, rel=1e-9)
 
 
 def test_a_step_whose_stance_foot_slid_is_not_used_for_the_lipm_corrections():
@@ -170,7 +184,7 @@ def test_lipm_corrections_are_measured_along_the_heading():
         stance, landing, planned = rotate([1.0, 0.05]), rotate([1.1, -0.05]), rotate([0.017, 0.01])
         estimator.touchdown(0.0, stance + rotate([0.02, 0.0]), stance, yaw, rotate([0.02, 0.0]), 0.0)
         estimator.touchdown(0.3, landing + planned + rotate([0.002, 0.0]), landing, yaw, planned, 0.0)
-        results.append((corrections.swing_drift, corrections.dcm_offset_bias))
+        results.append((corrections.stance_drift, corrections.dcm_offset_bias))
     np.testing.assert_allclose(results[0], results[1], atol=1e-12)
     assert results[0][0] > 0.0
 
@@ -221,6 +235,27 @@ def test_a_due_but_unmeasured_touchdown_is_delayed_by_the_wait_nodes():
     assert same is plan and no_delay == 0.0
 
 
+def test_a_due_swing_foot_is_aimed_below_the_ground():
+    """Waiting for a touchdown: the waiting nodes' height reference stays on the ground, and the
+    OCP reference carries the depth the touchdown term aims the foot at."""
+    from sequencer import FootstepSequencer
+    from wbmpc.walking.reference import OcpReferenceStage
+
+    plan = FootstepSequencer(load_walking_preset("bolt").planner).plan(
+        t=0.0, stance_foot="left", stance_position=[0.0, 0.05], dcm_measured=[0.0, 0.0], t_stance_start=0.0
+    )
+    step = plan.steps[0]
+    stage = OcpReferenceStage(("left", "right"), 10, 0.01, wait_for_contact=True, wait_nodes=2, wait_depth=0.005)
+    in_air = np.array([True, False])  # the right foot swings
+    reference = stage.sample(plan, step.touchdown_time, np.zeros(2), in_air)  # due now, still in the air
+    assert reference.touchdown_wait > 0.0 and reference.touchdown_depth == 0.005
+    j = reference.schedule.feet.index(step.foot)
+    waiting = ~reference.schedule.in_contact[:, j] & (reference.schedule.times < step.touchdown_time + 0.02 - 1e-9)
+    assert waiting[0] and np.all(reference.schedule.swing_phase[waiting, j] == 1.0)
+    on_time = stage.sample(plan, step.touchdown_time - 0.1, np.zeros(2), in_air)  # not due yet: nothing changes
+    assert on_time.touchdown_wait == 0.0 and on_time.touchdown_depth == 0.0
+
+
 # ---------------------------------------------------------------------------------------- presets
 
 
@@ -235,7 +270,7 @@ def test_bolt_preset_states_every_tuned_number_and_takes_overrides():
     # every field of the tuned sections is written in the file (nothing left to code defaults)
     skip = {"controller": {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate",
                            "feedback", "mpc_failure_times", "sequencer_params_from"},
-            "planner": {"swing_drift", "dcm_offset_bias", "double_support"}}
+            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift", "double_support"}}
     preset = load_walking_preset("bolt")
     for section in ("planner", "ocp", "controller", "fall", "command"):
         fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())

@@ -48,6 +48,7 @@ _HELP = {
     "double_support": "time both feet stay on the ground after each touchdown, in [0, t_min) (0 = point feet) [s]",
     "swing_drift": "kappa: DCM gain over the LIPM per unit of step length (0 = the paper's LIPM) [-]",
     "dcm_offset_bias": "measured minus planned sagittal DCM offset at touchdown, aimed off (0 = none) [m]",
+    "stance_drift": "forward DCM gain beyond the LIPM over a stance, whatever the step length (0 = none) [m]",
 }
 
 

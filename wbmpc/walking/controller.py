@@ -96,7 +96,8 @@ class WalkingController:
         self.omega = self.planning.omega
         self.feet = self.planning.feet
         self.reference_stage = OcpReferenceStage(self.feet, cfg.n_nodes, cfg.node_dt,
-                                                 cfg.touchdown_detection == "contact", cfg.touchdown_wait_nodes)
+                                                 cfg.touchdown_detection == "contact", cfg.touchdown_wait_nodes,
+                                                 cfg.touchdown_wait_depth)
         self.mpc = WalkingMPC(robot, preset.ocp, n_nodes=cfg.n_nodes, dt=cfg.node_dt, max_iterations=cfg.max_iterations,
                               horizon_end=cfg.mpc_horizon_end, time_budget=cfg.mpc_time_budget, solver=self.mpc_solver)
         self.feedback = FeedbackLaw(self.mpc.ocp.state, cfg.node_dt, cfg.delay_nodes, cfg.interpolate, cfg.feedback,
@@ -154,7 +155,7 @@ class WalkingController:
             self._pending_failures.pop(0)
             ok, status, iterations, cost, solve_time = False, "injected_failure", 0, np.nan, 0.0
         else:
-            solution = self.mpc.update(t, x, reference.schedule, reference.com_terminal)
+            solution = self.mpc.update(t, x, reference.schedule, reference.com_terminal, reference.touchdown_depth)
             ok, status = bool(solution.ok), str(solution.status)
             record["mpc_prepared_used"] = float(getattr(self.mpc.problem, "prepared_used", 0))
             record["mpc_rollouts"] = float(getattr(self.mpc.solver, "rollouts", np.nan))

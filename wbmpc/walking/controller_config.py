@@ -57,6 +57,17 @@ class WalkingControllerConfig:
         touchdown_wait_nodes: with contact detection, a swing foot still in the air when its
             touchdown is due is kept swinging (and driven down by the height cost) for this many
             more nodes in the OCP's schedule (see ``wbmpc.walking.stance.delay_to_touchdown``).
+        touchdown_wait_depth: while such a foot is due and still in the air, the OCP's
+            touchdown-height term aims it this far below the ground [m], and the waiting nodes'
+            height reference stays on the ground (``wbmpc.walking.stance.ground_waiting_nodes``).
+            Aimed at the ground itself, eq. (19) brings the foot down with zero vertical speed and a
+            sub-millimetre tracking error leaves it hovering: stepping in place or at 0.1 m/s Bolt's
+            feet stopped 0.6 mm above the ground, never touched, and every stance ended on the
+            stance tracker's 50 ms timeout (0.36 s steps for T_nom = 0.3 s: +52.6 and +25.5 mm/s
+            forward); walking backwards the left foot landed 12 ms late (28.5 mm/s sideways). With
+            5 mm the feet land 2-5 ms before the plan. Only the last nodes of a swing are
+            concerned: aimed 1.5 mm below the ground over the whole swing, Bolt fell at 0.33 m/s;
+            3 mm instead of 5 fell stepping in place (docs/closed_loop.md).
         first_stance_foot: stance foot at t0 (both feet are on the ground at start; the other one
             takes the first step).
         velocity_integral_gain: integral action on the forward speed [1/s] (0 = off, the default and
@@ -69,28 +80,28 @@ class WalkingControllerConfig:
             during the ramp and ends with a larger mean error (8.5 against 6.7 mm/s).
         velocity_correction_max: bound of that correction [m/s].
         velocity_filter_time: time constant of the low-pass filter on the measured speed [s].
-        lipm_correction_gain: per-step gain in [0, 1] of two corrections of the sequencer's LIPM,
-            identified after every step from the measured DCM (0 = off: the paper's pure LIPM and
-            the parameters' own ``swing_drift``, ``dcm_offset_bias``). (1) Swing drift
-            (``SequencerParams.swing_drift``): the DCM's gain over the LIPM during the stance that
-            just ended, d = zeta_T - p - (zeta_0 - p) exp(omega T) (zeta_0, zeta_T measured at its
-            touchdown and at the next one, p the stance foot), per unit of the step taken,
-            kappa_k = d / L (steps of at least ``LIPM_CORRECTION_MIN_STEP``). (2) Touchdown offset
-            bias (``SequencerParams.dcm_offset_bias``): measured DCM offset at the touchdown minus
-            the offset the plan aimed at. Each estimate moves by this fraction towards the step's
-            value. On Bolt the swing leg (the legs are half of the robot's mass) makes the DCM
-            outrun the LIPM by ~0.22 L per step and the touchdowns end ~2.5 mm ahead of the plan:
-            uncorrected, the sequencer answers with long, quick steps (0.12 m/s too fast with the
-            touchdown fixes, docs/closed_loop.md).
-        lipm_correction_min_step: shortest step [m] from which the LIPM corrections are identified
-            (stepping in place: little swing drift and too little signal).
+        lipm_correction_gain: per-step gain in [0, 1] of two corrections of the planner's LIPM,
+            identified after every undisturbed step from the measured DCM (0 = off: the paper's
+            pure LIPM and the parameters' own values) and written into the DCM planner's
+            ``LipmCorrections``. (1) Stance drift (``stance_drift``): the DCM's gain over the LIPM
+            during the stance that just ended, d = zeta_T - p - (zeta_0 - p) exp(omega T) (zeta_0,
+            zeta_T measured at its touchdown and at the next one, p the stance foot, along the
+            heading), in metres, at every step whatever its length (sign included). (2) Touchdown
+            offset bias (``dcm_offset_bias``): measured DCM offset at the touchdown minus the
+            offset the plan aimed at. Each estimate moves by this fraction towards the step's value.
+            On Bolt the swing leg (the legs are half of the robot's mass) makes the DCM outrun the
+            LIPM by ~24 mm per stance at 0.33 m/s and still 5.5-8.5 mm stepping in place (the
+            swing leg's angular momentum): not proportional to the step, so the earlier model
+            kappa L (identified from steps of 3 cm or more) left stepping in place drifting
+            forward at 53-61 mm/s (docs/closed_loop.md). Uncorrected, the planner answers the drift
+            with long, quick steps (0.12 m/s too fast at 0.33 m/s).
         lipm_correction_max_error: largest difference [m] (x and y) between the measured and the
             planned DCM offset at a touchdown for the step to count in the LIPM corrections (steady
             walking: 2-5 mm; after the paper's push: cm).
         lipm_correction_max_slide: largest slide [m] of the stance foot from its touchdown point
             for the step to count in the LIPM corrections (the point foot rolls 5-7 mm in
             undisturbed steps).
-        swing_drift_max: bound of each step's kappa_k and of the estimate, in [0, 0.9].
+        stance_drift_max: bound of each step's stance drift and of the estimate [m], in [0, 0.1].
         dcm_offset_bias_max: bound of each step's touchdown offset bias and of the estimate [m].
         stance_slide_follow: slide [m] of the stance foot from its touchdown point beyond which the
             sequencer plans from the foot's measured position (updated at every replan while the foot
@@ -129,15 +140,15 @@ class WalkingControllerConfig:
     feedback: bool = True
     touchdown_detection: str = "contact"
     touchdown_wait_nodes: int = 2
+    touchdown_wait_depth: float = 0.005
     first_stance_foot: str = "left"
     velocity_integral_gain: float = 0.0
     velocity_correction_max: float = 0.3
     velocity_filter_time: float = 1.0
     lipm_correction_gain: float = 0.2
-    lipm_correction_min_step: float = 0.03
     lipm_correction_max_error: float = 0.015
     lipm_correction_max_slide: float = 0.01
-    swing_drift_max: float = 0.5
+    stance_drift_max: float = 0.05
     dcm_offset_bias_max: float = 0.01
     stance_slide_follow: float | None = 0.02
     mpc_failure_times: tuple[float, ...] = ()
@@ -169,8 +180,8 @@ class WalkingControllerConfig:
             raise ParameterError(f"lipm_correction_gain={self.lipm_correction_gain} must be in [0, 1]")
         if not (np.isfinite(self.dcm_offset_bias_max) and 0.0 <= self.dcm_offset_bias_max <= 0.05):
             raise ParameterError(f"dcm_offset_bias_max={self.dcm_offset_bias_max} m must be in [0, 0.05] m")
-        if not (np.isfinite(self.swing_drift_max) and 0.0 <= self.swing_drift_max <= 0.9):
-            raise ParameterError(f"swing_drift_max={self.swing_drift_max} must be in [0, 0.9]")
+        if not (np.isfinite(self.stance_drift_max) and 0.0 <= self.stance_drift_max <= 0.1):
+            raise ParameterError(f"stance_drift_max={self.stance_drift_max} m must be in [0, 0.1] m")
         if self.stance_slide_follow is not None and not (
             np.isfinite(self.stance_slide_follow) and self.stance_slide_follow > 0
         ):
@@ -186,8 +197,8 @@ class WalkingControllerConfig:
         if isinstance(self.touchdown_wait_nodes, bool) or not isinstance(self.touchdown_wait_nodes, int) \
                 or not 0 <= self.touchdown_wait_nodes <= 10:
             raise ParameterError(f"touchdown_wait_nodes={self.touchdown_wait_nodes!r} must be an integer in [0, 10]")
-        for name, high in (("lipm_correction_min_step", 0.5), ("lipm_correction_max_error", 0.1),
-                           ("lipm_correction_max_slide", 0.1)):
+        for name, high in (("lipm_correction_max_error", 0.1), ("lipm_correction_max_slide", 0.1),
+                           ("touchdown_wait_depth", 0.02)):
             value = getattr(self, name)
             if not (np.isfinite(value) and 0.0 <= value <= high):
                 raise ParameterError(f"{name}={value} m must be in [0, {high}] m")

@@ -6,7 +6,7 @@ command handed to the planner, the LIPM corrections live in the planner's
 decides the stance position handed to the planner.
 
 - :class:`VelocityIntegral`: integral action on the forward speed, with anti-windup;
-- :class:`LipmCorrectionEstimator`: the swing drift κ and the touchdown offset bias of the DCM
+- :class:`LipmCorrectionEstimator`: the stance drift and the touchdown offset bias of the DCM
   planner's LIPM, identified after every undisturbed step;
 - :class:`StanceSlide`: how far the stance foot slid from its touchdown point, and the position
   the planner should plan from.
@@ -81,35 +81,35 @@ class _StanceRecord:
 class LipmCorrectionEstimator:
     """Identifies, after each step, two corrections of the DCM planner's LIPM.
 
-    (1) Swing drift κ: the DCM's gain over the LIPM during the stance that just ended,
-    d = ζ_T − p − (ζ_0 − p) exp(ω T) (ζ_0, ζ_T measured at its touchdown and at the next one,
-    p the stance foot, along the stance's heading), per unit of the step taken, κ_k = d / L.
-    (2) Touchdown offset bias: the measured DCM offset at the touchdown minus the offset the
-    plan aimed at (heading x). Each estimate moves by ``gain`` towards the step's value.
+    (1) Stance drift d: the DCM's gain over the LIPM during the stance that just ended,
+    d = ζ_T − p − (ζ_0 − p) exp(ω T) (ζ_0, ζ_T measured at its touchdown and at the next one, p
+    the stance foot, along the stance's heading), in metres, whatever the step's length (sign
+    included). (2) Touchdown offset bias: the measured DCM offset at the touchdown minus the offset
+    the plan aimed at (heading x). Each estimate moves by ``gain`` towards the step's value.
 
-    Only undisturbed steps count: the DCM at both touchdowns within ``max_error`` of the plan,
-    the stance foot within ``max_slide`` of its touchdown point, a step of at least ``min_step``.
-    On Bolt the swing leg (half of the robot's mass) makes the DCM outrun the LIPM by ~0.22 L per
-    step and the touchdowns end ~2.5 mm ahead of the plan (docs/closed_loop.md).
+    Only undisturbed steps count: the DCM at both touchdowns within ``max_error`` of the plan and
+    the stance foot within ``max_slide`` of its touchdown point. On Bolt the swing leg (half of
+    the robot's mass) makes the DCM outrun the LIPM by ~24 mm per stance at 0.33 m/s, and by
+    5.5-8.5 mm stepping in place (docs/closed_loop.md).
 
     Args:
         corrections: the planner's corrections object, written in place.
         omega: the run's pendulum frequency [1/s].
         gain: per-step gain in [0, 1] (0 = off).
-        swing_drift_max: bound of κ_k and of the estimate.
+        stance_drift_max: bound of each step's drift and of the estimate [m].
         offset_bias_max: bound of each step's offset error and of the estimate [m].
-        min_step, max_error, max_slide: see above [m].
+        max_error, max_slide: see above [m].
     """
 
-    def __init__(self, corrections: LipmCorrections, omega: float, gain: float, swing_drift_max: float,
-                 offset_bias_max: float, min_step: float, max_error: float, max_slide: float) -> None:
+    def __init__(self, corrections: LipmCorrections, omega: float, gain: float, stance_drift_max: float,
+                 offset_bias_max: float, max_error: float, max_slide: float) -> None:
         self.corrections = corrections
         self.omega = float(omega)
         self.gain = float(gain)
-        self.swing_drift_max, self.offset_bias_max = float(swing_drift_max), float(offset_bias_max)
-        self.min_step, self.max_error, self.max_slide = float(min_step), float(max_error), float(max_slide)
+        self.stance_drift_max, self.offset_bias_max = float(stance_drift_max), float(offset_bias_max)
+        self.max_error, self.max_slide = float(max_error), float(max_slide)
         self._previous: _StanceRecord | None = None
-        #: (touchdown time [s], κ of the stance that ended, touchdown offset error [m]) of every step used
+        #: (touchdown time [s], drift of the stance that ended [m], touchdown offset error [m]) of every step used
         self.steps: list[tuple[float, float, float]] = []
 
     def touchdown(self, t: float, dcm: np.ndarray, foot: np.ndarray, yaw: float,
@@ -129,19 +129,16 @@ class LipmCorrectionEstimator:
         # the first stance includes the start from standing; a stance foot that slid moved the pivot
         if previous is None or self.gain <= 0.0 or not (steady and previous.steady) or ended_slide > self.max_slide:
             return False
-        heading = previous.yaw
-        step = rotate_xy(foot - previous.foot, -heading)[0]
-        if abs(step) < self.min_step:
-            return False
         growth = math.exp(self.omega * (t - previous.t))
-        excess = rotate_xy((dcm - previous.foot) - (previous.dcm - previous.foot) * growth, -heading)[0]
-        kappa = float(np.clip(excess / step, 0.0, self.swing_drift_max))
-        offset_error = float(np.clip(error[0], -self.offset_bias_max, self.offset_bias_max))
+        excess = rotate_xy((dcm - previous.foot) - (previous.dcm - previous.foot) * growth, -previous.yaw)[0]
+        drift_max, bias_max = self.stance_drift_max, self.offset_bias_max
+        drift = float(np.clip(excess, -drift_max, drift_max))
+        offset_error = float(np.clip(error[0], -bias_max, bias_max))
         c = self.corrections
-        c.swing_drift = float(np.clip(c.swing_drift + self.gain * (kappa - c.swing_drift), 0.0, self.swing_drift_max))
+        c.stance_drift = float(np.clip(c.stance_drift + self.gain * (drift - c.stance_drift), -drift_max, drift_max))
         c.dcm_offset_bias = float(np.clip(c.dcm_offset_bias + self.gain * (offset_error - c.dcm_offset_bias),
-                                          -self.offset_bias_max, self.offset_bias_max))
-        self.steps.append((float(t), kappa, offset_error))
+                                          -bias_max, bias_max))
+        self.steps.append((float(t), drift, offset_error))
         return True
 
 

@@ -304,13 +304,17 @@ class WalkingOCP:
         return IntegratedActionModelEuler(dam, 0.0 if terminal else self.dt)
 
     # ------------------------------------------------------------------ update
-    def update(self, x0: np.ndarray, schedule, com_terminal_reference: np.ndarray) -> None:
+    def update(self, x0: np.ndarray, schedule, com_terminal_reference: np.ndarray,
+               touchdown_depth: float = 0.0) -> None:
         """Set the initial state, the per-node contacts and references from a schedule.
 
         Args:
             x0: initial state (nx,), Pinocchio convention.
             schedule: ``sequencer.schedule.ContactSchedule`` with n_nodes rows + 1 on this grid.
             com_terminal_reference: CoM reference at the end of the horizon (3,) [m], world.
+            touchdown_depth: how far below the ground the ``{foot}_touchdown_height`` term aims
+                the foot at the last swing node [m], >= 0 (0: on the ground; the walking
+                controller aims a due foot still in the air below it).
         """
         self.problem.set_x0(x0)
         if schedule.n_nodes != self.n_nodes:
@@ -324,6 +328,9 @@ class WalkingOCP:
         if com_ref.shape != (3,):
             raise ParameterError(f"com_terminal_reference has shape {com_ref.shape}, expected (3,)")
         check_finite("com_terminal_reference", com_ref)
+        if not (np.isfinite(touchdown_depth) and touchdown_depth >= 0.0):
+            raise ParameterError(f"touchdown_depth={touchdown_depth} m must be finite and >= 0")
+        touchdown_reference = self.ground_height - float(touchdown_depth)
         cfg = self.config
         columns = [schedule.feet.index(foot) for foot in self.feet]
         in_contact = np.asarray(schedule.in_contact, dtype=bool)[:, columns]
@@ -352,6 +359,7 @@ class WalkingOCP:
                     continue
                 if touchdown_height is not None:
                     touchdown_height.active = last_rows[k][j]
+                    touchdown_height.cost.residual.reference = touchdown_reference
                 if touchdown_velocity is not None:
                     touchdown_velocity.active = first_rows[k][j]
                 if foothold is not None:

@@ -67,9 +67,8 @@ class PlanningStage:
         self.lipm = None
         if isinstance(planner, DcmFootstepPlanner):
             self.lipm = LipmCorrectionEstimator(
-                planner.corrections, self.omega, config.lipm_correction_gain, config.swing_drift_max,
-                config.dcm_offset_bias_max, config.lipm_correction_min_step, config.lipm_correction_max_error,
-                config.lipm_correction_max_slide,
+                planner.corrections, self.omega, config.lipm_correction_gain, config.stance_drift_max,
+                config.dcm_offset_bias_max, config.lipm_correction_max_error, config.lipm_correction_max_slide,
             )
         self.command = VelocityCommand()
         self._range = planner.command_range()
@@ -168,6 +167,7 @@ class PlanningStage:
             "sequencer_yaw_rate": command.yaw_rate,
             "swing_drift": np.nan if self.lipm is None else self.lipm.corrections.swing_drift,
             "dcm_offset_bias": np.nan if self.lipm is None else self.lipm.corrections.dcm_offset_bias,
+            "stance_drift": np.nan if self.lipm is None else self.lipm.corrections.stance_drift,
         }
         tic = time.perf_counter()
         planned_stance = StanceState(stance.foot, self.slide.plan_position, stance.yaw, stance.t_start)

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from sequencer.schedule import ContactSchedule, contact_schedule
-from wbmpc.walking.stance import delay_to_touchdown
+from wbmpc.walking.stance import delay_to_touchdown, ground_waiting_nodes
 
 
 @dataclass(frozen=True)
@@ -27,11 +27,13 @@ class OcpReference:
         com_terminal: CoM reference at the end of the horizon (3,) [m], world frame.
         touchdown_wait: delay [s] applied to the plan so that a due but unmeasured touchdown
             lies ahead (0 when none, see :func:`wbmpc.walking.stance.delay_to_touchdown`).
+        touchdown_depth: how far below the ground the OCP aims that foot [m] (0 when no wait).
     """
 
     schedule: ContactSchedule
     com_terminal: np.ndarray
     touchdown_wait: float
+    touchdown_depth: float
 
 
 class OcpReferenceStage:
@@ -44,13 +46,16 @@ class OcpReferenceStage:
         wait_for_contact: with contact touchdown detection, delay a due but unmeasured touchdown
             by ``wait_nodes`` nodes (see :func:`~wbmpc.walking.stance.delay_to_touchdown`).
         wait_nodes: see above.
+        wait_depth: while waiting, the foot is aimed this far below the ground [m] and the waiting
+            nodes' height reference stays on the ground (:func:`~wbmpc.walking.stance.ground_waiting_nodes`).
     """
 
     def __init__(self, feet: tuple[str, ...], n_nodes: int, node_dt: float, wait_for_contact: bool,
-                 wait_nodes: int) -> None:
+                 wait_nodes: int, wait_depth: float) -> None:
         self.feet = tuple(feet)
         self.n_nodes, self.node_dt = int(n_nodes), float(node_dt)
         self.wait_for_contact, self.wait_nodes = bool(wait_for_contact), int(wait_nodes)
+        self.wait_depth = float(wait_depth)
 
     def sample(self, plan: Any, t: float, com_xy: np.ndarray, foot_in_contact: np.ndarray) -> OcpReference:
         """The OCP reference of the update at ``t`` [s] from ``plan``; ``com_xy`` (2,) [m] is the
@@ -62,5 +67,9 @@ class OcpReferenceStage:
             sampled, wait = delay_to_touchdown(plan, t, bool(foot_in_contact[swing_foot]), self.node_dt,
                                                self.wait_nodes)
         schedule = contact_schedule(sampled, t, self.node_dt, self.n_nodes, rounding="nearest")
+        depth = 0.0
+        if wait > 0.0:  # the swing foot is due and still in the air
+            schedule = ground_waiting_nodes(schedule, plan.steps[0], sampled.steps[0])
+            depth = self.wait_depth
         com_end = plan.com_reference(t + self.n_nodes * self.node_dt, com_xy)
-        return OcpReference(schedule, np.asarray(com_end, dtype=float), wait)
+        return OcpReference(schedule, np.asarray(com_end, dtype=float), wait, depth)

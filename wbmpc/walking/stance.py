@@ -138,3 +138,25 @@ def delay_to_touchdown(plan: Any, t: float, swing_foot_in_contact: bool, node_dt
     delay = target - first.touchdown_time
     steps = tuple(dataclasses.replace(s, touchdown_time=s.touchdown_time + delay) for s in plan.steps)
     return dataclasses.replace(plan, steps=steps), delay
+
+
+def ground_waiting_nodes(schedule: Any, step: Any, delayed: Any) -> Any:
+    """The schedule of a delayed swing with its waiting nodes at the undelayed phase (clipped to 1).
+
+    :func:`delay_to_touchdown` stretches the swing; sampled as is, eq. (19) on the stretched
+    swing puts the height reference back ~2.6 mm above the ground at the node due now (phase
+    0.94 on Bolt), against the touchdown-height term. The waiting nodes keep the phase of the
+    planned swing instead, clipped to 1: their reference stays on the ground.
+
+    Args:
+        schedule: the ``ContactSchedule`` sampled from the delayed plan.
+        step: the swing's planned step (``plan.steps[0]`` before the delay).
+        delayed: the same step in the delayed plan.
+    """
+    j = schedule.feet.index(step.foot)
+    times = schedule.times
+    phase = schedule.swing_phase.copy()
+    waiting = (times < delayed.touchdown_time) & ~schedule.in_contact[:, j]
+    duration = max(step.touchdown_time - step.stance_start_time, 1e-9)
+    phase[waiting, j] = np.clip((times[waiting] - step.stance_start_time) / duration, 0.0, 1.0)
+    return dataclasses.replace(schedule, swing_phase=phase)
