@@ -13,7 +13,7 @@ from wbmpc.errors import ParameterError
 from wbmpc.ocp.batched_problem import BatchedShootingProblem, batched_evaluation_support
 from wbmpc.ocp.problem import ShootingProblem
 from wbmpc.ocp.solvers import SolverFDDP
-from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig
+from wbmpc.walking.ocp import SlowPathWarning, WalkingOCP, WalkingOCPConfig
 
 # every term the batched pass supports, a Baumgarte position gain (moving contact references)
 BATCHED_TERMS = WalkingOCPConfig(foothold_weight=100.0, touchdown_height_weight=1e5, baumgarte_gains=(20.0, 40.0))
@@ -52,7 +52,8 @@ def test_walking_ocp_uses_the_batched_problem_when_it_can(bolt):
     assert WalkingOCP(bolt, WalkingOCPConfig(), 5, 0.01).evaluation == "batched"
     nodes = WalkingOCP(bolt, WalkingOCPConfig(evaluation="nodes"), 5, 0.01)
     assert nodes.evaluation == "nodes" and type(nodes.problem) is ShootingProblem
-    fallback = WalkingOCP(bolt, WalkingOCPConfig(contact_force_weight=1e-2), 5, 0.01)
+    with pytest.warns(SlowPathWarning, match="node-wise evaluation.*ResidualContactForce"):  # said, not silent
+        fallback = WalkingOCP(bolt, WalkingOCPConfig(contact_force_weight=1e-2), 5, 0.01)
     assert fallback.evaluation == "nodes"
     assert "ResidualContactForce" in fallback.evaluation_note
     with pytest.raises(ParameterError, match="evaluation='batched'.*ResidualContactForce"):

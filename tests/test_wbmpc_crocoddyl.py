@@ -20,7 +20,7 @@ from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig, quasi_static_control
 pytestmark = pytest.mark.crocoddyl
 ALL_TERMS = WalkingOCPConfig(foothold_weight=100.0, contact_force_weight=1e-2, friction_cone_weight=10.0,
                              touchdown_height_weight=1e5, touchdown_velocity_weight=1e3,
-                             baumgarte_gains=(20.0, 40.0))
+                             baumgarte_gains=(20.0, 40.0), evaluation="nodes")  # the node models themselves
 
 
 def _rel(actual, expected) -> float:
@@ -160,7 +160,7 @@ def test_closed_loop_with_crocoddyl_as_the_solver_applies_the_same_torques():
 def test_g1_flat_feet_solve_matches_crocoddyl(backend):
     g1 = load_robot("g1")
     config = WalkingOCPConfig(swing_apex_height=0.08, contact_force_weight=1e-4, baumgarte_gains=(10.0, 30.0),
-                              dynamics_backend=backend)
+                              dynamics_backend=backend, evaluation="nodes")
     ocp = WalkingOCP(g1, config, n_nodes=10, dt=0.02)
     x0 = standing_state(g1)
     schedule = alternating_schedule(0.0, 0.02, 10, step_duration=0.4, foot_y=(0.12, -0.12))

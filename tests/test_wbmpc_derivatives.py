@@ -22,7 +22,7 @@ NOISE = 10.0 * EPS ** (2.0 / 3.0)
 """Floor relative to the whole matrix: rounding noise of central differences (eps/h, h = eps^(1/3))."""
 ALL_TERMS = WalkingOCPConfig(foothold_weight=100.0, contact_force_weight=1e-2, friction_cone_weight=10.0,
                              touchdown_height_weight=1e5, touchdown_velocity_weight=1e3,
-                             baumgarte_gains=(20.0, 40.0))
+                             baumgarte_gains=(20.0, 40.0), evaluation="nodes")  # the node models themselves
 
 
 @pytest.fixture(scope="module")
@@ -231,7 +231,8 @@ def test_terminal_residuals_match_finite_differences(bolt, walking_nodes):
 def test_flat_foot_contact_dynamics_match_finite_differences(backend):
     """6D (flat-foot) contacts with Baumgarte gains on G1: Fx and Fu of a running node."""
     g1 = load_robot("g1")
-    config = WalkingOCPConfig(contact_force_weight=1e-3, baumgarte_gains=(10.0, 20.0), dynamics_backend=backend)
+    config = WalkingOCPConfig(contact_force_weight=1e-3, baumgarte_gains=(10.0, 20.0), dynamics_backend=backend,
+                              evaluation="nodes")
     ocp = WalkingOCP(g1, config, n_nodes=4, dt=0.02)
     schedule = alternating_schedule(0.0, 0.02, 4, step_duration=0.4, foot_y=(0.12, -0.12))
     ocp.update(standing_state(g1), schedule, np.array([0.0, 0.0, 0.7]))
@@ -271,7 +272,7 @@ def test_compiled_state_difference_matches_pinocchio(bolt):
 @pytest.mark.parametrize("backend", ["pinocchio", "kkt"])
 def test_flight_node_after_stance_matches_finite_differences(bolt, backend):
     """A node without contact, evaluated after it was a stance node (its data reused): Fx, Fu."""
-    ocp = WalkingOCP(bolt, WalkingOCPConfig(dynamics_backend=backend), n_nodes=4, dt=0.01)
+    ocp = WalkingOCP(bolt, WalkingOCPConfig(dynamics_backend=backend, evaluation="nodes"), n_nodes=4, dt=0.01)
     ocp.update(standing_state(bolt), alternating_schedule(0.0, 0.01, 4), np.array([0.0, 0.0, 0.3]))
     rng = np.random.default_rng(0)
     x, u = random_state(bolt, rng), rng.standard_normal(6)

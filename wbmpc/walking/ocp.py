@@ -30,6 +30,7 @@ integrated (× dt), the terminal cost is not.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -57,6 +58,10 @@ from wbmpc.ocp.residuals import (
 from wbmpc.ocp.state import StateMultibody
 
 GRAVITY = 9.81  # [m/s²]
+
+
+class SlowPathWarning(UserWarning):
+    """The walking OCP is evaluated node by node because a term cannot be batched (the message names it)."""
 
 
 @dataclass(frozen=True)
@@ -117,7 +122,8 @@ class WalkingOCPConfig:
         evaluation: how the horizon is evaluated, same results: "batched" (the Pinocchio calls
             node by node, everything else in one compiled pass, see :mod:`wbmpc.ocp.batched_problem`),
             "nodes" (every node model's calc/calcDiff, the reference pipeline), or "auto"
-            (default: batched when the problem's terms allow it, else nodes).
+            (default: batched when the problem's terms allow it, else nodes with a
+            :class:`SlowPathWarning` naming the term that cannot be batched).
         max_line_search_trials: FDDP line-search steps tried (1, ½, …).
         reg_min, reg_max: FDDP regularisation bounds.
         th_stop: FDDP stopping threshold.
@@ -240,8 +246,10 @@ class WalkingOCP:
                 self.evaluation = "batched"
             elif config.evaluation == "batched":
                 raise ParameterError(f"evaluation='batched' is not possible for this problem: {reason}")
-            else:
+            else:  # said, not silent: the node-wise path is several times slower
                 self.evaluation_note = f"node-wise evaluation: {reason}"
+                warnings.warn(f"WalkingOCP: {self.evaluation_note} (evaluation='auto'; set evaluation='nodes' to "
+                              "choose it, or 'batched' to make this an error)", SlowPathWarning, stacklevel=2)
 
     # ------------------------------------------------------------------ construction
     def _contact(self, foot: str):
