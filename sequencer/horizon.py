@@ -60,6 +60,10 @@ class PlannedStep:
         active: names of the active inequalities of this step's QP (see step_qp.CONSTRAINT_NAMES).
         yaw: world yaw of the foothold [rad] (not wrapped): the heading ψ_{k+1} = ψ_k + yaw_rate T_k
             of the stance this touchdown starts, the frame the next step's QP is written in.
+        cop_offset: world (x, y) offset [m] of the constant centre of pressure from this foothold during the
+            stance this touchdown starts (the pendulum's pivot is position + cop_offset), or None: the
+            foothold itself (the DCM planner, point feet). The ALIP planner's ankle torque τ is such a
+            constant CoP shift (c_x = -τ_y / (m g), c_y = τ_x / (m g)), so its CoM reference stays exact.
     """
 
     foot: str
@@ -70,6 +74,7 @@ class PlannedStep:
     stance_start_time: float
     active: tuple[str, ...] = ()
     yaw: float = 0.0
+    cop_offset: np.ndarray | None = None
 
     @property
     def duration(self) -> float:
@@ -94,6 +99,8 @@ class FootstepPlan:
         stance_yaw: world yaw of the stance foot's heading frame [rad].
         double_support: time both feet stay on the ground after each touchdown [s] (0 = point feet).
         feet: names of the feet the plan alternates, in the order schedules index them.
+        stance_cop_offset: world (x, y) offset [m] of the constant CoP from the stance foothold until the
+            first touchdown (the pivot of the current stance), or None (the foothold); see PlannedStep.cop_offset.
     """
 
     t0: float
@@ -108,6 +115,7 @@ class FootstepPlan:
     stance_yaw: float = 0.0
     double_support: float = 0.0
     feet: tuple[str, ...] = FEET
+    stance_cop_offset: np.ndarray | None = None
 
     # ------------------------------------------------------------------ queries
     @property
@@ -126,10 +134,13 @@ class FootstepPlan:
         return np.array([s.yaw for s in self.steps])
 
     def _segments(self):
-        """(start time, stance position, DCM at start) of every stance, the current one first."""
-        yield self.t0, self.stance_position, self.dcm_measured
+        """(start time, pendulum pivot, DCM at start) of every stance, the current one first (the pivot is the
+        foothold, shifted by the CoP offset when the plan has one)."""
+        pivot = self.stance_position if self.stance_cop_offset is None else self.stance_position + self.stance_cop_offset
+        yield self.t0, pivot, self.dcm_measured
         for step in self.steps:
-            yield step.touchdown_time, step.position, step.dcm_at_touchdown
+            yield step.touchdown_time, (step.position if step.cop_offset is None else step.position + step.cop_offset), \
+                step.dcm_at_touchdown
 
     def _check_times(self, t) -> np.ndarray:
         times = np.asarray(t, dtype=float)
@@ -221,6 +232,8 @@ class FootstepPlan:
         cx, cy = float(com0[0]), float(com0[1])
         start = self.t0
         fx, fy = float(self.stance_position[0]), float(self.stance_position[1])
+        if self.stance_cop_offset is not None:
+            fx, fy = fx + float(self.stance_cop_offset[0]), fy + float(self.stance_cop_offset[1])
         zx, zy = float(self.dcm_measured[0]), float(self.dcm_measured[1])
         for step in self.steps:
             end = step.touchdown_time
@@ -231,6 +244,8 @@ class FootstepPlan:
             cy = fy + (cy - fy) * decay + (zy - fy) * (grow - decay) / 2.0
             start = end
             fx, fy = float(step.position[0]), float(step.position[1])
+            if step.cop_offset is not None:
+                fx, fy = fx + float(step.cop_offset[0]), fy + float(step.cop_offset[1])
             zx, zy = float(step.dcm_at_touchdown[0]), float(step.dcm_at_touchdown[1])
         grow, decay = math.exp(omega * (t - start)), math.exp(-omega * (t - start))
         return np.array((fx + (cx - fx) * decay + (zx - fx) * (grow - decay) / 2.0,

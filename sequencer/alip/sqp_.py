@@ -5,7 +5,8 @@ configurations of one method, each one C++ call:
 
 - *local*: full Newton-SQP steps (no line search), the real-time iteration of a receding-horizon loop: from
   the previous plan's primal-dual solution (``warm``) it converges quadratically in 2-4 iterations;
-- *globalised*: the same SQP with its merit line search, from a cold start or when the local iteration fails.
+- *globalised*: the same SQP with its merit line search, from the cold start (:meth:`AlipNlp.initial_guess`),
+  without a warm start or when the local iteration from it fails (a warm start far from the new optimum).
   Near the optimum its line search can reject a step of round-off size (status
   ``Search_Direction_Becomes_Too_Small``) before the multipliers are updated: the local iteration then
   finishes from that point (a polish).
@@ -58,8 +59,7 @@ class SqpSolver:
                                       warm.lam_w, warm.lam_g)
             iterations += stats["iter_count"]
         if not stats["success"]:
-            x0 = nlp.initial_guess(instance) / nlp.scale if warm is None else np.clip(warm.w / nlp.scale, lbw, ubw)
-            result, stats = self._run(self.globalised, p, lbw, ubw, x0)
+            result, stats = self._run(self.globalised, p, lbw, ubw, nlp.initial_guess(instance) / nlp.scale)
             iterations += stats["iter_count"]
             if not stats["success"] and stats["return_status"] in _POLISH:
                 result, stats = self._run(self.local, p, lbw, ubw, result["x"], result["lam_x"], result["lam_g"])

@@ -1,0 +1,219 @@
+"""The ALIP step-to-step NMPC behind the :class:`~sequencer.planner.FootstepPlanner` interface.
+
+At each call: the measured ALIP state about the stance contact, in the stance's heading frame ψ_0
+(``ReducedState.angular_momentum``; when it is None, the paper's approximation eqs. 14-15 from the CoM
+velocity without the centroidal I ω terms, which ReducedState does not carry, at the model height), the
+time in stance t_curr = t − stance.t_start (a stance older than t_max is planned as a touchdown now), the
+NMPC of eq. (11) solved by the chosen solver, warm-started from the last plan (shifted by one step after a
+touchdown), and a :class:`~sequencer.horizon.FootstepPlan`:
+
+- headings ψ_{k+1} = ψ_k + r T_k (r the yaw rate), footholds p_{k+1} = p_k + R_z(ψ_k) ℓ_k (eq. 16),
+  touchdowns at t_start + T_0, then + T_k;
+- the K optimised steps, then nominal steps (ℓ^des clipped, T_des, τ = 0, the corrected S2S map) until a
+  touchdown at or after t + params.horizon, so the controller's grid is covered;
+- the DCM at every touchdown and the CoP offset of every stance (the ankle torque), so that
+  ``com_reference`` (the LIP formulas about the CoP) is the ALIP CoM prediction exactly.
+
+A failed solve raises :class:`~sequencer.alip.nlp.AlipSolverError` (a ``wbmpc.errors.SolverError``); the
+control loop keeps its last plan. :attr:`AlipFootstepPlanner.last_solution` holds the last optimum
+(periods, torques, steps, states, active bounds).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from sequencer.alip.ipopt_ import IpoptSolver
+from sequencer.alip.nlp import FEET, AlipInstance, AlipNlp, AlipSolution, desired_steps, orbit
+from sequencer.alip.params import AlipParams
+from sequencer.alip.s2s import B_D, heading_change_entries
+from sequencer.alip.sqp_ import SqpSolver
+from sequencer.horizon import FootstepPlan, PlannedStep
+from sequencer.planner import ReducedState, StanceState, VelocityCommand
+from wbmpc.errors import ParameterError
+
+SOLVERS = {"sqp": SqpSolver, "ipopt": IpoptSolver}
+
+
+def _rotation(yaw: float) -> np.ndarray:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array(((c, -s), (s, c)))
+
+
+class AlipFootstepPlanner:
+    """Footstep planner of the ALIP S2S NMPC (seed 001 eq. 11), implementing :class:`~sequencer.planner.FootstepPlanner`.
+
+    Args:
+        params: AlipParams (e.g. ``AlipParams.preset("g1")``).
+        solver: ``"sqp"`` (fast path, default) or ``"ipopt"`` (reference).
+        warm_start: start each solve from the last solution (shifted after a touchdown).
+    """
+
+    feet: tuple[str, ...] = FEET
+
+    def __init__(self, params: AlipParams, solver: str = "sqp", warm_start: bool = True) -> None:
+        if not isinstance(params, AlipParams):
+            raise ParameterError(f"params must be an AlipParams, got {type(params).__name__}")
+        if solver not in SOLVERS:
+            raise ParameterError(f"solver={solver!r} must be one of {sorted(SOLVERS)}")
+        if not isinstance(warm_start, bool):
+            raise ParameterError(f"warm_start={warm_start!r} must be True or False")
+        self.params = params
+        self.model = params.model
+        self.nlp = AlipNlp(params)
+        self.solver = SOLVERS[solver](self.nlp)
+        self.warm_start = warm_start
+        self.last_solution: AlipSolution | None = None
+        self.last_instance: AlipInstance | None = None
+        self._last_key = None
+
+    # ------------------------------------------------------------------ interface attributes
+    @property
+    def omega(self) -> float:
+        """ALIP natural frequency sqrt(g / z) [1/s]."""
+        return self.params.omega
+
+    @property
+    def com_height(self) -> float:
+        """The ALIP's CoM height z [m]."""
+        return self.params.com_height
+
+    @property
+    def double_support(self) -> float:
+        return self.params.double_support
+
+    def command_range(self) -> dict[str, tuple[float, float]]:
+        """v_x, v_y [m/s] whose desired steps (eqs. 12-13) lie in the step boxes; yaw_rate unbounded."""
+        return {**self.params.velocity_range(), "yaw_rate": (-math.inf, math.inf)}
+
+    def check_command(self, command: VelocityCommand) -> None:
+        command = _velocity_command(command)
+        self.params.check_velocity(command.v_x, command.v_y)
+
+    # ------------------------------------------------------------------ planning
+    def measured_state(self, stance: StanceState, measured: ReducedState) -> np.ndarray:
+        """ALIP state (p_x, L_y, p_y, L_x) about the stance contact, stance heading frame, shape (4,)."""
+        to_heading = _rotation(stance.yaw).T
+        p = to_heading @ (measured.com[:2] - stance.position)
+        if measured.angular_momentum is None:
+            v = np.concatenate([to_heading @ measured.com_velocity[:2], measured.com_velocity[2:]])
+            return self.model.state_from_velocity(p, v)
+        L = to_heading @ measured.angular_momentum[:2]  # (L_x, L_y)
+        return np.array([p[0], L[1], p[1], L[0]])
+
+    def instance(self, t: float, stance: StanceState, measured: ReducedState, command) -> AlipInstance:
+        """The NMPC instance of a call (validated; ParameterError names the bad argument)."""
+        if not isinstance(stance, StanceState):
+            raise ParameterError(f"stance must be a StanceState, got {type(stance).__name__}")
+        if not isinstance(measured, ReducedState):
+            raise ParameterError(f"measured must be a ReducedState, got {type(measured).__name__}")
+        if stance.foot not in self.feet:
+            raise ParameterError(f"stance foot={stance.foot!r} must be one of {self.feet}")
+        command = _velocity_command(command)
+        t = float(t)
+        if not math.isfinite(t) or t < stance.t_start:
+            raise ParameterError(f"t={t} s must be finite and >= the stance start t_start={stance.t_start} s")
+        self.params.check_velocity(command.v_x, command.v_y)
+        return AlipInstance(self.measured_state(stance, measured), t - stance.t_start, stance.foot, command.v_x,
+                            command.v_y, command.yaw_rate)
+
+    def solve(self, instance: AlipInstance, warm: AlipSolution | None = None) -> AlipSolution:
+        """Solve eq. (11) for ``instance`` (raises AlipSolverError)."""
+        return self.solver.solve(instance, warm)
+
+    def plan(self, t: float, stance: StanceState, measured: ReducedState, command: VelocityCommand) -> FootstepPlan:
+        """Footsteps from ``t`` [s]: the NMPC's K steps, then nominal ones until t + params.horizon.
+
+        Raises:
+            ParameterError: bad input or a command outside :meth:`command_range`.
+            AlipSolverError: the NMPC failed; a control loop keeps its last plan.
+        """
+        instance = self.instance(t, stance, measured, command)
+        key = (stance.foot, stance.t_start)
+        warm = None
+        if self.warm_start and self.last_solution is not None:
+            warm = self.last_solution if key == self._last_key else self._shifted(self.last_solution, instance)
+        solution = self.solve(instance, warm)
+        self.last_solution, self.last_instance, self._last_key = solution, instance, key
+        return self.footstep_plan(float(t), stance, measured, instance, solution)
+
+    def _shifted(self, solution: AlipSolution, instance: AlipInstance) -> AlipSolution:
+        """The last solution one step on (after a touchdown), its last step from the orbit; duals zero."""
+        K = self.nlp.K
+        ell, x_des = self.nlp.desired(instance)
+        w = np.concatenate([np.append(solution.periods[1:], self.params.t_des),
+                            np.vstack([solution.torques[1:], np.zeros((1, 2))]).ravel(),
+                            np.vstack([solution.steps[1:], ell[-1:]]).ravel(),
+                            np.vstack([solution.states[1:], x_des[-1:]]).ravel()])
+        return AlipSolution(w[:K], w[K:3 * K].reshape(K, 2), w[3 * K:5 * K].reshape(K, 2), w[5 * K:].reshape(K, 4),
+                            solution.cost, 0, solution.solver, (), w, np.zeros(self.nlp.n_w), np.zeros(self.nlp.n_g))
+
+    def footstep_plan(self, t: float, stance: StanceState, measured: ReducedState, instance: AlipInstance,
+                      solution: AlipSolution) -> FootstepPlan:
+        """The FootstepPlan of a solution (eq. 16 composition, nominal tail, DCM and CoP per stance)."""
+        params, model = self.params, self.model
+        omega, mz = model.omega, model.mz
+
+        def dcm_offset(x):  # DCM relative to the contact, heading frame: p + v / ω, v = (L_y, -L_x) / (m z)
+            return np.array([x[0] + x[1] / (mz * omega), x[2] - x[3] / (mz * omega)])
+
+        periods, torques, steps = list(solution.periods), list(solution.torques), list(solution.steps)
+        states = list(solution.states)
+        # nominal tail: ℓ^des (within its box), T_des, τ = 0, until a touchdown at or after t + horizon
+        foot, yaw = instance.stance_foot, stance.yaw
+        feet = self.nlp.stance_sequence(instance.stance_foot)
+        touchdown = stance.t_start + float(np.sum(periods))
+        stance_k = feet[-1]
+        other = {"left": "right", "right": "left"}
+        x = states[-1]
+        rate = instance.yaw_rate
+        lb, ub = self.nlp.bounds(instance)
+        box = {f: (lb[3 * self.nlp.K + 2 * i: 3 * self.nlp.K + 2 * i + 2], ub[3 * self.nlp.K + 2 * i: 3 * self.nlp.K + 2 * i + 2])
+               for i, f in enumerate(feet[:2])}
+        while touchdown < t + params.horizon:
+            post = np.array(heading_change_entries(rate * periods[-1])) @ (x + B_D @ steps[-1])
+            stance_k = other[stance_k]
+            x = model.flow(post, (0.0, 0.0), params.t_des)
+            periods.append(params.t_des)
+            torques.append(np.zeros(2))
+            steps.append(np.clip(desired_steps(params, instance.v_x, instance.v_y, stance_k), *box[stance_k]))
+            states.append(x)
+            touchdown += params.t_des
+        # composition (eq. 16) in the world frame
+        position, start = stance.position.copy(), stance.t_start
+        planned = []
+        for k, (period, torque, ell, state) in enumerate(zip(periods, torques, steps, states)):
+            rotation = _rotation(yaw)
+            touchdown = start + period
+            landing = other[foot]
+            foothold = position + rotation @ ell
+            zeta = position + rotation @ dcm_offset(state)  # DCM continuous through the impact
+            yaw_next = yaw + rate * period
+            next_torque = torques[k + 1] if k + 1 < len(torques) else np.zeros(2)
+            cop = _rotation(yaw_next) @ model.cop_offset(next_torque)
+            planned.append(PlannedStep(landing, foothold, touchdown, zeta - foothold, zeta, start,
+                                       solution.active if k == 0 else (), yaw_next, cop))
+            position, start, foot, yaw = foothold, touchdown, landing, yaw_next
+        x0 = instance.x0
+        dcm0 = stance.position + _rotation(stance.yaw) @ dcm_offset(x0)
+        return FootstepPlan(
+            t0=t, stance_foot=stance.foot, stance_position=stance.position.copy(), dcm_measured=dcm0, omega=omega,
+            steps=tuple(planned), t_stance_start=stance.t_start, horizon=params.horizon, com_height=params.com_height,
+            stance_yaw=stance.yaw, double_support=params.double_support, feet=self.feet,
+            stance_cop_offset=_rotation(stance.yaw) @ model.cop_offset(solution.torques[0]),
+        )
+
+
+def desired_orbit(params: AlipParams, command: VelocityCommand) -> dict[str, np.ndarray]:
+    """The desired pre-impact states of ``command`` (see :func:`sequencer.alip.nlp.orbit`)."""
+    return orbit(params, command.v_x, command.v_y)
+
+
+def _velocity_command(command) -> VelocityCommand:
+    if isinstance(command, VelocityCommand):
+        return command
+    if isinstance(command, (tuple, list)):
+        return VelocityCommand.from_tuple(command)
+    raise ParameterError(f"command must be a VelocityCommand or (v_x, v_y, yaw_rate), got {type(command).__name__}")
