@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from scipy.linalg import expm
 
 from sequencer.alip.model import AlipModel
 from sequencer.alip.nlp import desired_steps, orbit
@@ -29,7 +30,7 @@ def test_flow_matches_integration(seed):
     expected = integrate(x0, tau, T)
     scale = np.array([1.0, MODEL.mz, 1.0, MODEL.mz])
     assert np.max(np.abs((MODEL.flow(x0, tau, T) - expected) / scale)) < 1e-9
-    assert np.allclose(MODEL.phi(T), __import__("scipy.linalg").linalg.expm(MODEL.A * T), rtol=1e-12, atol=1e-12)
+    assert np.allclose(MODEL.phi(T), expm(MODEL.A * T), rtol=1e-12, atol=1e-12)
     assert np.allclose(MODEL.flow(MODEL.flow(x0, tau, T), tau, -T), x0, atol=1e-9)  # backwards (eq. 17)
 
 
@@ -76,9 +77,9 @@ def test_orbits_are_the_hlip_period1_and_period2():
         assert orbits[foot][0] == pytest.approx(l_x / 2, abs=1e-12)
         assert orbits[foot][1] / mz == pytest.approx(omega / math.tanh(omega * T / 2) * l_x / 2, rel=1e-12)
     ell = {f: desired_steps(params, v_x, v_y, f) for f in ("left", "right")}
-    x_right = MODEL_G1 = params.model.flow(orbits["left"] + B_D @ ell["left"], (0, 0), T)
-    assert np.allclose(x_right, orbits["right"]) and np.allclose(params.model.flow(orbits["right"] + B_D @ ell["right"], (0, 0), T), orbits["left"])
-    del MODEL_G1
+    flow = params.model.flow
+    assert np.allclose(flow(orbits["left"] + B_D @ ell["left"], (0, 0), T), orbits["right"])
+    assert np.allclose(flow(orbits["right"] + B_D @ ell["right"], (0, 0), T), orbits["left"])
     still = orbit(params, 0.0, 0.0)["left"]  # in place, left stance: p_y = -w/2, v_y = -σ2 w/2 (Xiong & Ames)
     w = params.width_offset
     assert still[2] == pytest.approx(-w / 2, abs=1e-12)

@@ -184,7 +184,7 @@ class AlipFootstepPlanner:
         # composition (eq. 16) in the world frame
         position, start = stance.position.copy(), stance.t_start
         planned = []
-        for k, (period, torque, ell, state) in enumerate(zip(periods, torques, steps, states)):
+        for k, (period, ell, state) in enumerate(zip(periods, steps, states)):
             rotation = _rotation(yaw)
             touchdown = start + period
             landing = other[foot]

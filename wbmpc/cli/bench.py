@@ -18,6 +18,7 @@ BENCH_MODULES: dict[str, str] = {
     "loop": "bench.loop",
     "ddp": "bench.ddp",
     "campaign": "bench.campaign",
+    "planner": "bench.planner",
 }
 
 # The checked type of every numeric option of each target (the targets declare them with plain int/float).
@@ -27,6 +28,7 @@ BENCH_NUMBERS: dict[str, dict[str, NumberType]] = {
     "ddp": {"nodes": COUNT, "ticks": COUNT, "repeats": COUNT, "g1_nodes": NON_NEGATIVE_INT, "seed": SEED,
             "time_budget": POSITIVE},
     "campaign": {"trials": COUNT, "duration": DURATION, "rounds": COUNT},
+    "planner": {"repeats": COUNT, "seed": SEED},
 }
 
 

@@ -14,6 +14,8 @@ from __future__ import annotations
 import argparse
 import dataclasses
 
+import numpy as np
+
 from sequencer.horizon import FootstepPlan, FootstepSequencer
 from sequencer.params import PRESET_DIR, SequencerParams
 from wbmpc.cli.arguments import FINITE, NON_NEGATIVE
@@ -135,11 +137,63 @@ def plan_table(plan: FootstepPlan) -> str:
     return "\n".join(lines)
 
 
+def run_alip_plan(args: argparse.Namespace) -> int:
+    """``--planner alip``: the ALIP NMPC from the robot standing (left stance, CoM at rest) or the given state."""
+    from robots.registry import load_robot
+    from sequencer.alip.params import AlipParams
+    from sequencer.alip.planner import AlipFootstepPlanner
+    from sequencer.planner import ReducedState, StanceState, VelocityCommand
+    from wbmpc.errors import ParameterError
+
+    given = sorted(f"--{f.name.replace('_', '-')}" for f in dataclasses.fields(SequencerParams)
+                   if f.name not in ("name", "v_x", "v_y") and getattr(args, f"param_{f.name}", None) is not None)
+    if given or args.preset is not None:
+        raise ParameterError(f"{given or ['--preset']} are DCM sequencer options; with --planner alip use --params FILE "
+                             "(an ALIP TOML) or --robot NAME")
+    robot_name = args.robot or "g1"
+    params = AlipParams.from_toml(args.params) if args.params else AlipParams.preset(robot_name)
+    robot = load_robot(robot_name)
+    foot = args.stance_foot or "left"
+    position = args.stance_position or tuple(robot.foot_positions_reference()[foot][:2])
+    com = np.array([*robot.com_position_reference[:2], params.com_height])
+    if args.dcm is not None:
+        com[:2] = args.dcm
+    elapsed = 0.0 if args.elapsed is None else float(args.elapsed)
+    command = VelocityCommand(args.param_v_x or 0.0, args.param_v_y or 0.0, args.yaw_rate)
+    planner = AlipFootstepPlanner(params, solver=args.alip_solver)
+    planner.check_command(command)
+    stance = StanceState(foot, position, 0.0, 0.0)
+    plan = planner.plan(elapsed, stance, ReducedState(com, np.zeros(3), com[:2]), command)
+    solution = planner.last_solution
+    if args.plot:
+        from sequencer.alip.plots import plot_alip_plan
+
+        plot_alip_plan(plan, solution, com[:2], args.plot, planner.model)
+    if args.json:
+        print_json({"planner": "alip", "params": params.to_dict(), "solver": args.alip_solver,
+                    "command": command.as_tuple(),
+                    "solution": {"periods": solution.periods, "torques": solution.torques, "steps": solution.steps,
+                                 "states": solution.states, "cost": solution.cost, "iterations": solution.iterations,
+                                 "active": solution.active},
+                    "plan": plan})
+    else:
+        print(plan_table(plan))
+        print("NMPC: T = " + ", ".join(f"{v:.3f}" for v in solution.periods) + " s; tau (y, x) = "
+              + ", ".join(f"({a:+.2f}, {b:+.2f})" for a, b in solution.torques) + " N·m; active: "
+              + (", ".join(solution.active) or "-"))
+        if args.plot:
+            print(f"wrote {args.plot}")
+    return 0
+
+
 def run_plan(args: argparse.Namespace) -> int:
+    if args.planner == "alip":
+        return run_alip_plan(args)
     params = params_from_args(args)
     sequencer = FootstepSequencer(params, backend=args.backend)
     foot, position, dcm, elapsed = state_from_args(args)
-    plan = sequencer.plan(t=elapsed, stance_foot=foot, stance_position=position, dcm_measured=dcm, t_stance_start=0.0)
+    plan = sequencer.plan(t=elapsed, stance_foot=foot, stance_position=position, dcm_measured=dcm, t_stance_start=0.0,
+                          yaw_rate=args.yaw_rate)
     if args.plot:
         from sequencer.plots import plot_plan
 
@@ -164,5 +218,10 @@ def register(subparsers) -> None:
     add_params_arguments(parser)
     add_state_arguments(parser)
     parser.add_argument("--backend", choices=("exact", "osqp", "proxqp"), default="exact", help="QP backend")
+    parser.add_argument("--planner", choices=("dcm", "alip"), default="dcm",
+                        help="dcm: the DCM step QP (Algorithm 1, default); alip: the ALIP S2S NMPC (sequencer.alip, "
+                             "preset sequencer/presets/alip/ROBOT.toml, --robot default g1)")
+    parser.add_argument("--alip-solver", choices=("sqp", "ipopt"), default="sqp", help="ALIP NMPC solver")
+    parser.add_argument("--yaw-rate", type=FINITE, default=0.0, help="commanded turning rate [rad/s]")
     add_output_arguments(parser, plot=True)
     parser.set_defaults(func=run_plan)
