@@ -19,7 +19,7 @@ class IpoptSolver:
         self.nlp = nlp
         tol = nlp.params.ipopt_tolerance
         self.solver = ca.nlpsol("alip_ipopt", "ipopt", nlp.nlp, {
-            "print_time": False, "error_on_fail": False,
+            "print_time": False, "error_on_fail": False, "show_eval_warnings": False,
             "ipopt": {"print_level": 0, "sb": "yes", "tol": tol, "constr_viol_tol": tol, "acceptable_iter": 0,
                       "max_iter": nlp.params.max_iterations, "bound_relax_factor": 0.0, "mu_strategy": "adaptive"},
         })

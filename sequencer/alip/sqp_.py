@@ -36,7 +36,8 @@ class SqpSolver:
         options = {
             "qpsol": "qrqp", "qpsol_options": {"print_iter": False, "print_header": False, "error_on_fail": False},
             "print_header": False, "print_iteration": False, "print_status": False, "print_time": False,
-            "error_on_fail": False, "max_iter": nlp.params.max_iterations, "tol_pr": tol, "tol_du": tol,
+            "error_on_fail": False, "show_eval_warnings": False, "max_iter": nlp.params.max_iterations, "tol_pr": tol,
+            "tol_du": tol,
             "min_step_size": 1e-14, "hessian_approximation": "exact",
         }
         self.globalised = ca.nlpsol("alip_sqp", "sqpmethod", nlp.nlp, options)
