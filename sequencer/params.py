@@ -19,7 +19,7 @@ from pathlib import Path
 
 from sequencer.corrections import check_dcm_offset_bias, check_stance_drift, check_swing_drift
 from sequencer.nominal import FEET, NominalGait, aimed_dcm_offset, nominal_gait, nominal_step_width, stance_sign
-from wbmpc.config import read_toml
+from wbmpc.config import dataclass_from_table, named_preset, read_toml
 from wbmpc.errors import ParameterError
 
 PRESET_DIR = Path(__file__).resolve().parent / "presets"
@@ -226,19 +226,12 @@ class SequencerParams:
     @classmethod
     def from_dict(cls, data: dict, source: str = "dict") -> "SequencerParams":
         """Build parameters from a mapping of field names to values (unknown keys raise)."""
-        allowed = [f.name for f in dataclasses.fields(cls)]
-        unknown = sorted(set(data) - set(allowed))
-        if unknown:
-            raise ParameterError(f"unknown sequencer parameter(s) {unknown} in {source}; allowed: {allowed}")
-        return cls(**data)
+        return dataclass_from_table(cls, data, "sequencer parameter", source)
 
     @classmethod
     def preset(cls, name: str) -> "SequencerParams":
         """Load a named preset from ``sequencer/presets/<name>.toml``."""
-        available = sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
-        if name not in available:
-            raise ParameterError(f"preset={name!r} is not known (available: {available})")
-        return cls.from_toml(PRESET_DIR / f"{name}.toml")
+        return named_preset(cls, PRESET_DIR, name, "preset")
 
     @classmethod
     def table_i(cls) -> "SequencerParams":

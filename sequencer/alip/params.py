@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from sequencer.alip.model import AlipModel
-from wbmpc.config import read_toml
+from wbmpc.config import dataclass_from_table, named_preset, read_toml
 from wbmpc.errors import ParameterError
 
 PRESET_DIR = Path(__file__).resolve().parent.parent / "presets" / "alip"
@@ -158,19 +158,12 @@ class AlipParams:
 
     @classmethod
     def from_dict(cls, data: dict, source: str = "dict") -> "AlipParams":
-        allowed = [f.name for f in dataclasses.fields(cls)]
-        unknown = sorted(set(data) - set(allowed))
-        if unknown:
-            raise ParameterError(f"unknown ALIP parameter(s) {unknown} in {source}; allowed: {allowed}")
-        return cls(**data)
+        return dataclass_from_table(cls, data, "ALIP parameter", source)
 
     @classmethod
     def preset(cls, name: str) -> "AlipParams":
         """``sequencer/presets/alip/<name>.toml`` (e.g. ``"g1"``)."""
-        available = sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
-        if name not in available:
-            raise ParameterError(f"ALIP preset={name!r} is not known (available: {available})")
-        return cls.from_toml(PRESET_DIR / f"{name}.toml")
+        return named_preset(cls, PRESET_DIR, name, "ALIP preset")
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
