@@ -55,6 +55,13 @@ def base_rotation(q: np.ndarray) -> np.ndarray:
     return _rotation_from_quaternion_wxyz(w, x, y, z)
 
 
+def base_yaw(quaternion_xyzw) -> np.ndarray:
+    """Yaw [rad] in (-pi, pi] of base orientations given as Pinocchio quaternions (x, y, z, w),
+    shape (4,) or (n, 4); returns a scalar array or shape (n,)."""
+    x, y, z, w = np.moveaxis(np.asarray(quaternion_xyzw, dtype=float), -1, 0)
+    return np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
 def pinocchio_to_mujoco_state(robot: RobotDescription, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Pinocchio (q (nq,), v (nv,)) -> MuJoCo (qpos (nq,), qvel (nv,)), robot-only layout.
 

@@ -30,6 +30,8 @@ from typing import Any
 
 import numpy as np
 
+from robots.conventions import base_yaw
+
 AVERAGE_WINDOW = 1.0  # [s], running average of the base velocity (about two steps)
 RECOVERY_BAND = 0.03  # [m/s]
 PAPER_FIGURES = {
@@ -37,12 +39,6 @@ PAPER_FIGURES = {
     "velocity_error_y": 1.1e-3,  # [m/s]
     "rise_time": 4.35,  # [s], transition 0 -> 0.3 m/s at t = 5 s (section IV.D)
 }
-
-
-def base_yaw_angles(quaternions_xyzw: np.ndarray) -> np.ndarray:
-    """Yaw [rad] of base orientations (n, 4), Pinocchio's (x, y, z, w) order, in (-pi, pi]."""
-    x, y, z, w = quaternions_xyzw.T
-    return np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 def running_average(t: np.ndarray, signal: np.ndarray, window: float = AVERAGE_WINDOW) -> np.ndarray:
@@ -110,7 +106,7 @@ def compute_metrics(log) -> dict[str, Any]:
         error = np.abs(mean_velocity - command[window][-1, :2])
         metrics["mean_velocity_x"], metrics["mean_velocity_y"] = float(mean_velocity[0]), float(mean_velocity[1])
         metrics["velocity_error_x"], metrics["velocity_error_y"] = float(error[0]), float(error[1])
-        yaw = np.unwrap(base_yaw_angles(ticks["x"][window, 3:7]))
+        yaw = np.unwrap(base_yaw(ticks["x"][window, 3:7]))
         span = t[window][-1] - t[window][0]
         metrics["mean_yaw_rate"] = float((yaw[-1] - yaw[0]) / span)
         metrics["yaw_rate_error"] = float(abs(metrics["mean_yaw_rate"] - command[window][-1, 2]))

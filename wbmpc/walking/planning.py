@@ -10,25 +10,19 @@ keeps the previous plan and is reported in the record; it never stops the loop.
 
 from __future__ import annotations
 
-import math
 import time
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
+from robots.conventions import base_yaw
 from sequencer.dcm_planner import DcmFootstepPlanner
 from sequencer.planner import FootstepPlanner, ReducedState, StanceState, VelocityCommand
 from wbmpc.errors import ParameterError, SolverError
 from wbmpc.walking.controller_config import WalkingControllerConfig
 from wbmpc.walking.estimators import LipmCorrectionEstimator, StanceSlide, VelocityIntegral, rotate_xy
 from wbmpc.walking.stance import StanceTracker
-
-
-def base_yaw(q: np.ndarray) -> float:
-    """Yaw [rad] of the floating base from q[3:7] = (x, y, z, w) (Pinocchio convention)."""
-    x, y, z, w = (float(v) for v in q[3:7])
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 class PlanningStage:
@@ -93,7 +87,7 @@ class PlanningStage:
         q0 = np.asarray(x0)[: self.nq]
         feet = self.feet_position(q0)
         index = self.feet.index(self.config.first_stance_foot)
-        self.stance.reset(self.config.first_stance_foot, feet[index, :2], t0, yaw=base_yaw(q0))
+        self.stance.reset(self.config.first_stance_foot, feet[index, :2], t0, yaw=float(base_yaw(q0[3:7])))
         self.slide.reset(self.stance.state.position)
         self.set_command(command)
         self.plan = None
