@@ -88,16 +88,13 @@ class IntegratedActionModelEuler:
                                data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu)
 
 
-class IntegratedActionDataEuler:
-    """Per-node buffers of :class:`IntegratedActionModelEuler`."""
+class ActionData:
+    """What every action model's data holds (Crocoddyl's ActionDataAbstract): xnext (nx,), cost,
+    the transition's Fx (ndx, ndx), Fu (ndx, nu) and the cost's Lx (ndx,), Lu (nu,), Lxx (ndx,
+    ndx), Lxu (ndx, nu), Luu (nu, nu), allocated once."""
 
-    def __init__(self, model: IntegratedActionModelEuler):
-        state = model.state
-        ndx, nu = state.ndx, model.nu
-        self.differential = model.differential.createData()
-        self.dx = np.zeros(ndx)
-        self.J_q = np.zeros((state.nv, state.nv))  # Jacobians of q ⊕ dq (compiled free-flyer path)
-        self.J_dq = np.zeros((state.nv, state.nv))
+    def __init__(self, state, nu: int):
+        ndx = state.ndx
         self.xnext = np.zeros(state.nx)
         self.cost = 0.0
         self.Fx = np.zeros((ndx, ndx))
@@ -107,3 +104,15 @@ class IntegratedActionDataEuler:
         self.Lxx = np.zeros((ndx, ndx))
         self.Lxu = np.zeros((ndx, nu))
         self.Luu = np.zeros((nu, nu))
+
+
+class IntegratedActionDataEuler(ActionData):
+    """Per-node buffers of :class:`IntegratedActionModelEuler`."""
+
+    def __init__(self, model: IntegratedActionModelEuler):
+        state = model.state
+        super().__init__(state, model.nu)
+        self.differential = model.differential.createData()
+        self.dx = np.zeros(state.ndx)
+        self.J_q = np.zeros((state.nv, state.nv))  # Jacobians of q ⊕ dq (compiled free-flyer path)
+        self.J_dq = np.zeros((state.nv, state.nv))

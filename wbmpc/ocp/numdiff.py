@@ -20,6 +20,7 @@ from typing import Callable
 import numpy as np
 
 from wbmpc.errors import ParameterError
+from wbmpc.ocp.integrator import ActionData
 
 DISTURBANCE = float(np.finfo(float).eps ** (1.0 / 3.0))
 """Default relative step of the central differences, eps^(1/3)."""
@@ -70,24 +71,14 @@ def vector_jacobian(f: Callable[[np.ndarray], np.ndarray], u: np.ndarray,
     return np.stack(columns, axis=1)
 
 
-class ActionDataNumDiff:
+class ActionDataNumDiff(ActionData):
     """Buffers of :class:`ActionModelNumDiff`: the wrapped model's data (``model_data``, after
     :meth:`ActionModelNumDiff.calc` at the unperturbed point), xnext (nx,), cost, Fx (ndx, ndx),
     Fu (ndx, nu), Lx (ndx,), Lu (nu,), and, with ``hessians``, Lxx, Lxu, Luu."""
 
     def __init__(self, model: "ActionModelNumDiff"):
-        state, nu = model.state, model.nu
-        ndx = state.ndx
+        super().__init__(model.state, model.nu)
         self.model_data = model.model.createData()
-        self.xnext = np.zeros(state.nx)
-        self.cost = 0.0
-        self.Fx = np.zeros((ndx, ndx))
-        self.Fu = np.zeros((ndx, nu))
-        self.Lx = np.zeros(ndx)
-        self.Lu = np.zeros(nu)
-        self.Lxx = np.zeros((ndx, ndx))
-        self.Lxu = np.zeros((ndx, nu))
-        self.Luu = np.zeros((nu, nu))
 
 
 class ActionModelNumDiff:
