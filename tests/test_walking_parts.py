@@ -286,7 +286,11 @@ def test_bolt_preset_states_every_tuned_number_and_takes_overrides():
         load_walking_preset("bolt", {"n_nodez": 3})
 
 
-def test_a_robot_without_a_walking_preset_is_refused_at_once():
+def test_a_robot_without_a_walking_preset_is_refused_at_once(monkeypatch, tmp_path):
+    import wbmpc.walking.preset as preset_module
+
+    (tmp_path / "bolt.toml").write_bytes((preset_module.PRESET_DIR / "bolt.toml").read_bytes())
+    monkeypatch.setattr(preset_module, "PRESET_DIR", tmp_path)  # a registered robot with no file: the G1's
     with pytest.raises(ParameterError, match=r"robot='g1' has no walking preset yet \(robots that walk: bolt\)"):
         load_walking_preset("g1")
 
