@@ -7,16 +7,19 @@ can transmit without sliding, tilting or spinning are (Caron, Pham, Nakamura, "S
 surface contacts for humanoid robots: closed-form formulae of the contact wrench cone for
 rectangular support areas", ICRA 2015)::
 
-    |f_x| <= μ' f_z,   |f_y| <= μ' f_z                       friction (4 rows, μ' = μ cos(π/4) inner)
-    |τ_x| <= Y f_z,    |τ_y| <= X f_z                        centre of pressure inside the sole (4)
+    |f_x| <= μ f_z,   |f_y| <= μ f_z                         friction (4 rows)
+    |τ_x| <= Y f_z,   |τ_y| <= X f_z                         centre of pressure inside the sole (4)
     τ_min <= τ_z <= τ_max                                    yaw torque (8 rows, the |.| expanded)
         τ_min = −μ(X+Y) f_z + |Y f_x − μ τ_x| + |X f_y − μ τ_y|
         τ_max = +μ(X+Y) f_z − |Y f_x + μ τ_x| − |X f_y + μ τ_y|
     f_z >= 0                                                 unilateral (1)
 
+With the inner approximation (default) μ is replaced by μ cos(π/4) in every row, the friction
+square inside the circular cone, as Crocoddyl's ``WrenchCone`` does.
+
 Rows 0..15 are feasible when <= 0, row 16 (f_z) when >= 0: pair the residual with a quadratic
 barrier on ``lower_bounds``/``upper_bounds``. Crocoddyl's ``WrenchCone`` has the same rows in
-another order (and optional normal-force bounds).
+another order (and optional normal-force bounds): the test suite compares them row for row.
 """
 
 from __future__ import annotations
@@ -36,13 +39,14 @@ def wrench_cone_matrix(mu: float, half_length: float, half_width: float,
         mu: friction coefficient, > 0.
         half_length: X, half the sole's length along its x axis [m], > 0.
         half_width: Y, half the sole's width along its y axis [m], > 0.
-        inner_approximation: scale μ by cos(π/4) in the friction rows (the square inside the cone).
+        inner_approximation: scale μ by cos(π/4) (the friction square inside the cone).
     """
     for name, value in (("mu", mu), ("half_length", half_length), ("half_width", half_width)):
         if not (np.isfinite(value) and value > 0):
             raise ParameterError(f"{name}={value} must be a finite positive number")
     X, Y = float(half_length), float(half_width)
-    mu_f = mu * np.cos(np.pi / 4.0) if inner_approximation else mu
+    mu = mu * np.cos(np.pi / 4.0) if inner_approximation else float(mu)
+    mu_f = mu
     rows = [
         (1, 0, -mu_f, 0, 0, 0), (-1, 0, -mu_f, 0, 0, 0), (0, 1, -mu_f, 0, 0, 0), (0, -1, -mu_f, 0, 0, 0),
         (0, 0, -Y, 1, 0, 0), (0, 0, -Y, -1, 0, 0), (0, 0, -X, 0, 1, 0), (0, 0, -X, 0, -1, 0),
