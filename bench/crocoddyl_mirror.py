@@ -19,6 +19,8 @@ ResidualFrameVelocity          ResidualModelFrameVelocity(..., LOCAL)
 ResidualCoMPosition            ResidualModelCoMPosition
 ResidualContactForce           ResidualModelContactForce
 ResidualFrictionCone           ResidualModelContactFrictionCone
+ResidualWrenchCone             ResidualModelContactWrenchCone (WrenchCone: the same rows, reordered)
+ResidualFrameRotation          ResidualModelFrameRotation
 ActivationQuad/WeightedQuad    ActivationModelQuad/WeightedQuad
 ActivationQuadraticBarrier     ActivationModelQuadraticBarrier
 IntegratedActionModelEuler     IntegratedActionModelEuler
@@ -38,10 +40,12 @@ from wbmpc.ocp.residuals import (
     ResidualContactForce,
     ResidualControl,
     ResidualFrameHeight,
+    ResidualFrameRotation,
     ResidualFrameTranslation,
     ResidualFrameVelocity,
     ResidualFrictionCone,
     ResidualState,
+    ResidualWrenchCone,
 )
 
 
@@ -112,6 +116,14 @@ class CrocoddylMirror:
             cone = croc.FrictionCone(np.eye(3), residual.mu, residual.nr - 1, True)
             r = croc.ResidualModelContactFrictionCone(self.state, frame_id, cone, nu)
             activation = croc.ActivationModelQuadraticBarrier(croc.ActivationBounds(cone.lb, cone.ub))
+        elif isinstance(residual, ResidualWrenchCone):
+            frame_id = self._contact_frames[residual.contact_name]
+            cone = croc.WrenchCone(np.eye(3), residual.mu, np.array([2.0 * residual.half_length, 2.0 * residual.half_width]),
+                                   4, True)
+            r = croc.ResidualModelContactWrenchCone(self.state, frame_id, cone, nu)
+            activation = croc.ActivationModelQuadraticBarrier(croc.ActivationBounds(cone.lb, cone.ub))
+        elif isinstance(residual, ResidualFrameRotation):
+            r = croc.ResidualModelFrameRotation(self.state, residual.frame_id, residual.reference.copy(), nu)
         else:
             raise TypeError(f"no Crocoddyl twin for residual {type(residual).__name__}")
         return croc.CostModelResidual(self.state, activation, r), r
@@ -163,5 +175,7 @@ class CrocoddylMirror:
                     twin.reference = pin.Force(ref) if ref.size == 6 else pin.Force(ref, np.zeros(3))
                 elif isinstance(residual, ResidualFrameVelocity):
                     twin.reference = pin.Motion(residual.reference)
+                elif isinstance(residual, ResidualFrameRotation):
+                    twin.reference = residual.reference.copy()
                 elif isinstance(residual, (ResidualFrameTranslation, ResidualCoMPosition, ResidualState, ResidualControl)):
                     twin.reference = residual.reference.copy()

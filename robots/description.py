@@ -105,6 +105,9 @@ class RobotDescription:
             ...], "right": [...]}: the collision spheres the MuJoCo model puts under each foot
             (one for Bolt, four sole corners for G1).
         sources: {quantity: where its value comes from} (also in ``docs/robots.md``).
+        sole_size: (length along the foot frame's x, width along its y) [m] of the support
+            rectangle centred on each foot frame (flat feet: what the OCP's wrench cone allows the
+            centre of pressure); None for point feet.
     """
 
     name: str
@@ -127,6 +130,7 @@ class RobotDescription:
         dataclasses.field(default_factory=dict)
     )
     sources: Mapping[str, str] = dataclasses.field(default_factory=dict)
+    sole_size: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         model = self.pinocchio_model
@@ -138,6 +142,11 @@ class RobotDescription:
             )
         if self.contact_type not in CONTACT_TYPES:
             raise ParameterError(f"contact_type={self.contact_type!r} must be one of {CONTACT_TYPES}")
+        if self.sole_size is not None:
+            size = tuple(float(v) for v in self.sole_size)
+            if len(size) != 2 or not all(np.isfinite(v) and v > 0 for v in size):
+                raise ParameterError(f"sole_size={self.sole_size!r} must be (length, width) > 0 [m] or None")
+            object.__setattr__(self, "sole_size", size)
         if set(self.foot_frames) != {"left", "right"}:
             raise ParameterError(f"foot_frames={dict(self.foot_frames)!r} must have exactly the keys 'left' and 'right'")
         for side, frame in self.foot_frames.items():

@@ -50,6 +50,9 @@ ANKLE_LINKS = {"left": "left_ankle_roll_link", "right": "right_ankle_roll_link"}
 SOLE_CENTER_IN_ANKLE = np.array([0.035, 0.0, -0.035])  # [m], ankle_roll_link frame
 SOLE_SPHERES_IN_ANKLE = ((-0.05, 0.025, -0.03), (-0.05, -0.025, -0.03), (0.12, 0.03, -0.03), (0.12, -0.03, -0.03))
 SOLE_SPHERE_RADIUS = 0.005  # [m] (URDF collision spheres)
+# Support rectangle about the sole frame [m]: the sphere centres span x in [-0.05, 0.12] (0.17 m) and
+# y in +-0.025 at the heel, +-0.03 at the toe (the narrower 0.05 m is taken).
+SOLE_SIZE = (0.17, 0.05)
 
 # Standing posture (knees bent, arms slightly away from the body); ankle pitch keeps the soles flat.
 STANDING_JOINTS = {
@@ -118,10 +121,12 @@ def load_g1() -> RobotDescription:
             side: tuple((ANKLE_LINKS[side], center, SOLE_SPHERE_RADIUS) for center in SOLE_SPHERES_IN_ANKLE)
             for side in FOOT_FRAMES
         },
+        sole_size=SOLE_SIZE,
         sources={
             "kinematics, inertias, torque_limit, velocity_limit": "example-robot-data g1_description/urdf/g1_29dof_rev_1_0.urdf",
             "armature": "Unitree motor classes 5020 / 7520-14 / 7520-22 / 4010 reflected inertias (BeyondMimic, mjlab)",
             "q_reference": "knees bent (hip -0.312, knee 0.669 rad), soles flat, on the floor",
             "foot frames": "sole centres, middle of the URDF's four 5 mm sole spheres",
+            "sole_size": "rectangle spanned by the URDF's sole sphere centres (0.17 x 0.05 m)",
         },
     )

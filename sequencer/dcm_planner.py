@@ -42,9 +42,11 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from sequencer.corrections import LipmCorrections
 from sequencer.horizon import FootstepPlan, FootstepSequencer
-from sequencer.nominal import FEET
+from sequencer.nominal import FEET, other_foot
 from sequencer.params import SequencerParams
 from sequencer.planner import ReducedState, StanceState, VelocityCommand
 from wbmpc.errors import ParameterError
@@ -132,6 +134,15 @@ class DcmFootstepPlanner:
         (``measured.dcm``, world (x, y), with this planner's ω), the command and the current
         values of :attr:`corrections`.
 
+        A stance that has not begun (``t < stance.t_start``) is a start from standing: both feet
+        stay on the ground until ``stance.t_start`` (the contact schedule holds them there), a
+        double support in which a flat-footed robot can move its centre of pressure and bring the
+        DCM where the gait needs it. The steps are then planned from ``stance.t_start`` and from the
+        DCM the nominal gait has at the start of a stance on this foot (the offset the previous
+        touchdown aims at), not from the measured one: planned from the DCM between the feet, the
+        first step would be a wide catch step (0.16 m wider on the G1) and the walk would drift
+        sideways by as much.
+
         Raises:
             ParameterError: bad input, or a command outside :meth:`command_range` (clip it first).
             sequencer.step_qp.StepQPError: the step QP failed (``clamp_elapsed=False`` and a late
@@ -144,11 +155,26 @@ class DcmFootstepPlanner:
         if stance.foot not in self.feet:
             raise ParameterError(f"stance foot={stance.foot!r} must be one of {self.feet}")
         command = _velocity_command(command)
+        dcm = measured.dcm
+        if t < stance.t_start:  # start from standing (see above)
+            dcm = self.stance_start_dcm(stance, command)
+            t = stance.t_start
         return self.sequencer.plan(
-            t, stance.foot, stance.position, measured.dcm, stance.t_start, self.clamp_elapsed,
+            t, stance.foot, stance.position, dcm, stance.t_start, self.clamp_elapsed,
             stance_yaw=stance.yaw, yaw_rate=command.yaw_rate, velocity=(command.v_x, command.v_y),
             corrections=self.corrections,
         )
+
+
+    def stance_start_dcm(self, stance: StanceState, command: VelocityCommand) -> np.ndarray:
+        """The DCM (world (x, y) [m]) the nominal gait of ``command`` has when a stance on
+        ``stance.foot`` begins: the stance position plus the offset aimed at by the touchdown that
+        ends a stance on the other foot, rotated by the stance yaw."""
+        command = _velocity_command(command)
+        gait = self.sequencer.nominal_gait((command.v_x, command.v_y), self.corrections)
+        b_x, b_y = gait.dcm_offset(other_foot(stance.foot))
+        c, s = math.cos(stance.yaw), math.sin(stance.yaw)
+        return stance.position + np.array((c * b_x - s * b_y, s * b_x + c * b_y))
 
 
 def _velocity_command(command) -> VelocityCommand:

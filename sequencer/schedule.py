@@ -92,7 +92,9 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
     The plan is a sequence of touchdowns, one foot each (``plan.steps[i].foot`` lands at
     ``plan.steps[i].touchdown_time``). The foot landing at touchdown i lifts off
     ``plan.double_support`` seconds after the previous touchdown (after ``plan.t_stance_start``
-    for the first one) and swings until its touchdown; every other foot is in contact. With
+    for the first one) and swings until its touchdown; every other foot is in contact. Nodes before
+    ``plan.t_stance_start`` (a plan for a stance that has not begun: a start from standing, see
+    :meth:`sequencer.dcm_planner.DcmFootstepPlanner.plan`) have every foot in contact. With
     ``double_support = 0`` (point feet) exactly one foot of a biped is in stance between two
     touchdowns, and at a node exactly on a touchdown time the landing foot is in contact and the
     other foot starts its swing (phase 0). The swing phase and duration run over the swing itself
@@ -109,7 +111,7 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
     Args:
         plan: FootstepPlan; its ``feet`` name the columns, its ``double_support`` [s] the time both
             feet stay on the ground after each touchdown.
-        t0: time of node 0 [s], >= plan.t_stance_start.
+        t0: time of node 0 [s] (before ``plan.t_stance_start``: double support until then).
         dt: node spacing [s], > 0.
         n_nodes: number of running nodes, >= 1; the grid must end before the last planned
             touchdown (the swing in progress there would have no planned end).
@@ -128,10 +130,8 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
     n_nodes = int(n_nodes)
     if rounding not in SCHEDULE_ROUNDINGS:
         raise ParameterError(f"rounding={rounding!r} must be one of {SCHEDULE_ROUNDINGS}")
-    if not np.isfinite(t0) or t0 < plan.t_stance_start:
-        raise ParameterError(
-            f"t0={t0} s must be finite and >= the plan's current stance start {plan.t_stance_start} s"
-        )
+    if not np.isfinite(t0):
+        raise ParameterError(f"t0={t0} s must be finite")
     feet = tuple(plan.feet)
     column = {foot: j for j, foot in enumerate(feet)}
     try:
@@ -155,16 +155,15 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
     start = np.concatenate([[plan.t_stance_start], touchdowns])[interval]  # the previous touchdown
     end = touchdowns[interval]
     double_support = float(plan.double_support)
-    if double_support > 0.0:
-        start = start + double_support  # lift-off of the landing foot
-        if np.any(end <= start):
-            late = float(end[np.argmax(end <= start)])
-            raise ParameterError(
-                f"double_support={double_support} s leaves no swing before the touchdown at {late:.4g} s"
-            )
-        swinging = times + shift >= start
-        rows, interval, start, end = rows[swinging], interval[swinging], start[swinging], end[swinging]
-        node_times = times[swinging]
+    start = start + double_support  # lift-off of the landing foot
+    if double_support > 0.0 and np.any(end <= start):
+        late = float(end[np.argmax(end <= start)])
+        raise ParameterError(
+            f"double_support={double_support} s leaves no swing before the touchdown at {late:.4g} s"
+        )
+    swinging = times + shift >= start  # (all nodes for point feet, once the stance has begun)
+    rows, interval, start, end = rows[swinging], interval[swinging], start[swinging], end[swinging]
+    node_times = times[swinging]
     swing = np.array(landing_columns)[interval]
     in_contact = np.ones((n_nodes + 1, len(feet)), dtype=bool)
     in_contact[rows, swing] = False

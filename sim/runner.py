@@ -36,7 +36,7 @@ from sequencer.planner import VelocityCommand
 from sim.falls import ContactSensor, FallCriteria, detect_fall
 from sim.log import RunLog
 from sim.scenarios import make_scenario, scenario_class, scenario_parameters
-from wbmpc.errors import ParameterError
+from wbmpc.errors import NoSolutionError, ParameterError
 from wbmpc.walking.controller import WalkingController
 from wbmpc.walking.interface import Controller
 from wbmpc.walking.measurement import Measurement
@@ -354,7 +354,11 @@ class _ClosedLoop:
                     replan_rows.append({"t": t, **record})
                     timing["replan"] += time.perf_counter() - tic
                 tic = time.perf_counter()
-                tau_command = np.asarray(self.controller.compute(t, measurement), dtype=float)
+                try:
+                    tau_command = np.asarray(self.controller.compute(t, measurement), dtype=float)
+                except NoSolutionError as err:  # nothing to follow (the first solve failed): end the run, keep the log
+                    log.status, log.error = "failed", str(err)
+                    break
                 timing["feedback"] += time.perf_counter() - tic
                 tau = np.minimum(np.maximum(tau_command, -self.torque_limit), self.torque_limit)  # clip, 4x faster
                 ticks["tau_command"][r] = tau_command

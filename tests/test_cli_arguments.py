@@ -111,8 +111,8 @@ def test_plan_for_a_robot_starts_from_its_standing_pose(capsys):
     assert result["params"]["name"] == "bolt"  # the planner of its walking preset
     assert result["plan"]["stance_position"] == pytest.approx(bolt.foot_positions_reference()["left"][:2])
     assert result["plan"]["dcm_measured"] == pytest.approx(bolt.com_position_reference[:2])
-    assert main(["plan", "--robot", "g1"]) == 2
-    assert "robot='g1' has no walking preset yet" in capsys.readouterr().err
+    assert main(["plan", "--robot", "g1", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["params"]["name"] == "g1"
 
 
 def test_walk_passes_robot_and_a_velocity_command_only_when_asked(monkeypatch):

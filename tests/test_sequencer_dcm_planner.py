@@ -295,8 +295,6 @@ def test_plan_input_errors_and_late_touchdowns():
         planner.plan(0.229, StanceState("front_left", [0, 0], 0.0, 0.0), TABLE_I_MEASURED, command)
     with pytest.raises(ParameterError, match=r"command must be a VelocityCommand or \(v_x, v_y, yaw_rate\), got str"):
         planner.plan(0.229, TABLE_I_STANCE, TABLE_I_MEASURED, "fast")
-    with pytest.raises(ParameterError, match=r"t_stance_start=0.0 s must be <= t=-0.1 s"):
-        planner.plan(-0.1, TABLE_I_STANCE, TABLE_I_MEASURED, command)
     with pytest.raises(ParameterError, match=r"clamp_elapsed=1 must be True or False"):
         DcmFootstepPlanner(params, clamp_elapsed=1)
     assert planner.plan(0.229, TABLE_I_STANCE, TABLE_I_MEASURED, (0.2, 0.0, 0.1)).steps  # a tuple is a command
@@ -321,3 +319,24 @@ def test_com_reference_is_the_lipm_com_at_the_model_height():
     assert np.all(references[:, 2] == 0.31)
     with pytest.raises(ParameterError, match=r"must be >= the plan's t0=0.229 s"):
         plan.com_reference(0.0, com_xy)
+
+
+def test_a_stance_not_begun_is_planned_from_its_start_and_the_nominal_dcm():
+    """A start from standing: before the stance begins the plan is the one made at its start from
+    the DCM the nominal gait has there, whatever the measured DCM; that first step is nominal."""
+    params = SequencerParams.table_i()
+    planner = DcmFootstepPlanner(params)
+    command = VelocityCommand(0.2, 0.0, 0.1)
+    stance = StanceState("left", [0.3, 0.1], 0.4, 1.0)
+    standing = ReducedState(np.array([0.3, -0.02, 0.3]), np.zeros(3), np.array([0.3, -0.02]))
+    early = planner.plan(0.5, stance, standing, command)
+    dcm = planner.stance_start_dcm(stance, command)
+    at_start = planner.plan(1.0, stance, dataclasses.replace(standing, dcm=dcm), command)
+    assert early.t0 == 1.0
+    np.testing.assert_array_equal(early.positions, at_start.positions)
+    np.testing.assert_array_equal(early.touchdown_times, at_start.touchdown_times)
+    gait = planner.sequencer.nominal_gait((0.2, 0.0), planner.corrections)
+    heading = np.array([[np.cos(0.4), -np.sin(0.4)], [np.sin(0.4), np.cos(0.4)]])
+    first = heading.T @ (early.steps[0].position - stance.position)
+    np.testing.assert_allclose(first, (gait.step_length, gait.step_width("left")), atol=1e-6)
+    assert early.steps[0].touchdown_time == pytest.approx(1.0 + params.t_nom, abs=1e-6)

@@ -54,8 +54,19 @@ def test_schedule_input_errors(plan):
         contact_schedule(plan, plan.t0, 0.01, 0)
     with pytest.raises(ParameterError, match=r"at or after the plan's last touchdown"):
         contact_schedule(plan, plan.t0, 0.01, 400)
-    with pytest.raises(ParameterError, match=r"t0=-1.0 s must be finite and >= the plan's current stance start"):
-        contact_schedule(plan, -1.0, 0.01, 10)
+    with pytest.raises(ParameterError, match=r"t0=nan s must be finite"):
+        contact_schedule(plan, float("nan"), 0.01, 10)
+
+
+def test_nodes_before_the_stance_start_are_double_support(plan):
+    """A plan for a stance that has not begun (a start from standing): both feet on the ground
+    until it begins, then the plan's own schedule."""
+    dt = 0.01
+    early = contact_schedule(plan, plan.t_stance_start - 0.1, dt, 40)
+    later = contact_schedule(plan, plan.t_stance_start, dt, 30)
+    assert early.in_contact[:10].all() and np.isnan(early.swing_phase[:10]).all()
+    np.testing.assert_array_equal(early.in_contact[10:], later.in_contact)
+    np.testing.assert_allclose(early.swing_phase[10:], later.swing_phase, atol=1e-12)
 
 
 def test_nearest_rounding_puts_each_touchdown_on_the_nearest_node(plan):

@@ -13,7 +13,7 @@ import pytest
 from robots import load_robot
 from sequencer.corrections import LipmCorrections
 from sequencer.planner import VelocityCommand
-from wbmpc.errors import ParameterError
+from wbmpc.errors import NoSolutionError, ParameterError
 from wbmpc.ocp.mpc import MPCSolution
 from wbmpc.ocp.state import StateMultibody
 from wbmpc.walking.controller_config import WalkingControllerConfig
@@ -90,7 +90,7 @@ def test_computation_delay_applies_a_new_solution_only_after_the_latency(known_s
 
 def test_feedback_law_without_a_solution_says_so(known_solution):
     state, _, x = known_solution
-    with pytest.raises(RuntimeError, match="no MPC solution yet"):
+    with pytest.raises(NoSolutionError, match="no MPC solution yet"):
         _law(state).control(0.0, x)
 
 
@@ -286,7 +286,31 @@ def test_bolt_preset_states_every_tuned_number_and_takes_overrides():
         load_walking_preset("bolt", {"n_nodez": 3})
 
 
-def test_a_robot_without_a_walking_preset_is_refused_at_once():
+def test_g1_preset_states_every_tuned_number():
+    import tomllib
+
+    from wbmpc.walking.preset import PRESET_DIR
+
+    with (PRESET_DIR / "g1.toml").open("rb") as stream:
+        data = tomllib.load(stream)
+    skip = {"controller": {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate",
+                           "feedback", "mpc_failure_times", "sequencer_params_from"},
+            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift"}}
+    preset = load_walking_preset("g1")
+    for section in ("planner", "ocp", "controller", "fall", "command"):
+        fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())
+        assert fields <= set(data[section]), (section, sorted(fields - set(data[section])))
+    assert preset.ocp.wrench_cone_weight > 0 and preset.controller.start_double_support > 0
+    assert preset.planner.double_support > 0 and preset.command.yaw_rate[1] > 0
+    weights = preset.ocp.state_weights
+    assert dict(weights.joint_position_by_name)["waist"] > weights.joint_position
+
+
+def test_a_robot_without_a_walking_preset_is_refused_at_once(monkeypatch, tmp_path):
+    import wbmpc.walking.preset as preset_module
+
+    (tmp_path / "bolt.toml").write_bytes((preset_module.PRESET_DIR / "bolt.toml").read_bytes())
+    monkeypatch.setattr(preset_module, "PRESET_DIR", tmp_path)  # a registered robot with no file: the G1's
     with pytest.raises(ParameterError, match=r"robot='g1' has no walking preset yet \(robots that walk: bolt\)"):
         load_walking_preset("g1")
 

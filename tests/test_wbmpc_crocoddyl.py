@@ -16,6 +16,7 @@ from robots import load_robot  # noqa: E402
 from wbmpc.ocp.solvers import SolverFDDP  # noqa: E402
 from wbmpc.walking.mpc import WalkingMPC  # noqa: E402
 from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig, quasi_static_controls  # noqa: E402
+from wbmpc.walking.preset import load_walking_preset  # noqa: E402
 
 pytestmark = pytest.mark.crocoddyl
 ALL_TERMS = WalkingOCPConfig(foothold_weight=100.0, contact_force_weight=1e-2, friction_cone_weight=10.0,
@@ -159,12 +160,15 @@ def test_closed_loop_with_crocoddyl_as_the_solver_applies_the_same_torques():
 @pytest.mark.parametrize("backend", ["pinocchio", "kkt"])
 def test_g1_flat_feet_solve_matches_crocoddyl(backend):
     g1 = load_robot("g1")
-    config = WalkingOCPConfig(swing_apex_height=0.08, contact_force_weight=1e-4, baumgarte_gains=(10.0, 30.0),
-                              dynamics_backend=backend, evaluation="nodes")
+    preset = load_walking_preset("g1").ocp  # its flat-foot terms: wrench cones, swing orientation, posture weights
+    config = dataclasses.replace(preset, contact_force_weight=1e-4, baumgarte_gains=(10.0, 30.0),
+                                 dynamics_backend=backend, evaluation="nodes")
     ocp = WalkingOCP(g1, config, n_nodes=10, dt=0.02)
     x0 = standing_state(g1)
     schedule = alternating_schedule(0.0, 0.02, 10, step_duration=0.4, foot_y=(0.12, -0.12))
     ocp.update(x0, schedule, np.array([0.05, 0.0, 0.7]))
+    terms = ocp.problem.running_models[3].differential.costs.costs
+    assert terms["left_wrench_cone"].active and terms["right_orientation"].active
     mirror = CrocoddylMirror(ocp.problem)
     rng = np.random.default_rng(2)
     xs = [random_state(g1, rng, 0.05, 0.2) for _ in range(11)]
@@ -181,3 +185,13 @@ def test_g1_flat_feet_solve_matches_crocoddyl(backend):
     assert ours.iter == theirs.iter
     assert ours.cost == pytest.approx(theirs.cost, rel=1e-9)
     np.testing.assert_allclose(ours.us, np.array(theirs.us), atol=1e-6)
+
+
+def test_wrench_cone_has_crocoddyls_rows():
+    from wbmpc.ocp.residuals.wrench_cone import wrench_cone_matrix
+
+    cone = crocoddyl.WrenchCone(np.eye(3), 0.7, np.array([0.17, 0.05]), 4, True)
+    A, lower, upper = wrench_cone_matrix(0.7, 0.085, 0.025)
+    ours = sorted(zip(map(tuple, np.round(A, 12)), lower, upper))
+    theirs = sorted(zip(map(tuple, np.round(cone.A, 12)), cone.lb, cone.ub))
+    assert ours == theirs

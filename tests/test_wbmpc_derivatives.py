@@ -112,18 +112,17 @@ def test_integrated_node_derivatives_match_finite_differences(bolt, walking_node
     _assert_blocks_close(data.Lu, numdiff.Lu, "Lu", WHOLE, WHOLE)
 
 
-def test_every_residual_jacobian_matches_finite_differences(bolt, walking_nodes):
-    """Rx, Ru of every residual of the walking OCP, each at a node where it is active."""
-    problem = walking_nodes.problem
+def _check_every_residual(robot, problem, rng) -> set:
+    """Rx, Ru of every residual of ``problem`` against finite differences, each at a node where it
+    is active; returns the names checked."""
     state = problem.state
-    rng = np.random.default_rng(7)
     checked = set()
     for k, model in enumerate(problem.running_models):
         dam = model.differential
         todo = [name for name, item in dam.costs.costs.items() if item.active and name not in checked]
         if not todo:
             continue
-        x = random_state(bolt, rng)
+        x = random_state(robot, rng)
         u = 0.5 * rng.standard_normal(dam.nu)
         data = dam.createData()
         dam.calc(data, x, u)
@@ -150,9 +149,28 @@ def test_every_residual_jacobian_matches_finite_differences(bolt, walking_nodes)
                                  _tangent_blocks(state))
             _assert_blocks_close(rdata.Ru, vector_jacobian(r_of_u, u), f"node {k} {name} Ru", WHOLE, WHOLE)
             checked.add(name)
-    kinds = {name.split("_", 1)[1] if name.startswith(("left_", "right_")) else name for name in checked}
+    return {name.split("_", 1)[1] if name.startswith(("left_", "right_")) else name for name in checked}
+
+
+def test_every_residual_jacobian_matches_finite_differences(bolt, walking_nodes):
+    """Rx, Ru of every residual of the walking OCP, each at a node where it is active."""
+    kinds = _check_every_residual(bolt, walking_nodes.problem, np.random.default_rng(7))
     assert kinds >= {"state_regularization", "control_regularization", "control_bounds", "height", "foothold",
                      "contact_force", "friction_cone", "touchdown_height", "touchdown_velocity"}, kinds
+
+
+def test_g1_flat_foot_residual_jacobians_match_finite_differences():
+    """The G1 preset's flat-foot terms: wrench cones (through the 6D contact forces), swing-sole
+    orientation, posture weights by joint name."""
+    from wbmpc.walking.preset import load_walking_preset
+
+    g1 = load_robot("g1")
+    config = dataclasses.replace(load_walking_preset("g1").ocp, evaluation="nodes", baumgarte_gains=(10.0, 30.0))
+    ocp = WalkingOCP(g1, config, n_nodes=6, dt=0.02)
+    ocp.update(standing_state(g1), alternating_schedule(0.0, 0.02, 6, step_duration=0.08, foot_y=(0.12, -0.12)),
+               np.array([0.05, 0.0, 0.7]))
+    kinds = _check_every_residual(g1, ocp.problem, np.random.default_rng(11))
+    assert kinds >= {"wrench_cone", "orientation", "state_regularization", "height"}, kinds
 
 
 def test_terminal_node_com_and_state_gradient(bolt, walking_nodes):

@@ -17,6 +17,11 @@ class SolverError(WbmpcError):
     """A numerical solver failed (infeasible problem, divergence, maximum iterations)."""
 
 
+class NoSolutionError(SolverError):
+    """A control loop has no solution to follow: its first solve failed (later failures keep the
+    last good solution and are only reported)."""
+
+
 def check_finite(name: str, value) -> None:
     """Raise ParameterError if ``value`` (scalar or array) contains NaN or inf."""
     import numpy as np

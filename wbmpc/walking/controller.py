@@ -27,7 +27,7 @@ import numpy as np
 
 from sequencer.dcm_planner import DcmFootstepPlanner
 from sequencer.planner import VelocityCommand
-from wbmpc.errors import ParameterError
+from wbmpc.errors import NoSolutionError, ParameterError
 from wbmpc.walking.controller_config import WalkingControllerConfig
 from wbmpc.walking.feedback import FeedbackLaw
 from wbmpc.walking.measurement import Measurement
@@ -190,7 +190,7 @@ class WalkingController:
         tic = time.perf_counter()
         try:
             tau = self.feedback.control(t, measurement.x)
-        except RuntimeError as err:
-            raise RuntimeError(f"{err}: last MPC status {self.last_status!r}") from None
+        except NoSolutionError as err:
+            raise NoSolutionError(f"{err}: last MPC status {self.last_status!r}") from None
         self.timers.feedback += time.perf_counter() - tic
         return tau

@@ -70,6 +70,13 @@ class WalkingControllerConfig:
             3 mm instead of 5 fell stepping in place (docs/closed_loop.md).
         first_stance_foot: stance foot at t0 (both feet are on the ground at start; the other one
             takes the first step).
+        start_double_support: a start from standing [s]: the first stance begins this long after
+            t0, both feet on the ground until then, and the first steps are planned from the DCM
+            the nominal gait has at a stance start (:meth:`sequencer.dcm_planner.DcmFootstepPlanner.plan`),
+            which the whole-body OCP reaches by moving the centre of pressure. 0 (Bolt: point feet
+            cannot move it) starts stepping at once from the DCM between the feet. On the G1 that
+            first step was a catch step 0.16 m wider than nominal and the walk drifted sideways by
+            as much (docs/closed_loop.md).
         velocity_integral_gain: integral action on the forward speed [1/s] (0 = off, the default and
             the paper's pipeline): the sequencer is given v*_x + k ∫ (v*_x − v̄_x) dt, v̄ the CoM
             velocity low-passed over ``velocity_filter_time``, the correction bounded by
@@ -142,6 +149,7 @@ class WalkingControllerConfig:
     touchdown_wait_nodes: int = 2
     touchdown_wait_depth: float = 0.005
     first_stance_foot: str = "left"
+    start_double_support: float = 0.0
     velocity_integral_gain: float = 0.0
     velocity_correction_max: float = 0.3
     velocity_filter_time: float = 1.0
@@ -172,6 +180,8 @@ class WalkingControllerConfig:
             raise ParameterError(f"mpc_time_budget={budget!r} must be None or a number of seconds in (0, 1)")
         if not (np.isfinite(self.computation_delay) and 0.0 <= self.computation_delay <= 0.1):
             raise ParameterError(f"computation_delay={self.computation_delay} s must be in [0, 0.1] s")
+        if not (np.isfinite(self.start_double_support) and 0.0 <= self.start_double_support <= 5.0):
+            raise ParameterError(f"start_double_support={self.start_double_support} s must be in [0, 5] s")
         if not (np.isfinite(self.velocity_integral_gain) and self.velocity_integral_gain >= 0):
             raise ParameterError(f"velocity_integral_gain={self.velocity_integral_gain} 1/s must be >= 0")
         if not (np.isfinite(self.velocity_filter_time) and self.velocity_filter_time > 0):

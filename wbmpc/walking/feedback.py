@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from wbmpc.errors import NoSolutionError
 from wbmpc.ocp.mpc import MPCSolution
 from wbmpc.ocp.policy import RiccatiPolicy
 from wbmpc.ocp.state import StateMultibody
@@ -58,10 +59,10 @@ class FeedbackLaw:
         """Torque command (nu,) [N·m] at time ``t`` for the measured state ``x`` (nx,).
 
         Raises:
-            RuntimeError: no solution yet (the first MPC update failed).
+            NoSolutionError: no solution yet (the first MPC update failed).
         """
         while self._pending and self._pending[0][0] <= t + 1e-9:
             self.policy = self._pending.pop(0)[1]
         if self.policy is None:
-            raise RuntimeError("FeedbackLaw.control(): no MPC solution yet (the first update failed)")
+            raise NoSolutionError("FeedbackLaw.control(): no MPC solution yet (the first update failed)")
         return self.policy.control(t, x, feedback=self.feedback)

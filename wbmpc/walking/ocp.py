@@ -50,11 +50,14 @@ from wbmpc.ocp.residuals import (
     ResidualContactForce,
     ResidualControl,
     ResidualFrameHeight,
+    ResidualFrameRotation,
     ResidualFrameTranslation,
     ResidualFrameVelocity,
     ResidualFrictionCone,
     ResidualState,
+    ResidualWrenchCone,
 )
+from wbmpc.ocp.residuals.frame_rotation import yaw_rotation
 from wbmpc.ocp.state import StateMultibody
 
 GRAVITY = 9.81  # [m/s²]
@@ -79,12 +82,29 @@ class StateWeights:
     base_linear_velocity: tuple[float, float, float] = (0.1, 0.1, 1.0)
     base_angular_velocity: tuple[float, float, float] = (1.0, 1.0, 1.0)
     joint_velocity: float = 0.1
+    joint_position_by_name: tuple[tuple[str, float], ...] = ()
 
-    def vector(self, nv: int) -> np.ndarray:
-        """Weights as a vector (2 nv,) for a floating-base robot."""
+    def vector(self, nv: int, joint_names: tuple[str, ...] = ()) -> np.ndarray:
+        """Weights as a vector (2 nv,) for a floating-base robot.
+
+        ``joint_position_by_name`` holds (name part, weight) pairs: a joint whose name contains the
+        part gets that position weight instead of ``joint_position`` (the last pair that matches
+        wins), e.g. ``(("waist", 10.0), ("shoulder", 3.0))`` holds a humanoid's torso and arms
+        closer to the reference posture than its legs. ``joint_names`` (nv − 6,) are the actuated
+        joints in velocity order.
+        """
         nj = nv - 6
+        joint_position = np.full(nj, float(self.joint_position))
+        if self.joint_position_by_name:
+            if len(joint_names) != nj:
+                raise ParameterError(f"joint_position_by_name needs the {nj} joint names, got {len(joint_names)}")
+            for part, weight in self.joint_position_by_name:
+                matched = [j for j, name in enumerate(joint_names) if str(part) in name]
+                if not matched:
+                    raise ParameterError(f"joint_position_by_name: {part!r} matches no joint (joints: {list(joint_names)})")
+                joint_position[matched] = float(weight)
         w = np.concatenate([
-            self.base_position, self.base_orientation, np.full(nj, self.joint_position),
+            self.base_position, self.base_orientation, joint_position,
             self.base_linear_velocity, self.base_angular_velocity, np.full(nj, self.joint_velocity),
         ]).astype(float)
         if np.any(w < 0) or not np.all(np.isfinite(w)):
@@ -115,7 +135,14 @@ class WalkingOCPConfig:
             emerge (the paper's choice).
         contact_force_weight: stance-force regularisation towards m g / n_stance; 0 = off.
         friction_cone_weight: linearised friction-cone barrier (point feet); 0 = off.
-        friction_coefficient: μ of the friction cone.
+        friction_coefficient: μ of the friction and wrench cones.
+        wrench_cone_weight: flat feet: rectangular contact wrench cone barrier (friction, centre
+            of pressure inside the sole, yaw torque; :mod:`wbmpc.ocp.residuals.wrench_cone`) on
+            every stance foot; 0 = off.
+        cop_sole_fraction: the fraction of the robot's ``sole_size`` the wrench cone lets the
+            centre of pressure use, (0, 1] (a margin against the sole's edges).
+        swing_orientation_weight: flat feet: orientation of the swing foot towards flat with
+            the planned touchdown yaw, log3(R_ref^T R) [rad], at every swing node; 0 = off.
         baumgarte_gains: (Kp [1/s²], Kd [1/s]) of the contact constraints.
         dynamics_backend: "pinocchio" (constraintDynamics and its derivatives, fast) or "kkt"
             (Crocoddyl's formulas written out); same results (see :mod:`wbmpc.ocp.dynamics`).
@@ -143,6 +170,9 @@ class WalkingOCPConfig:
     contact_force_weight: float = 0.0
     friction_cone_weight: float = 0.0
     friction_coefficient: float = 0.7
+    wrench_cone_weight: float = 0.0
+    cop_sole_fraction: float = 1.0
+    swing_orientation_weight: float = 0.0
     baumgarte_gains: tuple[float, float] = (0.0, 50.0)
     dynamics_backend: str = "pinocchio"
     evaluation: str = "auto"
@@ -154,7 +184,8 @@ class WalkingOCPConfig:
     def __post_init__(self) -> None:
         for name in ("foot_height_weight", "touchdown_height_weight", "touchdown_velocity_weight", "state_weight",
                      "control_weight", "control_bound_weight",
-                     "com_terminal_weight", "foothold_weight", "contact_force_weight", "friction_cone_weight"):
+                     "com_terminal_weight", "foothold_weight", "contact_force_weight", "friction_cone_weight",
+                     "wrench_cone_weight", "swing_orientation_weight"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f"{name}={value} must be finite and >= 0")
@@ -162,6 +193,8 @@ class WalkingOCPConfig:
             raise ParameterError(f"swing_apex_height={self.swing_apex_height} m must be finite and >= 0")
         if not (0 < self.control_bound_fraction <= 1):
             raise ParameterError(f"control_bound_fraction={self.control_bound_fraction} must be in (0, 1]")
+        if not (0 < self.cop_sole_fraction <= 1):
+            raise ParameterError(f"cop_sole_fraction={self.cop_sole_fraction} must be in (0, 1]")
         if not (np.isfinite(self.friction_coefficient) and self.friction_coefficient > 0):
             raise ParameterError(f"friction_coefficient={self.friction_coefficient} must be > 0")
         if len(self.baumgarte_gains) != 2 or min(self.baumgarte_gains) < 0:
@@ -228,13 +261,15 @@ class WalkingOCP:
         running = [self._node(terminal=False) for _ in range(self.n_nodes)]
         terminal = self._node(terminal=True)
         # per node: (differential model, per foot (height, touchdown height, touchdown velocity,
-        # foothold, contact force, friction cone) cost items, None where the term is absent)
+        # foothold, contact force, friction cone, wrench cone, orientation) cost items, None where
+        # the term is absent)
         self._node_terms = []
         for model in running + [terminal]:
             items = model.differential.costs.costs
             self._node_terms.append((model.differential, [
                 tuple(items.get(f"{foot}_{term}") for term in (
-                    "height", "touchdown_height", "touchdown_velocity", "foothold", "contact_force", "friction_cone"))
+                    "height", "touchdown_height", "touchdown_velocity", "foothold", "contact_force", "friction_cone",
+                    "wrench_cone", "orientation"))
                 for foot in self.feet]))
         self.problem = ShootingProblem(self.x_reference, running, terminal)
         #: "batched" or "nodes" (see WalkingOCPConfig.evaluation); evaluation_note says why nodes
@@ -263,7 +298,7 @@ class WalkingOCP:
         cfg = self.config
         state, nu = self.state, self.nu
         costs = CostModelSum(state, nu)
-        w_state = cfg.state_weights.vector(state.nv)
+        w_state = cfg.state_weights.vector(state.nv, tuple(self.robot.actuated_joint_names))
         costs.add("state_regularization",
                   CostModelResidual(ResidualState(state, self.x_reference, nu), ActivationWeightedQuad(w_state)),
                   cfg.state_weight)
@@ -303,6 +338,20 @@ class WalkingOCP:
                           CostModelResidual(residual, ActivationQuadraticBarrier(residual.lower_bounds,
                                                                                  residual.upper_bounds)),
                           cfg.friction_cone_weight, active=False)
+            flat = self.contact_type == "flat6d"
+            if not terminal and cfg.wrench_cone_weight > 0 and flat:
+                length, width = self._sole_size()
+                residual = ResidualWrenchCone(state, foot, cfg.friction_coefficient,
+                                              0.5 * cfg.cop_sole_fraction * length, 0.5 * cfg.cop_sole_fraction * width, nu)
+                costs.add(f"{foot}_wrench_cone",
+                          CostModelResidual(residual, ActivationQuadraticBarrier(residual.lower_bounds,
+                                                                                 residual.upper_bounds)),
+                          cfg.wrench_cone_weight, active=False)
+            if not terminal and cfg.swing_orientation_weight > 0 and flat:
+                costs.add(f"{foot}_orientation",
+                          CostModelResidual(ResidualFrameRotation(state, fid, self._reference_placements[foot].rotation,
+                                                                  nu)),
+                          cfg.swing_orientation_weight, active=False)
         if terminal:
             costs.add("com_position",
                       CostModelResidual(ResidualCoMPosition(state, np.zeros(3), nu)), cfg.com_terminal_weight)
@@ -310,6 +359,12 @@ class WalkingOCP:
         dam = DifferentialActionModelContactFwdDynamics(state, self.actuation, contacts, costs,
                                                         backend=cfg.dynamics_backend)
         return IntegratedActionModelEuler(dam, 0.0 if terminal else self.dt)
+
+    def _sole_size(self) -> tuple[float, float]:
+        size = getattr(self.robot, "sole_size", None)
+        if size is None:
+            raise ParameterError(f"wrench_cone_weight > 0 needs the robot's sole_size (robot {self.robot.name!r} has none)")
+        return size
 
     # ------------------------------------------------------------------ update
     def update(self, x0: np.ndarray, schedule, com_terminal_reference: np.ndarray,
@@ -344,6 +399,7 @@ class WalkingOCP:
         in_contact = np.asarray(schedule.in_contact, dtype=bool)[:, columns]
         phase = np.asarray(schedule.swing_phase, dtype=float)[:, columns]
         touchdown = np.asarray(schedule.touchdown_position, dtype=float)[:, columns]
+        touchdown_yaw = np.nan_to_num(np.asarray(schedule.touchdown_yaw, dtype=float)[:, columns])
         heights = self.ground_height + swing_height_reference(np.nan_to_num(phase), cfg.swing_apex_height)
         n_stance = np.maximum(in_contact.sum(axis=1), 1)
         last_swing = np.zeros_like(in_contact)
@@ -358,7 +414,8 @@ class WalkingOCP:
             terminal = k == self.n_nodes
             if not terminal:
                 dam.set_active_contacts(stance_names[k])
-            for j, (height, touchdown_height, touchdown_velocity, foothold, force, cone) in enumerate(feet_terms):
+            for j, (height, touchdown_height, touchdown_velocity, foothold, force, cone, wrench, orientation) in (
+                    enumerate(feet_terms)):
                 swing = swing_rows[k][j]
                 height.active = swing
                 if swing:
@@ -380,14 +437,27 @@ class WalkingOCP:
                     force.cost.residual.reference[2] = force_reference[k]
                 if cone is not None:
                     cone.active = not swing
+                if wrench is not None:
+                    wrench.active = not swing
+                if orientation is not None:
+                    orientation.active = swing
+                    if swing:
+                        orientation.cost.residual.reference[:] = yaw_rotation(touchdown_yaw[k, j])
         self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
         if self.evaluation == "batched":  # contact sets, weights and activity (references are shared)
             self.problem.sync()
 
 
 def quasi_static_controls(ocp: WalkingOCP, x: np.ndarray) -> np.ndarray:
-    """Torques (nu,) [N·m] holding the configuration of x still on the node-0 stance feet
-    (least squares over torques and contact forces of the gravity torque)."""
+    """Torques (nu,) [N·m] holding the configuration of x still on the node-0 stance feet.
+
+    Solves S^T tau + sum_c J_c^T f_c = g(q) (g the generalised gravity, S the actuated rows) for
+    the torques and contact forces of least weighted norm, sum_i (tau_i / tau_max_i)^2 +
+    sum_c ||f_c||^2 / (m g)^2: where the contacts leave freedom (a humanoid's two flat feet: 12
+    wrench components for 6 base equations) the load goes to the contacts and the torques stay
+    within the robot's limits. With as many unknowns as equations (Bolt's two point feet) it is the
+    exact solution, whatever the weights.
+    """
     model = ocp.state.pinocchio
     pdata = model.createData()
     q = x[: model.nq]
@@ -396,9 +466,12 @@ def quasi_static_controls(ocp: WalkingOCP, x: np.ndarray) -> np.ndarray:
     pin.updateFramePlacements(model, pdata)
     dam = ocp.problem.running_models[0].differential
     columns = [np.vstack([np.zeros((6, ocp.nu)), np.eye(ocp.nu)])]
+    scales = [ocp.torque_limit]
     for name in dam.active_contacts:
         contact = dam.contacts[name]
         J = pin.getFrameJacobian(model, pdata, contact.frame_id, pin.LOCAL_WORLD_ALIGNED if contact.nc == 3 else pin.LOCAL)
         columns.append(J[: contact.nc].T)
-    A = np.hstack(columns)
-    return (np.linalg.pinv(A) @ gravity)[: ocp.nu]
+        scales.append(np.full(contact.nc, ocp.mass * GRAVITY))
+    scale = np.concatenate(scales)
+    A = np.hstack(columns) * scale  # unknowns in units of their scale
+    return (scale * (np.linalg.pinv(A) @ gravity))[: ocp.nu]

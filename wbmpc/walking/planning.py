@@ -83,11 +83,13 @@ class PlanningStage:
 
     # ------------------------------------------------------------------ episode
     def reset(self, x0: np.ndarray, t0: float, command: VelocityCommand) -> None:
-        """Start with ``config.first_stance_foot`` in stance at its measured position."""
+        """Start with ``config.first_stance_foot`` in stance at its measured position, from
+        ``t0 + config.start_double_support`` on (both feet on the ground until then)."""
         q0 = np.asarray(x0)[: self.nq]
         feet = self.feet_position(q0)
         index = self.feet.index(self.config.first_stance_foot)
-        self.stance.reset(self.config.first_stance_foot, feet[index, :2], t0, yaw=float(base_yaw(q0[3:7])))
+        self.stance.reset(self.config.first_stance_foot, feet[index, :2], t0 + self.config.start_double_support,
+                          yaw=float(base_yaw(q0[3:7])))
         self.slide.reset(self.stance.state.position)
         self.set_command(command)
         self.plan = None

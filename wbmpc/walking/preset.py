@@ -135,12 +135,16 @@ def _build(cls, table: Mapping[str, Any], section: str):
         raise ParameterError(f"[{section}]: {err}") from None
 
 
+def _tuples(value):
+    """TOML arrays (nested lists) as tuples, the form the frozen dataclasses hold."""
+    return tuple(_tuples(v) for v in value) if isinstance(value, (list, tuple)) else value
+
+
 def _ocp_from_table(table: Mapping[str, Any]) -> WalkingOCPConfig:
     table = dict(table)
     weights = table.pop("state_weights", {})
     if isinstance(weights, Mapping):
-        weights = _build(StateWeights, {k: tuple(v) if isinstance(v, list) else v for k, v in weights.items()},
-                         "ocp.state_weights")
+        weights = _build(StateWeights, {k: _tuples(v) for k, v in weights.items()}, "ocp.state_weights")
     if "baumgarte_gains" in table:
         table["baumgarte_gains"] = tuple(table["baumgarte_gains"])
     return _build(WalkingOCPConfig, {**table, "state_weights": weights}, "ocp")

@@ -71,5 +71,6 @@ class OcpReferenceStage:
         if wait > 0.0:  # the swing foot is due and still in the air
             schedule = ground_waiting_nodes(schedule, plan.steps[0], sampled.steps[0])
             depth = self.wait_depth
-        com_end = plan.com_reference(t + self.n_nodes * self.node_dt, com_xy)
+        # (a plan for a stance that has not begun starts later than t: it predicts from its start)
+        com_end = plan.com_reference(max(t + self.n_nodes * self.node_dt, plan.t0), com_xy)
         return OcpReference(schedule, np.asarray(com_end, dtype=float), wait, depth)

@@ -7,23 +7,28 @@ frame placement it needs.
 
 from wbmpc.ocp.residuals.base import DataCollector, ResidualData
 from wbmpc.ocp.residuals.com_position import ResidualCoMPosition
-from wbmpc.ocp.residuals.contact_force import ResidualContactForce
+from wbmpc.ocp.residuals.contact_force import ResidualContactForce, ResidualLinearInContactForce
 from wbmpc.ocp.residuals.control import ResidualControl
 from wbmpc.ocp.residuals.frame_height import ResidualFrameHeight
+from wbmpc.ocp.residuals.frame_rotation import ResidualFrameRotation
 from wbmpc.ocp.residuals.frame_translation import ResidualFrameTranslation
 from wbmpc.ocp.residuals.frame_velocity import ResidualFrameVelocity
 from wbmpc.ocp.residuals.friction_cone import ResidualFrictionCone
 from wbmpc.ocp.residuals.state import ResidualState
+from wbmpc.ocp.residuals.wrench_cone import ResidualWrenchCone
 
 __all__ = [
     "DataCollector",
     "ResidualData",
     "ResidualCoMPosition",
     "ResidualContactForce",
+    "ResidualLinearInContactForce",
     "ResidualControl",
     "ResidualFrameHeight",
+    "ResidualFrameRotation",
     "ResidualFrameTranslation",
     "ResidualFrameVelocity",
     "ResidualFrictionCone",
     "ResidualState",
+    "ResidualWrenchCone",
 ]

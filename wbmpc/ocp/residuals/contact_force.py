@@ -1,4 +1,4 @@
-"""Contact force residual r = f − f_ref (3 or 6,) [N, N·m]: contact-force regularisation."""
+"""Residuals of the contact forces: r = f − f_ref (regularisation) and r = A f (cones), [N, N·m]."""
 
 from __future__ import annotations
 
@@ -40,6 +40,43 @@ class ResidualContactForce:
         contact = shared.contacts[self.contact_name]
         data.Rx[:] = contact.df_dx
         data.Ru[:] = contact.df_du
+
+    def createData(self) -> ResidualData:
+        return ResidualData(self.nr, self.state.ndx, self.nu)
+
+
+class ResidualLinearInContactForce:
+    """r = A f_contact (A of shape (nr, nc)), Rx = A ∂f/∂x, Ru = A ∂f/∂u: what friction and wrench
+    cones are (the force in the contact's own frame, see :mod:`wbmpc.ocp.contacts`).
+
+    Args:
+        state: the multibody state.
+        contact_name: name of the contact in the node's contact set.
+        A: the rows (nr, nc), nc = 3 (point) or 6 (flat contact).
+        nu: control dimension.
+    """
+
+    #: why :class:`~wbmpc.ocp.batched_problem.BatchedShootingProblem` cannot batch this term
+    batch_unsupported = "it reads the contact forces of the node's dynamics data, not kept per node when batched"
+
+    uses_contact_forces = True  # reads the force derivatives the dynamics computes
+
+    def __init__(self, state: StateMultibody, contact_name: str, A: np.ndarray, nu: int):
+        self.state = state
+        self.contact_name = contact_name
+        self.A = np.ascontiguousarray(A, dtype=float)
+        self.nr = self.A.shape[0]
+        self.nu = nu
+
+    def calc(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
+        force = shared.contacts[self.contact_name].force
+        np.matmul(self.A, force[: self.A.shape[1]], out=data.r)
+
+    def calcDiff(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
+        contact = shared.contacts[self.contact_name]
+        nc = self.A.shape[1]
+        np.matmul(self.A, contact.df_dx[:nc], out=data.Rx)
+        np.matmul(self.A, contact.df_du[:nc], out=data.Ru)
 
     def createData(self) -> ResidualData:
         return ResidualData(self.nr, self.state.ndx, self.nu)

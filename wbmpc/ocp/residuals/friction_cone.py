@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.residuals.base import DataCollector, ResidualData
+from wbmpc.ocp.residuals.contact_force import ResidualLinearInContactForce
 from wbmpc.ocp.state import StateMultibody
 
 
@@ -45,7 +45,7 @@ def friction_cone_matrix(mu: float, n_facets: int = 4, inner_approximation: bool
     return A, lower, upper
 
 
-class ResidualFrictionCone:
+class ResidualFrictionCone(ResidualLinearInContactForce):
     """r = A f_contact (world-aligned point-contact force), Rx = A ∂f/∂x, Ru = A ∂f/∂u.
 
     Args:
@@ -55,27 +55,8 @@ class ResidualFrictionCone:
         nu: control dimension.
     """
 
-    #: why :class:`~wbmpc.ocp.batched_problem.BatchedShootingProblem` cannot batch this term
-    batch_unsupported = "it reads the contact forces of the node's dynamics data, not kept per node when batched"
-
-    uses_contact_forces = True  # reads the force derivatives the dynamics computes
-
     def __init__(self, state: StateMultibody, contact_name: str, mu: float, nu: int, n_facets: int = 4,
                  inner_approximation: bool = True):
-        self.state = state
-        self.contact_name = contact_name
+        A, self.lower_bounds, self.upper_bounds = friction_cone_matrix(mu, n_facets, inner_approximation)
+        super().__init__(state, contact_name, A, nu)
         self.mu = float(mu)
-        self.A, self.lower_bounds, self.upper_bounds = friction_cone_matrix(mu, n_facets, inner_approximation)
-        self.nr = n_facets + 1
-        self.nu = nu
-
-    def calc(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
-        np.matmul(self.A, shared.contacts[self.contact_name].force[:3], out=data.r)
-
-    def calcDiff(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
-        contact = shared.contacts[self.contact_name]
-        np.matmul(self.A, contact.df_dx[:3], out=data.Rx)
-        np.matmul(self.A, contact.df_du[:3], out=data.Ru)
-
-    def createData(self) -> ResidualData:
-        return ResidualData(self.nr, self.state.ndx, self.nu)
