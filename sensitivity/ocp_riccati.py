@@ -80,6 +80,34 @@ def factorise(lq: LinearQuadratic) -> RiccatiFactorisation:
 
 
 @njit(cache=True)
+def _cholesky_solve(A, B, X):
+    """X = A⁻¹ B for A (n, n) positive definite (checked by the factorisation), B (n, m)."""
+    n = A.shape[0]
+    L = np.zeros((n, n))
+    for j in range(n):
+        s = A[j, j]
+        for p in range(j):
+            s -= L[j, p] * L[j, p]
+        L[j, j] = np.sqrt(s)
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for p in range(j):
+                s -= L[i, p] * L[j, p]
+            L[i, j] = s / L[j, j]
+    for c in range(B.shape[1]):
+        for i in range(n):  # L y = b
+            s = B[i, c]
+            for p in range(i):
+                s -= L[i, p] * X[p, c]
+            X[i, c] = s / L[i, i]
+        for i in range(n - 1, -1, -1):  # Lᵀ x = y
+            s = X[i, c]
+            for p in range(i + 1, n):
+                s -= L[p, i] * X[p, c]
+            X[i, c] = s / L[i, i]
+
+
+@njit(cache=True)
 def _sensitivity_sweep(Fx, Fu, P, K, Quu, q, r, c, dxs, dus):
     """The backward and forward sweeps of the module docstring for the m columns of q, r, c."""
     N = Fx.shape[0]
@@ -91,9 +119,7 @@ def _sensitivity_sweep(Fx, Fu, P, K, Quu, q, r, c, dxs, dus):
         w = s + np.dot(P[t + 1], c[t])
         Qx = q[t] + np.dot(np.ascontiguousarray(Fx[t].T), w)
         Qu = r[t] + np.dot(np.ascontiguousarray(Fu[t].T), w)
-        L = np.linalg.cholesky(Quu[t])
-        y = np.linalg.solve(L, Qu)
-        kff[t] = np.linalg.solve(L.T, y)
+        _cholesky_solve(Quu[t], Qu, kff[t])
         s = Qx - np.dot(np.ascontiguousarray(K[t].T), Qu)
     dxs[0] = 0.0
     for t in range(N):

@@ -9,6 +9,7 @@ DCM planner); the robot description maps these names to its frames. Positions ar
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -51,6 +52,8 @@ class ContactSchedule:
         node_spacing_jacobian: shape (n_nodes, m), ∂ node_spacing / ∂ touchdown_times [1].
         swing_phase_jacobian: shape (n_nodes + 1, n_feet, m), ∂ swing_phase / ∂ touchdown_times
             [1/s]; 0 where the foot is in contact.
+        swing_phase_next_jacobian: shape (n_nodes + 1, n_feet), ∂ swing_phase / ∂ the touchdown
+            ending the swing still running at the horizon's end (after it) [1/s].
     """
 
     t0: float
@@ -66,6 +69,7 @@ class ContactSchedule:
     touchdown_times: np.ndarray | None = None
     node_spacing_jacobian: np.ndarray | None = None
     swing_phase_jacobian: np.ndarray | None = None
+    swing_phase_next_jacobian: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.dt) and self.dt > 0):
@@ -208,7 +212,8 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
     )
 
 
-def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_times=None) -> ContactSchedule:
+def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_times=None,
+                           next_touchdown: float | None = None) -> ContactSchedule:
     """A schedule whose contact phases are timed continuously by the touchdown times in the horizon.
 
     The phases and their node counts come from the plan sampled with ``rounding="nearest"``
@@ -229,6 +234,8 @@ def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_t
         t0, dt, n_nodes: the nominal grid (as :func:`contact_schedule`).
         touchdown_times: shape (m,), the times [s] of the plan's m touchdowns inside the horizon,
             strictly increasing in (t0, t_end) and before the plan's next touchdown; None: the plan's.
+        next_touchdown: the time [s] of the touchdown ending the swing in progress at t_end (after
+            t_end); None: the plan's.
 
     Returns:
         ContactSchedule with ``node_spacing``, ``touchdown_times`` and their Jacobians.
@@ -253,6 +260,9 @@ def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_t
         raise ParameterError(f"the plan's touchdowns {np.round(planned[:m], 4).tolist()} s put a contact phase of no node "
                              f"on the grid t0={t0} s, dt={dt} s, n_nodes={n_nodes} (a touchdown within half a node of "
                              "t0, t_end or another touchdown): change n_nodes or dt")
+    upper = planned[m] if next_touchdown is None else float(next_touchdown)
+    if not (math.isfinite(upper) and upper > t_end):
+        raise ParameterError(f"next_touchdown={next_touchdown} s must be finite and after the horizon's end {t_end:.6g} s")
     if touchdown_times is None:
         tau = planned[:m].copy()
     else:
@@ -260,11 +270,10 @@ def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_t
         if tau.shape != (m,):
             raise ParameterError(f"touchdown_times has shape {tau.shape}, expected ({m},): the plan has {m} touchdowns "
                                  f"in the horizon ({t0}, {t_end:.4g}) s")
-        upper = planned[m]
-        edges = np.concatenate([[t0], tau, [min(t_end, upper)]])
+        edges = np.concatenate([[t0], tau, [t_end]])
         if not (np.all(np.isfinite(tau)) and np.all(np.diff(edges) > 0)):
             raise ParameterError(f"touchdown_times={tau.tolist()} s must be finite, strictly increasing and inside the "
-                                 f"horizon ({t0}, {min(t_end, upper):.6g}) s")
+                                 f"horizon ({t0}, {t_end:.6g}) s")
     counts = np.diff(boundaries)
     edges = np.concatenate([[t0], tau, [t_end]])  # τ_0 … τ_{m+1}
     n_feet = len(nominal.feet)
@@ -290,9 +299,10 @@ def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_t
     swing_phase = np.where(in_contact, np.nan, 0.0)
     swing_duration = np.where(in_contact, np.nan, 0.0)
     phase_jacobian = np.zeros((n_nodes + 1, n_feet, m))
+    next_jacobian = np.zeros((n_nodes + 1, n_feet))
     for i in range(m + 1):
         lift = (float(plan.t_stance_start), -1) if i == 0 else (tau[i - 1], i - 1)
-        land = (tau[i], i) if i < m else (float(planned[m]), -1)
+        land = (tau[i], i) if i < m else (upper, -1)
         duration = land[0] - lift[0]
         end = boundaries[i + 1] + (1 if i == m else 0)  # the terminal node belongs to the last phase
         for k in range(boundaries[i], end):
@@ -305,10 +315,13 @@ def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_t
                     ds[lift[1]] += (s - 1.0) / duration
                 if land[1] >= 0:
                     ds[land[1]] -= s / duration
+                else:
+                    next_jacobian[k, j] = -s / duration
                 phase_jacobian[k, j] = ds
     return ContactSchedule(
         t0=t0, dt=dt, feet=nominal.feet, in_contact=in_contact, swing_phase=swing_phase,
         swing_duration=swing_duration, touchdown_position=nominal.touchdown_position,
         touchdown_yaw=nominal.touchdown_yaw, contact_yaw=nominal.contact_yaw, node_spacing=spacing,
         touchdown_times=tau, node_spacing_jacobian=spacing_jacobian, swing_phase_jacobian=phase_jacobian,
+        swing_phase_next_jacobian=next_jacobian,
     )

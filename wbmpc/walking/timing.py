@@ -85,20 +85,24 @@ class ContactTimingOCP:
         """``"touchdown_1_right"`` … in time order (the foot that lands)."""
         return [f"touchdown_{i + 1}_{foot}" for i, foot in enumerate(self._landing_feet)]
 
-    def set_parameters(self, touchdown_times=None, com_terminal_reference=None) -> None:
-        """Re-time the OCP (None: the plan's touchdowns) and optionally move the terminal CoM reference.
+    def set_parameters(self, touchdown_times=None, com_terminal_reference=None, next_touchdown=None) -> None:
+        """Re-time the OCP (None: the plan's touchdowns), optionally move the terminal CoM reference
+        and the touchdown ending the last swing (after the horizon; None: the plan's).
 
         Raises:
             ParameterError: touchdown_times of the wrong shape, unordered or outside the horizon.
         """
-        self.schedule = timed_contact_schedule(self.plan, self.t0, self.ocp.dt, self.ocp.n_nodes, touchdown_times)
+        self.schedule = timed_contact_schedule(self.plan, self.t0, self.ocp.dt, self.ocp.n_nodes, touchdown_times,
+                                               next_touchdown)
         if com_terminal_reference is not None:
             self.com_terminal_reference = np.asarray(com_terminal_reference, dtype=float).copy()
         self.ocp.update(self.x0, self.schedule, self.com_terminal_reference)
 
     # ------------------------------------------------------------------ derivatives
-    def parameter_derivatives(self, xs, us, com_reference: bool = False) -> ParameterDerivatives:
-        """Analytic ∂(x⁺, Lx, Lu)/∂p at (xs, us) (module docstring) for p = τ, then c* if ``com_reference``.
+    def parameter_derivatives(self, xs, us, com_reference: bool = False,
+                              next_touchdown: bool = False) -> ParameterDerivatives:
+        """Analytic ∂(x⁺, Lx, Lu)/∂p at (xs, us) (module docstring) for p = τ, then the touchdown
+        ending the last swing (after t_end) if ``next_touchdown``, then c* (3,) if ``com_reference``.
 
         Evaluates the problem (calc and calcDiff) at (xs, us) first.
         """
@@ -107,7 +111,8 @@ class ContactTimingOCP:
         schedule = self.schedule
         N, ndx, nu = problem.T, problem.ndx, problem.nu
         m_tau = schedule.touchdown_times.size
-        m = m_tau + (3 if com_reference else 0)
+        m_next = m_tau + (1 if next_touchdown else 0)
+        m = m_next + (3 if com_reference else 0)
         dxnext = np.zeros((N, ndx, m))
         dLx = np.zeros((N + 1, ndx, m))
         dLu = np.zeros((N, nu, m))
@@ -129,17 +134,19 @@ class ContactTimingOCP:
             for foot in self.ocp.feet:
                 column = schedule.feet.index(foot)
                 ds = schedule.swing_phase_jacobian[k, column]
+                if next_touchdown:
+                    ds = np.append(ds, schedule.swing_phase_next_jacobian[k, column])
                 if not np.any(ds):
                     continue
                 s = schedule.swing_phase[k, column]
                 gradient = costs.reference_gradient(cdata, f"{foot}_height")[:, 0]  # ∂[Lx; Lu]/∂z*
                 dz = swing_height_reference_derivative(s, apex)
-                dLx[k, :, :m_tau] += scale * np.outer(gradient[:ndx], dz * ds)
+                dLx[k, :, :m_next] += scale * np.outer(gradient[:ndx], dz * ds)
                 if not terminal:
-                    dLu[k, :, :m_tau] += scale * np.outer(gradient[ndx:], dz * ds)
+                    dLu[k, :, :m_next] += scale * np.outer(gradient[ndx:], dz * ds)
         if com_reference:
             costs = problem.terminal_model.differential.costs
-            dLx[N, :, m_tau:] = costs.reference_gradient(problem.terminal_data.differential.costs, "com_position")[:ndx]
+            dLx[N, :, m_next:] = costs.reference_gradient(problem.terminal_data.differential.costs, "com_position")[:ndx]
         return ParameterDerivatives(dxnext, dLx, dLu, ddt)
 
     # ------------------------------------------------------------------ outputs
@@ -231,7 +238,7 @@ def relative_gap(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(np.abs(a - b))) / (scale if scale > 0 else 1.0)
 
 
-def contact_timing_sensitivity(timed: ContactTimingOCP, solver: SolverFDDP, fd_step: float = 2e-4,
+def contact_timing_sensitivity(timed: ContactTimingOCP, solver: SolverFDDP, fd_step: float = 2e-5,
                                th_stop: float = 1e-12, com_reference: bool = False,
                                routes=ROUTES, gauss_newton: bool = True, hessian_step: float = 1e-6,
                                fd_th_stop: float = 1e-17, kkt_solver: str = "auto") -> TimingSensitivity:
@@ -338,3 +345,106 @@ def standing_start_timing_ocp(robot_name: str = "bolt", n_nodes: int = 100, dt: 
     ocp = WalkingOCP(start.robot, config, n_nodes=n_nodes, dt=dt)
     com_terminal = np.append(start.plan.lipm_com_at(n_nodes * dt, start.com0[:2]), start.com0[2])
     return ContactTimingOCP(ocp, start.plan, 0.0, start.x0, com_terminal)
+
+
+# ---------------------------------------------------------------------- end to end: DCM -> plan -> OCP
+def touchdown_dcm_jacobian(sequencer, plan, n_touchdowns: int) -> np.ndarray:
+    """dτ_i/dθ (n_touchdowns, 2) [s/m] of the plan's first touchdowns to a disturbance θ on the
+    measured DCM, by chaining the step QP's Fiacco sensitivities (:func:`sensitivity.fiacco_sensitivity`).
+
+    Step 0's QP sees θ directly: dT_0/dθ = dΓ_0/dθ / (ω Γ_0). Step i ≥ 1 starts at touchdown i
+    (elapsed 0) from its foothold p_T,i−1 with the DCM p_T,i−1 + b_T,i−1: the QP is invariant to a
+    common shift of the foothold and the DCM, so its disturbance is the change of b_T,i−1,
+    dθ_i/dθ = (db_T,i−1/dθ_{i−1}) dθ_{i−1}/dθ, and τ_{i+1} = τ_i + T_i.
+
+    Raises:
+        sensitivity.DegenerateSensitivity: a step's QP has a weakly active bound (no derivative).
+    """
+    from sensitivity import fiacco_sensitivity
+
+    omega = plan.omega
+    jacobian = np.zeros((n_touchdowns, 2))
+    chain = np.eye(2)  # dθ_i/dθ
+    time_derivative = np.zeros(2)
+    for i in range(n_touchdowns):
+        if i == 0:
+            problem = sequencer.problem(plan.stance_foot, plan.stance_position, plan.dcm_measured,
+                                        plan.t0 - plan.t_stance_start)
+        else:
+            previous = plan.steps[i - 1]
+            problem = sequencer.problem(previous.foot, previous.position, previous.dcm_at_touchdown, 0.0)
+        step = fiacco_sensitivity(problem)
+        gamma = step.x[2]
+        time_derivative = time_derivative + (step.dx_dtheta[2] / (omega * gamma)) @ chain
+        jacobian[i] = time_derivative
+        chain = step.dx_dtheta[3:5] @ chain
+    return jacobian
+
+
+def dcm_sensitivity(robot_name: str = "bolt", n_nodes: int = 100, dt: float = 0.01, fd_step: float = 1e-4,
+                    com_step: float = 1e-6, th_stop: float = 1e-17) -> dict:
+    """End to end: du0/dθ [N·m/m] of the whole-body MPC's first torques to a disturbance θ (2,) on
+    the measured DCM, from a standing start, and its check against the whole chain.
+
+    du0/dθ = du0/dτ dτ/dθ + du0/dτ⁺ dτ⁺/dθ + du0/dc* dc*/dθ: the OCP's sensitivity (Riccati sweep) to
+    the touchdown times τ in the horizon, to the touchdown τ⁺ ending the last swing and to the
+    terminal CoM reference c* (the plan's LIPM CoM at t_end), times the step QP's chained Fiacco
+    derivatives dτ/dθ, dτ⁺/dθ (:func:`touchdown_dcm_jacobian`) and dc*/dθ (central differences of the
+    planner's closed-form LIPM prediction, step ``com_step`` [m]; the one numerical link). The
+    footholds do not enter the OCP (foothold_weight 0, contacts without position feedback). The
+    check: central differences (step ``fd_step`` [m]) of the whole chain, re-planning, rebuilding
+    and re-solving the timed OCP for θ ± h e_j.
+
+    Returns:
+        dict with du0_dtheta (nu, 2), its channels (timing, com_reference), dtau_dtheta (m + 1, 2) by
+        the chain and by differences of the planner, the finite-difference du0/dθ, their relative
+        disagreement and the settings.
+    """
+    from wbmpc.walking.standing_start import standing_start
+
+    fd_step = check_fd_step(fd_step)
+    timed = standing_start_timing_ocp(robot_name, n_nodes, dt)
+    solver = timed.solve(th_stop=th_stop)
+    xs, us = solver.xs.copy(), solver.us.copy()
+    m = timed.touchdown_times.size
+    start = standing_start(robot_name)
+    dtau = touchdown_dcm_jacobian(start.sequencer, start.plan, m + 1)
+    t_end = n_nodes * dt
+
+    def planned(theta):
+        plan = standing_start(robot_name, dcm_offset=theta).plan
+        return plan.touchdown_times[: m + 1], np.append(plan.lipm_com_at(t_end, start.com0[:2]), start.com0[2])
+
+    dtau_fd, dcom = np.zeros((m + 1, 2)), np.zeros((3, 2))
+    for j in range(2):
+        step = np.zeros(2)
+        step[j] = com_step
+        (tau_plus, com_plus), (tau_minus, com_minus) = planned(step), planned(-step)
+        dtau_fd[:, j] = (tau_plus - tau_minus) / (2 * com_step)
+        dcom[:, j] = (com_plus - com_minus) / (2 * com_step)
+    check_converged(solver.stop, 1e-12, solver.is_feasible)
+    derivatives = timed.parameter_derivatives(xs, us, com_reference=True, next_touchdown=True)
+    lq = linear_quadratic(timed.problem, xs, us, derivatives, "exact")
+    sens = riccati_sensitivity(lq)
+    du0_dp = sens.dus[0]  # (nu, m + 1 + 3)
+    timing = du0_dp[:, : m + 1] @ dtau
+    com_channel = du0_dp[:, m + 1:] @ dcom
+    du0 = timing + com_channel
+    fd = np.zeros_like(du0)
+    for j in range(2):
+        u0 = []
+        for sign in (1.0, -1.0):
+            theta = np.zeros(2)
+            theta[j] = sign * fd_step
+            disturbed = standing_start_timing_ocp(robot_name, n_nodes, dt, dcm_offset=theta)
+            u0.append(disturbed.solve(xs, us, th_stop=th_stop).us[0].copy())
+        fd[:, j] = (u0[0] - u0[1]) / (2 * fd_step)
+    return {
+        "du0_dtheta": du0, "du0_dtheta_timing_channel": timing, "du0_dtheta_com_reference_channel": com_channel,
+        "du0_dtheta_finite_differences": fd, "max_relative_disagreement": relative_gap(du0, fd),
+        "disagreement": {"chain vs finite differences of the whole chain": relative_gap(du0, fd),
+                         "dtau_dtheta: Fiacco chain vs planner differences": relative_gap(dtau, dtau_fd)},
+        "dtau_dtheta": dtau, "dtau_dtheta_planner_differences": dtau_fd, "dcom_reference_dtheta": dcom,
+        "du0_dtau": du0_dp[:, : m + 1], "touchdown_times": np.append(timed.touchdown_times, start.plan.touchdown_times[m]),
+        "settings": {"fd_step_m": fd_step, "com_step_m": com_step, "th_stop": th_stop, "n_nodes": n_nodes, "dt": dt},
+    }
