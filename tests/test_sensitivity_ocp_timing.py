@@ -3,6 +3,7 @@ on the grid, its analytic parameter derivatives match differences of the model, 
 to d(u, x, forces, CoM)/dτ agree (Riccati sweep = full KKT = re-solved finite differences)."""
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -177,3 +178,36 @@ def test_non_converged_base_solution_is_refused(solved):
 def test_bad_finite_difference_step_is_refused(step):
     with pytest.raises(ParameterError, match="fd_step"):
         check_fd_step(step)
+
+
+def test_cli_contact_timing_prints_every_route_and_their_disagreement(capsys, tmp_path):
+    from wbmpc.cli import main
+
+    plot = tmp_path / "timing.png"
+    assert main(["sensitivity", "--wrt", "contact-timing", "--nodes", str(N_NODES), "--json", "--plot", str(plot)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert set(report["routes"]) == {"riccati", "kkt", "finite_differences"}
+    assert np.asarray(report["routes"]["riccati"]["du0_dtau"]).shape == (6, 2)
+    assert np.asarray(report["routes"]["kkt"]["dforces0_dtau"]).shape == (3, 2)
+    assert np.asarray(report["routes"]["finite_differences"]["dcom_terminal_dtau"]).shape == (3, 2)
+    assert report["max_relative_disagreement"] < 1e-4
+    assert report["cost"]["sweep_over_riccati"] > 0
+    assert plot.stat().st_size > 0
+
+
+def test_cli_dcm_prints_the_end_to_end_derivative(capsys):
+    from wbmpc.cli import main
+
+    assert main(["sensitivity", "--wrt", "dcm", "--nodes", str(N_NODES), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert np.asarray(report["du0_dtheta"]).shape == (6, 2)
+    assert report["max_relative_disagreement"] < 1e-3
+
+
+@pytest.mark.parametrize("value", ["0", "-1e-4", "nan", "inf"])
+def test_cli_refuses_a_bad_fd_step(capsys, value):
+    from wbmpc.cli import main
+
+    assert main(["sensitivity", "--wrt", "contact-timing", "--fd-step", value]) == 2
+    err = capsys.readouterr().err
+    assert "--fd-step" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1

@@ -241,7 +241,7 @@ def relative_gap(a: np.ndarray, b: np.ndarray) -> float:
 def contact_timing_sensitivity(timed: ContactTimingOCP, solver: SolverFDDP, fd_step: float = 2e-5,
                                th_stop: float = 1e-12, com_reference: bool = False,
                                routes=ROUTES, gauss_newton: bool = True, hessian_step: float = 1e-6,
-                               fd_th_stop: float = 1e-17, kkt_solver: str = "auto") -> TimingSensitivity:
+                               fd_th_stop: float = 1e-20, kkt_solver: str = "auto") -> TimingSensitivity:
     """d(xs*, us*, forces*, CoM*)/dτ at a converged solution by the routes asked.
 
     Args:
