@@ -325,7 +325,9 @@ class WalkingOCP:
 
         Args:
             x0: initial state (nx,), Pinocchio convention.
-            schedule: ``sequencer.schedule.ContactSchedule`` with n_nodes rows + 1 on this grid.
+            schedule: ``sequencer.schedule.ContactSchedule`` with n_nodes rows + 1 on this grid; a
+                timed one (``node_spacing`` set, :func:`sequencer.timed_contact_schedule`) gives
+                running node k the spacing node_spacing[k] (evaluation="nodes" only).
             com_terminal_reference: CoM reference at the end of the horizon (3,) [m], world.
             touchdown_depth: how far below the ground the ``{foot}_touchdown_height`` term aims
                 the foot at the last swing node [m], >= 0 (0: on the ground; the walking
