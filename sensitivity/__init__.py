@@ -7,6 +7,11 @@ Python API::
     problem = StepProblem.from_params(SequencerParams.table_i(), "left", [-0.12, 0.10], [-0.12, -0.07], 0.229)
     sens = fiacco_sensitivity(problem)      # sens.dx_dtheta: (5, 2)
     check = crosscheck(problem)             # analytic vs CasADi vs finite differences vs ProxQP backward
+
+The parametric sensitivity of a shooting problem (issue 16: the whole-body OCP to its contact
+timings, composed in :mod:`wbmpc.walking.timing`): :mod:`sensitivity.ocp_parametric` (optimality
+conditions, exact Lagrangian Hessian, the LQ problem), one route per file: ``ocp_riccati`` (the
+sweep), ``ocp_kkt`` (the full KKT system), ``ocp_finite_differences`` (re-solved OCPs).
 """
 
 from sensitivity.crosscheck import Crosscheck, crosscheck

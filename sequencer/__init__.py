@@ -26,7 +26,7 @@ from sequencer.horizon import FootstepPlan, FootstepSequencer, PlannedStep
 from sequencer.nominal import NominalGait, nominal_dcm_offset
 from sequencer.params import SequencerParams
 from sequencer.planner import FootstepPlanner, ReducedState, StanceState, VelocityCommand
-from sequencer.schedule import ContactSchedule, contact_schedule
+from sequencer.schedule import ContactSchedule, contact_schedule, timed_contact_schedule
 from sequencer.step_qp import InfeasibleStep, StepProblem, StepQPError, StepSolution
 
 __all__ = [
@@ -48,4 +48,5 @@ __all__ = [
     "VelocityCommand",
     "contact_schedule",
     "nominal_dcm_offset",
+    "timed_contact_schedule",
 ]

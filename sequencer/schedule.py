@@ -9,6 +9,7 @@ DCM planner); the robot description maps these names to its frames. Positions ar
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,6 +43,17 @@ class ContactSchedule:
             touchdown); NaN where the foot swings, and where it landed before the plan was made
             (the trailing foot of a double support at the start of the plan). Omitted (None): 0
             in contact, NaN in swing.
+        node_spacing: shape (n_nodes,), the spacing of each running node [s] (node k spans
+            [times[k], times[k + 1]]); None: ``dt`` everywhere. Set by :func:`timed_contact_schedule`,
+            where every contact phase keeps its number of nodes and the spacing follows the phase's
+            duration.
+        touchdown_times: shape (m,), the touchdown times inside the horizon that time the phases
+            [s] (the continuous parameters of a timed schedule); None for a fixed-spacing one.
+        node_spacing_jacobian: shape (n_nodes, m), ∂ node_spacing / ∂ touchdown_times [1].
+        swing_phase_jacobian: shape (n_nodes + 1, n_feet, m), ∂ swing_phase / ∂ touchdown_times
+            [1/s]; 0 where the foot is in contact.
+        swing_phase_next_jacobian: shape (n_nodes + 1, n_feet), ∂ swing_phase / ∂ the touchdown
+            ending the swing still running at the horizon's end (after it) [1/s].
     """
 
     t0: float
@@ -53,6 +65,11 @@ class ContactSchedule:
     touchdown_position: np.ndarray
     touchdown_yaw: np.ndarray | None = None
     contact_yaw: np.ndarray | None = None
+    node_spacing: np.ndarray | None = None
+    touchdown_times: np.ndarray | None = None
+    node_spacing_jacobian: np.ndarray | None = None
+    swing_phase_jacobian: np.ndarray | None = None
+    swing_phase_next_jacobian: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.dt) and self.dt > 0):
@@ -83,7 +100,9 @@ class ContactSchedule:
     @property
     def times(self) -> np.ndarray:
         """Node times [s], shape (n_nodes + 1,)."""
-        return self.t0 + self.dt * np.arange(self.n_nodes + 1)
+        if self.node_spacing is None:
+            return self.t0 + self.dt * np.arange(self.n_nodes + 1)
+        return self.t0 + np.concatenate([[0.0], np.cumsum(self.node_spacing)])
 
 
 def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "next") -> ContactSchedule:
@@ -189,4 +208,119 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
         t0=t0, dt=dt, feet=feet, in_contact=in_contact, swing_phase=swing_phase,
         swing_duration=swing_duration, touchdown_position=touchdown_position, touchdown_yaw=touchdown_yaw,
         contact_yaw=contact_yaw,
+    )
+
+
+def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_times=None,
+                           next_touchdown: float | None = None) -> ContactSchedule:
+    """A schedule whose contact phases are timed continuously by the touchdown times in the horizon.
+
+    The phases and their node counts come from the plan sampled with ``rounding="nearest"``
+    (:func:`contact_schedule`): phase 0 runs from node 0 to the node of the first touchdown in the
+    horizon, phase i from the node of touchdown i to the node of touchdown i + 1, the last phase
+    to node ``n_nodes``, and phase i keeps its n_i nodes whatever the times. With τ_0 = t0,
+    τ_1 < … < τ_m the touchdown times and τ_{m+1} = t_end = t0 + n_nodes dt (the horizon's end
+    stays put), the nodes of phase i have the spacing h_i = (τ_{i+1} − τ_i) / n_i and the times
+    τ_i + j h_i, j = 0 … n_i − 1. The swing phase at a node is s = (t − t_lift-off) / (t_touchdown −
+    t_lift-off) of its time: j / n_i inside the horizon (it does not depend on the times), and a
+    smooth function of τ_1 for the swing in progress at t0 (lift-off ``plan.t_stance_start``) and
+    of τ_m for the swing still running at t_end (touchdown the plan's next one, held fixed).
+    When every τ_i − t0 is a multiple of dt the schedule equals ``contact_schedule(plan, t0, dt,
+    n_nodes, "nearest")`` with ``node_spacing`` = dt.
+
+    Args:
+        plan: FootstepPlan with ``double_support == 0`` (one foot in contact at a time).
+        t0, dt, n_nodes: the nominal grid (as :func:`contact_schedule`).
+        touchdown_times: shape (m,), the times [s] of the plan's m touchdowns inside the horizon,
+            strictly increasing in (t0, t_end) and before the plan's next touchdown; None: the plan's.
+        next_touchdown: the time [s] of the touchdown ending the swing in progress at t_end (after
+            t_end); None: the plan's.
+
+    Returns:
+        ContactSchedule with ``node_spacing``, ``touchdown_times`` and their Jacobians.
+
+    Raises:
+        ParameterError: double support, a touchdown within half a node of t0, t_end or another
+            touchdown (its phase would have no node), or ``touchdown_times`` of the wrong shape,
+            unordered or outside the horizon.
+    """
+    if float(plan.double_support) != 0.0:
+        raise ParameterError(f"double_support={plan.double_support} s: a timed schedule needs one foot in contact "
+                             "at a time (double_support = 0)")
+    nominal = contact_schedule(plan, t0, dt, n_nodes, rounding="nearest")
+    t0, dt, n_nodes = float(t0), float(dt), int(n_nodes)
+    t_end = t0 + n_nodes * dt
+    planned = plan.touchdown_times
+    m = int(np.searchsorted(planned, t_end, side="left"))  # touchdowns before t_end (contact_schedule: not all)
+    grid = t0 + dt * np.arange(n_nodes + 1)
+    first_node = np.searchsorted(grid + 0.5 * dt, planned[:m], side="left")  # the "nearest" rule
+    boundaries = np.concatenate([[0], first_node, [n_nodes]])
+    if np.any(np.diff(boundaries) < 1):
+        raise ParameterError(f"the plan's touchdowns {np.round(planned[:m], 4).tolist()} s put a contact phase of no node "
+                             f"on the grid t0={t0} s, dt={dt} s, n_nodes={n_nodes} (a touchdown within half a node of "
+                             "t0, t_end or another touchdown): change n_nodes or dt")
+    upper = planned[m] if next_touchdown is None else float(next_touchdown)
+    if not (math.isfinite(upper) and upper > t_end):
+        raise ParameterError(f"next_touchdown={next_touchdown} s must be finite and after the horizon's end {t_end:.6g} s")
+    if touchdown_times is None:
+        tau = planned[:m].copy()
+    else:
+        tau = np.asarray(touchdown_times, dtype=float)
+        if tau.shape != (m,):
+            raise ParameterError(f"touchdown_times has shape {tau.shape}, expected ({m},): the plan has {m} touchdowns "
+                                 f"in the horizon ({t0}, {t_end:.4g}) s")
+        edges = np.concatenate([[t0], tau, [t_end]])
+        if not (np.all(np.isfinite(tau)) and np.all(np.diff(edges) > 0)):
+            raise ParameterError(f"touchdown_times={tau.tolist()} s must be finite, strictly increasing and inside the "
+                                 f"horizon ({t0}, {t_end:.6g}) s")
+    counts = np.diff(boundaries)
+    edges = np.concatenate([[t0], tau, [t_end]])  # τ_0 … τ_{m+1}
+    n_feet = len(nominal.feet)
+    spacing = np.empty(n_nodes)
+    spacing_jacobian = np.zeros((n_nodes, m))
+    times = np.empty(n_nodes + 1)
+    times_jacobian = np.zeros((n_nodes + 1, m))  # ∂t_k/∂τ
+    for i in range(m + 1):
+        nodes = np.arange(boundaries[i], boundaries[i + 1])
+        spacing[nodes] = (edges[i + 1] - edges[i]) / counts[i]
+        fraction = (nodes - boundaries[i]) / counts[i]
+        times[nodes] = edges[i] + fraction * (edges[i + 1] - edges[i])
+        if i >= 1:
+            spacing_jacobian[nodes, i - 1] = -1.0 / counts[i]
+            times_jacobian[nodes, i - 1] = 1.0 - fraction
+        if i < m:
+            spacing_jacobian[nodes, i] = 1.0 / counts[i]
+            times_jacobian[nodes, i] = fraction
+    times[n_nodes] = t_end
+    # the swing of phase i: lift-off at τ_i (the plan's stance start for i = 0), touchdown at τ_{i+1} (the
+    # plan's next touchdown for the last phase); as (value, column of τ or -1 for a fixed time)
+    in_contact = nominal.in_contact
+    swing_phase = np.where(in_contact, np.nan, 0.0)
+    swing_duration = np.where(in_contact, np.nan, 0.0)
+    phase_jacobian = np.zeros((n_nodes + 1, n_feet, m))
+    next_jacobian = np.zeros((n_nodes + 1, n_feet))
+    for i in range(m + 1):
+        lift = (float(plan.t_stance_start), -1) if i == 0 else (tau[i - 1], i - 1)
+        land = (tau[i], i) if i < m else (upper, -1)
+        duration = land[0] - lift[0]
+        end = boundaries[i + 1] + (1 if i == m else 0)  # the terminal node belongs to the last phase
+        for k in range(boundaries[i], end):
+            for j in np.flatnonzero(~in_contact[k]):
+                s = (times[k] - lift[0]) / duration
+                swing_phase[k, j] = s
+                swing_duration[k, j] = duration
+                ds = times_jacobian[k] / duration
+                if lift[1] >= 0:
+                    ds[lift[1]] += (s - 1.0) / duration
+                if land[1] >= 0:
+                    ds[land[1]] -= s / duration
+                else:
+                    next_jacobian[k, j] = -s / duration
+                phase_jacobian[k, j] = ds
+    return ContactSchedule(
+        t0=t0, dt=dt, feet=nominal.feet, in_contact=in_contact, swing_phase=swing_phase,
+        swing_duration=swing_duration, touchdown_position=nominal.touchdown_position,
+        touchdown_yaw=nominal.touchdown_yaw, contact_yaw=nominal.contact_yaw, node_spacing=spacing,
+        touchdown_times=tau, node_spacing_jacobian=spacing_jacobian, swing_phase_jacobian=phase_jacobian,
+        swing_phase_next_jacobian=next_jacobian,
     )

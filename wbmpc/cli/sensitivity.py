@@ -1,4 +1,7 @@
-"""``wbmpc sensitivity``: DCM sensitivity of the footstep QP (eqs. 9-12) by four routes, and Fig. 2."""
+"""``wbmpc sensitivity``: DCM sensitivity of the footstep QP (eqs. 9-12) by four routes, and Fig. 2
+(``--wrt step-qp``, the default); the whole-body OCP's sensitivity to the touchdown times by three
+routes (``--wrt contact-timing``); the end-to-end du0/dθ from a DCM disturbance to the first
+torques (``--wrt dcm``)."""
 
 from __future__ import annotations
 
@@ -54,7 +57,104 @@ def format_report(report: dict) -> str:
     return "\n".join(lines)
 
 
+WRT = ("step-qp", "contact-timing", "dcm")
+
+
+def timing_report(n_nodes: int, fd_step: float | None) -> dict:
+    """``--wrt contact-timing``: the default Bolt walking OCP's du0/dτ, dforces0/dτ, dCoM_N/dτ by route."""
+    from wbmpc.walking.timing import contact_timing_sensitivity, standing_start_timing_ocp
+
+    timed = standing_start_timing_ocp("bolt", n_nodes=n_nodes)
+    solver = timed.solve(th_stop=1e-17)
+    kwargs = {} if fd_step is None else {"fd_step": fd_step}
+    result = contact_timing_sensitivity(timed, solver, **kwargs)
+    model = timed.ocp.state.pinocchio
+    names = {"u0": "du0_dtau", "forces0": "dforces0_dtau", "com_terminal": "dcom_terminal_dtau"}
+    routes = {route: {names[key]: out[key] for key in names} for route, out in result.routes.items()}
+    return {
+        "robot": "bolt", "n_nodes": n_nodes, "dt_s": timed.ocp.dt, "parameters": result.parameter_names,
+        "touchdown_times_s": result.touchdown_times, "joints": list(model.names[2:]),
+        "stance_feet_node0": list(timed.problem.running_models[0].differential.active_contacts),
+        "units": {"du0_dtau": "N·m/s", "dforces0_dtau": "N/s", "dcom_terminal_dtau": "m/s"},
+        "routes": routes, "disagreement": result.disagreement,
+        "max_relative_disagreement": result.max_relative_disagreement,
+        "gauss_newton": {"du0_dtau": result.gauss_newton["outputs"]["u0"],
+                         "relative_gap": result.gauss_newton["gap_to_finite_differences"]},
+        "cost": result.cost, "settings": result.settings,
+    }
+
+
+def dcm_report(n_nodes: int, fd_step: float | None) -> dict:
+    """``--wrt dcm``: the end-to-end du0/dθ and its check against the whole chain."""
+    from wbmpc.walking.timing import dcm_sensitivity
+
+    result = dcm_sensitivity("bolt", n_nodes=n_nodes, **({} if fd_step is None else {"fd_step": fd_step}))
+    return {"robot": "bolt", "n_nodes": n_nodes, "units": {"du0_dtheta": "N·m/m", "dtau_dtheta": "s/m"}, **result}
+
+
+def format_timing(report: dict) -> str:
+    lines = [f"{report['robot']} walking OCP, N={report['n_nodes']}: touchdowns "
+             + ", ".join(f"{n} {t:.4f} s" for n, t in zip(report["parameters"], report["touchdown_times_s"])),
+             "du0/dtau [N·m/s] (Riccati sweep, exact Hessian):"]
+    J = np.asarray(report["routes"]["riccati"]["du0_dtau"])
+    for name, row in zip(report["joints"], J):
+        lines.append(f"  {name:>14} " + " ".join(f"{v:>+10.4g}" for v in row))
+    for pair, gaps in report["disagreement"].items():
+        lines.append(f"  {pair}: " + ", ".join(f"{k} {v:.2e}" for k, v in gaps.items()))
+    lines.append(f"largest relative disagreement between routes: {report['max_relative_disagreement']:.2e}")
+    lines.append("Gauss-Newton sweep (FDDP's factorisation) vs finite differences: "
+                 + ", ".join(f"{k} {v:.2e}" for k, v in report["gauss_newton"]["relative_gap"].items()))
+    c = report["cost"]
+    lines.append(f"cost: sweep {c['sensitivity_sweep_s'] * 1e3:.3f} ms = {c['sweep_over_riccati']:.2f} Riccati pass "
+                 f"({c['riccati_pass_s'] * 1e3:.3f} ms); exact Hessian {c['exact_hessian_s']:.3f} s; "
+                 f"re-solves {c.get('finite_differences_s', float('nan')):.3f} s")
+    return "\n".join(lines)
+
+
+def format_dcm(report: dict) -> str:
+    J = np.asarray(report["du0_dtheta"])
+    lines = ["du0/dtheta [N·m/m] (columns theta_x, theta_y):"]
+    for i, row in enumerate(J):
+        lines.append(f"  u{i} {row[0]:>+11.5g} {row[1]:>+11.5g}")
+    for pair, gap in report["disagreement"].items():
+        lines.append(f"  {pair}: {gap:.2e}")
+    return "\n".join(lines)
+
+
+def plot_timing(report: dict, path: str) -> None:
+    """Bars of du0/dτ per joint, one group per touchdown."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    J = np.asarray(report["routes"]["riccati"]["du0_dtau"])
+    joints = report["joints"]
+    fig, ax = plt.subplots(figsize=(8, 4))
+    width = 0.8 / J.shape[1]
+    for j, name in enumerate(report["parameters"]):
+        ax.bar(np.arange(len(joints)) + (j - (J.shape[1] - 1) / 2) * width, J[:, j], width,
+               label=f"{name} ({report['touchdown_times_s'][j]:.3f} s)")
+    ax.set_xticks(np.arange(len(joints)), joints, rotation=20)
+    ax.set_ylabel("du0/dτ [N·m/s]")
+    ax.axhline(0.0, color="k", lw=0.6)
+    ax.legend()
+    ax.set_title("first torques of the whole-body MPC vs the planned touchdown times")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
 def run_sensitivity(args: argparse.Namespace) -> int:
+    if args.wrt != "step-qp":
+        report = (timing_report if args.wrt == "contact-timing" else dcm_report)(args.nodes, args.fd_step)
+        if args.plot and args.wrt == "contact-timing":
+            plot_timing(report, args.plot)
+        if args.json:
+            print_json(report)
+        else:
+            print(format_timing(report) if args.wrt == "contact-timing" else format_dcm(report))
+        return 0
     params = params_from_args(args)
     problem = StepProblem.from_params(params, *state_from_args(args))
     report = sensitivity_report(problem, args.samples, args.sigma, args.seed)
@@ -81,5 +181,12 @@ def register(subparsers) -> None:
     parser.add_argument("--samples", type=COUNT, default=1000, help="Monte Carlo samples for Fig. 2 (default 1000)")
     parser.add_argument("--sigma", type=POSITIVE, default=0.005, help="std of each theta component [m] (default 0.005)")
     parser.add_argument("--seed", type=SEED, default=0, help="seed of the Monte Carlo samples")
+    parser.add_argument("--wrt", choices=WRT, default="step-qp",
+                        help="step-qp: the footstep QP to the DCM (default); contact-timing: the whole-body OCP's u0, "
+                        "node-0 forces and terminal CoM to the touchdown times; dcm: the end-to-end du0/dtheta")
+    parser.add_argument("--fd-step", type=POSITIVE, default=None,
+                        help="central-difference step of the re-solved route: [s] for contact-timing (default 2e-5), "
+                        "[m] for dcm (default 1e-4)")
+    parser.add_argument("--nodes", type=COUNT, default=100, help="OCP horizon N for contact-timing and dcm (default 100)")
     add_output_arguments(parser, plot=True)
     parser.set_defaults(func=run_sensitivity)

@@ -111,6 +111,19 @@ class CostModelSum:
         cost_rows_derivatives(data.r, data.R_values, data.R_row_start, data.R_cols, data.row_term, data.term_scale,
                               data.w, data.lb, data.ub, data.gradient, data.hessian)
 
+    def reference_gradient(self, data: "CostDataSum", name: str) -> np.ndarray:
+        """∂[Lx; Lu]/∂reference, shape (ndx + nu, nr), of the term ``name`` whose residual is
+        r = g(x, u) − reference, after calcDiff (continuous cost, not scaled by a node's dt):
+        −weight Rᵀ diag(a''(r)), a'' the activation's row curvature (w_i on a quadratic row or outside
+        a dead zone, 0 inside it). Zero for an inactive term."""
+        item = self.costs[name]
+        rows = data.rows[name]
+        if not item.active:
+            return np.zeros((data.R.shape[1], item.cost.nr))
+        r, w, lb, ub = data.r[rows], data.w[rows], data.lb[rows], data.ub[rows]
+        curvature = np.where((lb == ub) | (r < lb) | (r > ub), w, 0.0)
+        return -item.weight * data.R[rows].T * curvature
+
     def term_costs(self, data: "CostDataSum") -> dict[str, float]:
         """Cost of every term by name after calc (inactive terms report 0)."""
         return {name: float(data.term_cost[j]) for j, name in enumerate(self.costs)}

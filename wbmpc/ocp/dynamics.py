@@ -265,6 +265,18 @@ class DifferentialActionModelContactFwdDynamics:
         self.costs.calcDiff(data.costs, x, u, data.shared)
         self._copy_cost_derivatives(data)
 
+    def contact_force_jacobians(self, data) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Derivatives of each active contact's force (world-aligned for point contacts, as
+        ``data.contacts[name].force``) after calcDiff at (x, u): name -> (∂λ/∂x (nc, ndx), ∂λ/∂u (nc, nu))."""
+        if self.nc and self.backend == "pinocchio" and not self._costs_use_force_derivatives:
+            pdata, constraint_datas = data.select_pinocchio(self)
+            _, _, _, dlambda_dq, dlambda_dv, dlambda_dtau = pin.computeConstraintDynamicsDerivatives(
+                self.state.pinocchio, pdata, self.active_constraints, constraint_datas, self.proximal_settings)
+            return {name: (np.hstack([dlambda_dq[rows], dlambda_dv[rows]]), dlambda_dtau[rows, 6:].copy())
+                    for name, rows in self._active_rows}
+        return {name: (data.contacts[name].df_dx.copy(), data.contacts[name].df_du.copy())
+                for name in self.active_contacts}
+
     @staticmethod
     def _copy_cost_derivatives(data) -> None:
         c = data.costs

@@ -88,6 +88,70 @@ class IntegratedActionModelEuler:
                                data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu)
 
 
+    def calcDiffDt(self, data, x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Analytic derivatives of the node with respect to its spacing dt (a running node; needs
+        calcDiff at (x, u)).
+
+        With dq = v dt + a dt² and v⁺ = v + a dt: ∂x⁺/∂dt = [J_dq (v + 2 a dt); a] in the tangent
+        space at x⁺ (J_dq = ∂(q ⊕ δ)/∂δ at δ = dq), and since l = dt · l_c(x, u),
+        ∂Lx/∂dt = ∂l_c/∂x, ∂Lu/∂dt = ∂l_c/∂u.
+
+        Returns:
+            (dxnext_ddt (ndx,), dLx_ddt (ndx,), dLu_ddt (nu,)).
+        """
+        state = self.state
+        nq, nv = state.nq, state.nv
+        dd = data.differential
+        a = dd.xout
+        J_dq = self._integrate_jacobians(data, x)[1]
+        dxnext = np.empty(state.ndx)
+        dxnext[:nv] = J_dq @ (x[nq:] + 2.0 * self.dt * a)
+        dxnext[nv:] = a
+        return dxnext, dd.Lx.copy(), dd.Lu.copy()
+
+    def transitionJacobiansTransposeDt(self, data, x: np.ndarray, lam: np.ndarray,
+                                       step: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
+        """∂(Fxᵀ λ)/∂dt (ndx,) and ∂(Fuᵀ λ)/∂dt (nu,) for a fixed costate λ (ndx,) at x⁺ (needs
+        calcDiff at (x, u)): the second-order term of the dynamics in (x, dt) a parametric
+        sensitivity contracts with the costate.
+
+        The acceleration derivatives do not depend on dt; Fx, Fu depend on it polynomially and
+        through the Lie-group Jacobians of q ⊕ dq(dt), which have no closed-form derivative in
+        Pinocchio. The transition Jacobians (the compiled kernel of calcDiff) are therefore
+        differenced centrally in dt with ``step`` [s] (error O(step²), ~1e-10 relative).
+        """
+        state = self.state
+        nq, ndx, nu = state.nq, state.ndx, self.nu
+        dd = data.differential
+        a = dd.xout
+        v = x[nq:]
+        out_x = np.zeros(ndx)
+        out_u = np.zeros(nu)
+        Fx = np.empty((ndx, ndx))
+        Fu = np.empty((ndx, nu))
+        for sign in (1.0, -1.0):
+            dt = self.dt + sign * step
+            J_q, J_dq, n_base = self._integrate_jacobians(data, x, v * dt + a * dt * dt)
+            euler_transition_jacobians(dd.Fx, dd.Fu, J_q, J_dq, dt, n_base, Fx, Fu)
+            out_x += sign * (Fx.T @ lam)
+            out_u += sign * (Fu.T @ lam)
+        return out_x / (2.0 * step), out_u / (2.0 * step)
+
+    def _integrate_jacobians(self, data, x: np.ndarray, dq: np.ndarray | None = None):
+        """(J_q, J_dq, n_base): Jacobians (nv, nv) of q ⊕ dq with respect to q and dq (dq: the
+        node's step data.dx[:nv] after calc by default), identity outside the leading n_base block."""
+        state = self.state
+        nq, nv = state.nq, state.nv
+        q = x[:nq]
+        dq = data.dx[:nv] if dq is None else dq
+        if state._compiled_difference:
+            J_q, J_dq = np.zeros((nv, nv)), np.zeros((nv, nv))
+            free_flyer_dintegrate(q, dq, J_q, J_dq)
+            return J_q, J_dq, 6
+        model = state.pinocchio
+        return pin.dIntegrate(model, q, dq, pin.ARG0), pin.dIntegrate(model, q, dq, pin.ARG1), nv
+
+
 class ActionData:
     """What every action model's data holds (Crocoddyl's ActionDataAbstract): xnext (nx,), cost,
     the transition's Fx (ndx, ndx), Fu (ndx, nu) and the cost's Lx (ndx,), Lu (nu,), Lxx (ndx,

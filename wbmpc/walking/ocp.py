@@ -215,6 +215,12 @@ def swing_height_reference(phase, apex_height: float):
     return 16.0 * apex_height * s**2 * (1.0 - s) ** 2
 
 
+def swing_height_reference_derivative(phase, apex_height: float):
+    """d/ds of :func:`swing_height_reference`: 32 H s (1 − s)(1 − 2 s) [m]."""
+    s = np.asarray(phase, dtype=float)
+    return 32.0 * apex_height * s * (1.0 - s) * (1.0 - 2.0 * s)
+
+
 class WalkingOCP:
     """The walking OCP of a robot on a fixed grid; :meth:`update` sets it from a contact schedule.
 
@@ -272,6 +278,7 @@ class WalkingOCP:
                     "wrench_cone", "orientation"))
                 for foot in self.feet]))
         self.problem = ShootingProblem(self.x_reference, running, terminal)
+        self._timed = False  # running nodes carry a timed schedule's spacing (see update)
         #: "batched" or "nodes" (see WalkingOCPConfig.evaluation); evaluation_note says why nodes
         self.evaluation, self.evaluation_note = "nodes", ""
         if config.evaluation != "nodes":
@@ -373,7 +380,9 @@ class WalkingOCP:
 
         Args:
             x0: initial state (nx,), Pinocchio convention.
-            schedule: ``sequencer.schedule.ContactSchedule`` with n_nodes rows + 1 on this grid.
+            schedule: ``sequencer.schedule.ContactSchedule`` with n_nodes rows + 1 on this grid; a
+                timed one (``node_spacing`` set, :func:`sequencer.timed_contact_schedule`) gives
+                running node k the spacing node_spacing[k] (evaluation="nodes" only).
             com_terminal_reference: CoM reference at the end of the horizon (3,) [m], world.
             touchdown_depth: how far below the ground the ``{foot}_touchdown_height`` term aims
                 the foot at the last swing node [m], >= 0 (0: on the ground; the walking
@@ -394,6 +403,7 @@ class WalkingOCP:
         if not (np.isfinite(touchdown_depth) and touchdown_depth >= 0.0):
             raise ParameterError(f"touchdown_depth={touchdown_depth} m must be finite and >= 0")
         touchdown_reference = self.ground_height - float(touchdown_depth)
+        self._set_node_spacing(schedule.node_spacing)
         cfg = self.config
         columns = [schedule.feet.index(foot) for foot in self.feet]
         in_contact = np.asarray(schedule.in_contact, dtype=bool)[:, columns]
@@ -446,6 +456,24 @@ class WalkingOCP:
         self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
         if self.evaluation == "batched":  # contact sets, weights and activity (references are shared)
             self.problem.sync()
+
+    def _set_node_spacing(self, spacing) -> None:
+        """Give running node k the spacing ``spacing[k]`` [s] (a timed schedule), or ``dt`` (None)."""
+        if spacing is None:
+            if self._timed:
+                for model in self.problem.running_models:
+                    model.dt = self.dt
+                self._timed = False
+            return
+        spacing = np.asarray(spacing, dtype=float)
+        if spacing.shape != (self.n_nodes,) or not np.all(np.isfinite(spacing) & (spacing > 0)):
+            raise ParameterError(f"schedule node_spacing must be ({self.n_nodes},) finite and > 0, got {spacing}")
+        if self.evaluation == "batched":
+            raise ParameterError("a schedule with node_spacing (timed phases) needs evaluation='nodes' "
+                                 "(the batched problem holds one spacing per node from its construction)")
+        for model, h in zip(self.problem.running_models, spacing.tolist()):
+            model.dt = h
+        self._timed = True
 
 
 def quasi_static_controls(ocp: WalkingOCP, x: np.ndarray) -> np.ndarray:

@@ -14,6 +14,52 @@ import dataclasses
 import numpy as np
 
 
+@dataclasses.dataclass(frozen=True)
+class StandingStart:
+    """A robot standing still at its reference posture and the footstep plan it starts walking with.
+
+    Attributes:
+        robot: the ``robots.RobotDescription``; preset: its walking preset (planner with the command).
+        x0: the standing state (nx,); com0: its CoM (3,) [m], world; feet: foot -> position (3,) [m], world.
+        sequencer: the DCM footstep sequencer; plan: its plan at t = 0 from the left stance foot, with
+            the measured DCM the CoM's xy plus ``dcm_offset``.
+    """
+
+    robot: object
+    preset: object
+    x0: np.ndarray
+    com0: np.ndarray
+    feet: dict
+    sequencer: object
+    plan: object
+
+
+def standing_start(robot_name: str = "bolt", speed: float | None = None, dcm_offset=(0.0, 0.0)) -> StandingStart:
+    """The standing robot and its footstep plan at t = 0 (the DCM of a still robot is its CoM; a
+    disturbance ``dcm_offset`` (2,) [m] on the measured DCM changes the plan only)."""
+    import pinocchio as pin
+
+    from robots import load_robot
+    from sequencer import FootstepSequencer
+    from wbmpc.walking.preset import load_walking_preset
+
+    robot = load_robot(robot_name)
+    preset = load_walking_preset(robot_name)
+    if speed is not None:
+        preset = dataclasses.replace(preset, planner=dataclasses.replace(preset.planner, v_x=float(speed)))
+    model = robot.pinocchio_model
+    data = model.createData()
+    x0 = np.concatenate([robot.q_reference, np.zeros(model.nv)])
+    q0 = x0[: model.nq]
+    pin.framesForwardKinematics(model, data, q0)
+    com0 = pin.centerOfMass(model, data, q0).copy()
+    feet = {foot: data.oMf[model.getFrameId(name)].translation.copy() for foot, name in robot.foot_frames.items()}
+    sequencer = FootstepSequencer(preset.planner)
+    plan = sequencer.plan(t=0.0, stance_foot="left", stance_position=feet["left"][:2],
+                          dcm_measured=com0[:2] + np.asarray(dcm_offset, dtype=float), t_stance_start=0.0)
+    return StandingStart(robot, preset, x0, com0, feet, sequencer, plan)
+
+
 def solve_walking_ocp(robot_name: str = "bolt", speed: float | None = None, n_nodes: int = 100, dt: float = 0.01,
                       iterations: int = 100, foothold_weight: float | None = 0.0) -> dict:
     """Plan footsteps from a standing start, solve the walking OCP, summarise the solution.
@@ -29,30 +75,19 @@ def solve_walking_ocp(robot_name: str = "bolt", speed: float | None = None, n_no
     """
     import pinocchio as pin
 
-    from robots import load_robot
-    from sequencer import FootstepSequencer, contact_schedule
+    from sequencer import contact_schedule
     from wbmpc.errors import ParameterError
     from wbmpc.ocp.blas import limit_blas_threads
     from wbmpc.ocp.solvers import SolverFDDP
     from wbmpc.walking.ocp import WalkingOCP, quasi_static_controls
-    from wbmpc.walking.preset import load_walking_preset
 
     if int(iterations) != iterations or iterations < 1:
         raise ParameterError(f"iterations={iterations} must be an integer >= 1")
-    robot = load_robot(robot_name)
-    preset = load_walking_preset(robot_name)
+    start = standing_start(robot_name, speed)
+    robot, preset, x0, com0, plan = start.robot, start.preset, start.x0, start.com0, start.plan
     model = robot.pinocchio_model
     data = model.createData()
-    x0 = np.concatenate([robot.q_reference, np.zeros(model.nv)])
-    q0 = x0[: model.nq]
-    pin.framesForwardKinematics(model, data, q0)
-    com0 = pin.centerOfMass(model, data, q0).copy()
-    feet = {foot: data.oMf[model.getFrameId(name)].translation.copy() for foot, name in robot.foot_frames.items()}
-    params = preset.planner
-    if speed is not None:
-        params = dataclasses.replace(params, v_x=float(speed))
-    plan = FootstepSequencer(params).plan(t=0.0, stance_foot="left", stance_position=feet["left"][:2],
-                                          dcm_measured=com0[:2], t_stance_start=0.0)
+    feet = start.feet
     schedule = contact_schedule(plan, 0.0, dt, n_nodes)
     com_terminal = np.append(plan.lipm_com_at(n_nodes * dt, com0[:2]), com0[2])
     config = preset.ocp if foothold_weight is None else dataclasses.replace(preset.ocp, foothold_weight=foothold_weight)

@@ -1,0 +1,213 @@
+"""Contact timing as a continuous OCP parameter (issue 16): the timed OCP equals the fixed-spacing one
+on the grid, its analytic parameter derivatives match differences of the model, and the three routes
+to d(u, x, forces, CoM)/dτ agree (Riccati sweep = full KKT = re-solved finite differences)."""
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from sensitivity.ocp_finite_differences import check_fd_step
+from sensitivity.ocp_parametric import check_converged, linear_quadratic
+from sensitivity.ocp_riccati import time_sweep_against_riccati
+from sequencer import contact_schedule, timed_contact_schedule
+from wbmpc.errors import ParameterError
+from wbmpc.walking.ocp import WalkingOCP
+from wbmpc.walking.timing import (
+    ContactTimingOCP,
+    contact_timing_sensitivity,
+    dcm_sensitivity,
+    standing_start_timing_ocp,
+)
+
+N_NODES = 50  # 0.5 s: two touchdowns inside the horizon, a re-solve in ~0.1 s
+
+
+@pytest.fixture(scope="module")
+def solved():
+    timed = standing_start_timing_ocp("bolt", n_nodes=N_NODES)
+    solver = timed.solve(th_stop=1e-17)
+    return timed, solver
+
+
+@pytest.fixture(scope="module")
+def report(solved):
+    timed, solver = solved
+    return contact_timing_sensitivity(timed, solver, fd_step=2e-5, kkt_solver="dense")
+
+
+def on_grid(plan, dt):
+    """The plan with its touchdowns moved to multiples of dt (phase durations multiples of dt)."""
+    steps = tuple(dataclasses.replace(step, touchdown_time=round(step.touchdown_time / dt) * dt) for step in plan.steps)
+    return dataclasses.replace(plan, steps=steps)
+
+
+def test_timed_schedule_on_the_grid_equals_the_fixed_spacing_schedule(solved):
+    timed, _ = solved
+    plan = on_grid(timed.plan, 0.01)
+    fixed = contact_schedule(plan, 0.0, 0.01, N_NODES, rounding="nearest")
+    scaled = timed_contact_schedule(plan, 0.0, 0.01, N_NODES)
+    np.testing.assert_array_equal(scaled.in_contact, fixed.in_contact)
+    np.testing.assert_allclose(scaled.swing_phase, fixed.swing_phase, atol=1e-12)
+    np.testing.assert_allclose(scaled.swing_duration, fixed.swing_duration, atol=1e-12)
+    np.testing.assert_allclose(scaled.node_spacing, 0.01, atol=1e-14)
+    np.testing.assert_allclose(scaled.times, fixed.times, atol=1e-12)
+
+
+def test_timed_ocp_on_the_grid_has_the_solution_of_the_fixed_spacing_ocp(solved):
+    timed, _ = solved
+    plan = on_grid(timed.plan, 0.01)
+    x0, com = timed.x0, timed.com_terminal_reference
+    config = timed.ocp.config
+    fixed = WalkingOCP(timed.ocp.robot, config, n_nodes=N_NODES, dt=0.01)
+    fixed.update(x0, contact_schedule(plan, 0.0, 0.01, N_NODES, rounding="nearest"), com)
+    scaled = ContactTimingOCP(WalkingOCP(timed.ocp.robot, config, n_nodes=N_NODES, dt=0.01), plan, 0.0, x0, com)
+    from wbmpc.ocp.solvers import SolverFDDP
+    from wbmpc.walking.ocp import quasi_static_controls
+
+    guess_u = [quasi_static_controls(fixed, x0)] * N_NODES
+    solutions = []
+    for problem in (fixed.problem, scaled.problem):
+        solver = SolverFDDP(problem)
+        solver.solve([x0] * (N_NODES + 1), guess_u, maxiter=40)
+        solutions.append((solver.xs.copy(), solver.us.copy(), solver.cost))
+    np.testing.assert_allclose(solutions[1][0], solutions[0][0], atol=1e-10)
+    np.testing.assert_allclose(solutions[1][1], solutions[0][1], atol=1e-9)
+    assert abs(solutions[1][2] - solutions[0][2]) < 1e-10
+
+
+def test_node_spacing_and_swing_phase_jacobians_match_differences(solved):
+    timed, _ = solved
+    tau = timed.touchdown_times
+    base = timed_contact_schedule(timed.plan, 0.0, 0.01, N_NODES, tau)
+    h = 1e-7
+    for j in range(tau.size):
+        step = np.zeros(tau.size)
+        step[j] = h
+        plus = timed_contact_schedule(timed.plan, 0.0, 0.01, N_NODES, tau + step)
+        minus = timed_contact_schedule(timed.plan, 0.0, 0.01, N_NODES, tau - step)
+        np.testing.assert_allclose((plus.node_spacing - minus.node_spacing) / (2 * h), base.node_spacing_jacobian[:, j],
+                                   atol=1e-7)
+        fd = np.nan_to_num(plus.swing_phase - minus.swing_phase) / (2 * h)
+        np.testing.assert_allclose(fd, base.swing_phase_jacobian[:, :, j], atol=1e-6)
+    assert np.abs(base.swing_phase_jacobian).max() > 0.1  # the swings at both ends of the horizon move
+
+
+def test_parameter_derivatives_match_differences_of_the_model(solved):
+    timed, solver = solved
+    xs, us = solver.xs.copy(), solver.us.copy()
+    problem = timed.problem
+    analytic = timed.parameter_derivatives(xs, us, com_reference=True)
+    tau, com = timed.touchdown_times, timed.com_terminal_reference.copy()
+    h = 1e-6
+    try:
+        for j in range(tau.size + 3):
+            values = []
+            for sign in (1.0, -1.0):
+                p = np.concatenate([tau, com])
+                p[j] += sign * h
+                timed.set_parameters(p[: tau.size], p[tau.size:])
+                problem.calc_and_diff(xs, us)
+                values.append((problem.xnext.copy(), problem.Lx.copy(), problem.Lu.copy()))
+            dxnext = np.array([problem.state.diff(a, b) for a, b in zip(values[1][0], values[0][0])]) / (2 * h)
+            for fd, exact in ((dxnext, analytic.dxnext[..., j]), ((values[0][1] - values[1][1]) / (2 * h),
+                              analytic.dLx[..., j]), ((values[0][2] - values[1][2]) / (2 * h), analytic.dLu[..., j])):
+                scale = max(np.abs(exact).max(), 1.0)
+                assert np.abs(fd - exact).max() < 1e-6 * scale
+    finally:
+        timed.set_parameters(tau, com)
+
+
+def test_riccati_sweep_equals_the_full_kkt_solution(report):
+    gaps = report.disagreement["kkt vs riccati"]
+    assert max(gaps.values()) < 1e-8, gaps
+
+
+def test_riccati_sweep_agrees_with_re_solved_finite_differences(report):
+    gaps = report.disagreement["finite_differences vs riccati"]
+    assert max(gaps.values()) < 1e-4, gaps
+    assert report.max_relative_disagreement < 1e-4
+    assert np.abs(report.routes["riccati"]["u0"]).max() > 0.1  # not trivially zero [N·m/s]
+
+
+def test_gauss_newton_hessian_misses_the_true_derivative(report):
+    """FDDP's Gauss-Newton factorisation gives a derivative, but not the derivative of the solution map."""
+    gap = report.gauss_newton["gap_to_finite_differences"]
+    assert gap["u0"] > 1e-3
+
+
+def test_sensitivity_sweep_costs_less_than_one_riccati_pass(solved):
+    timed, solver = solved
+    derivatives = timed.parameter_derivatives(solver.xs, solver.us)
+    lq = linear_quadratic(timed.problem, solver.xs, solver.us, derivatives, "gauss-newton")
+    timing = time_sweep_against_riccati(lq, repeats=30)
+    assert timing["sweep_over_riccati"] < 1.0, timing
+
+
+def test_dcm_end_to_end_matches_finite_differences_of_the_whole_chain():
+    result = dcm_sensitivity("bolt", n_nodes=N_NODES, fd_step=1e-4)
+    assert result["max_relative_disagreement"] < 1e-3, result["disagreement"]
+    assert np.abs(result["du0_dtheta"]).max() > 0.1
+
+
+@pytest.mark.parametrize("times, match", [
+    ([0.3, 0.2], "strictly increasing"),
+    ([0.17, 0.7], "inside the horizon"),
+    ([-0.1, 0.4], "inside the horizon"),
+    ([0.17], "shape"),
+    ([np.nan, 0.4], "finite"),
+])
+def test_bad_touchdown_times_are_refused(solved, times, match):
+    timed, _ = solved
+    with pytest.raises(ParameterError, match=f"touchdown_times.*{match}|{match}.*touchdown_times|touchdown_times has shape"):
+        timed_contact_schedule(timed.plan, 0.0, 0.01, N_NODES, times)
+
+
+def test_non_converged_base_solution_is_refused(solved):
+    timed, _ = solved
+    timed.set_parameters()
+    solver = timed.solve(th_stop=1e-9)
+    with pytest.raises(ParameterError, match=r"stop=.* must be < th_stop"):
+        contact_timing_sensitivity(timed, solver, th_stop=1e-30)
+    with pytest.raises(ParameterError, match="stop=nan"):
+        check_converged(float("nan"), 1e-12)
+
+
+@pytest.mark.parametrize("step", [0.0, -1e-4, float("nan"), float("inf"), "a"])
+def test_bad_finite_difference_step_is_refused(step):
+    with pytest.raises(ParameterError, match="fd_step"):
+        check_fd_step(step)
+
+
+def test_cli_contact_timing_prints_every_route_and_their_disagreement(capsys, tmp_path):
+    from wbmpc.cli import main
+
+    plot = tmp_path / "timing.png"
+    assert main(["sensitivity", "--wrt", "contact-timing", "--nodes", str(N_NODES), "--json", "--plot", str(plot)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert set(report["routes"]) == {"riccati", "kkt", "finite_differences"}
+    assert np.asarray(report["routes"]["riccati"]["du0_dtau"]).shape == (6, 2)
+    assert np.asarray(report["routes"]["kkt"]["dforces0_dtau"]).shape == (3, 2)
+    assert np.asarray(report["routes"]["finite_differences"]["dcom_terminal_dtau"]).shape == (3, 2)
+    assert report["max_relative_disagreement"] < 1e-4
+    assert report["cost"]["sweep_over_riccati"] > 0
+    assert plot.stat().st_size > 0
+
+
+def test_cli_dcm_prints_the_end_to_end_derivative(capsys):
+    from wbmpc.cli import main
+
+    assert main(["sensitivity", "--wrt", "dcm", "--nodes", str(N_NODES), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert np.asarray(report["du0_dtheta"]).shape == (6, 2)
+    assert report["max_relative_disagreement"] < 1e-3
+
+
+@pytest.mark.parametrize("value", ["0", "-1e-4", "nan", "inf"])
+def test_cli_refuses_a_bad_fd_step(capsys, value):
+    from wbmpc.cli import main
+
+    assert main(["sensitivity", "--wrt", "contact-timing", "--fd-step", value]) == 2
+    err = capsys.readouterr().err
+    assert "--fd-step" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
