@@ -48,7 +48,8 @@ from numba import njit
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.dynamics import DifferentialActionModelContactFwdDynamics
 from wbmpc.ocp.integrator import IntegratedActionModelEuler
-from wbmpc.ocp.kernels.costs import cost_rows_derivatives, cost_rows_value, scale_cost_derivatives
+from wbmpc.ocp.kernels.costs import (add_gauss_newton_rows, clear_hessian_entries, cost_rows_value, hessian_entries,
+                                     scale_cost_derivatives)
 from wbmpc.ocp.kernels.feedback import rollout_node_start
 from wbmpc.ocp.kernels.frames import FrameKinematics, frame_kinematics_support
 from wbmpc.ocp.kernels.integration import euler_transition_jacobians, free_flyer_euler_step
@@ -139,6 +140,8 @@ class BatchedShootingProblem(ShootingProblem):
             raise ParameterError("a residual's jacobian_pattern() is not row-major with increasing columns")
         self._cols = cols
         self._row_start = np.searchsorted(rows, np.arange(nr + 1)).astype(np.int64)
+        # the Hessian entries the pattern can fill: the only ones of Lxx, Lxu, Luu (rows < N) ever written
+        self._hessian_entries = hessian_entries(self._row_start, cols, ndx)
         self._values = np.zeros((N, cols.size))
         self._r = np.zeros((N, nr))
         # every term's per-node references: rows of one array, shared with the node residuals
@@ -417,7 +420,7 @@ class BatchedShootingProblem(ShootingProblem):
         cost = horizon_derivatives(
             xs, self._dt, self._euler_dx, self._da_dx, self._da_du, self._J_q, self._J_dq, self._r, self._values,
             self._row_start, self._cols, self._row_term, self._term_scale, self._w, self._lb, self._ub,
-            self._gradient, self._hessian, self._node_cost, self._term_cost,
+            self._gradient, self._hessian, *self._hessian_entries, self._node_cost, self._term_cost,
             self.Fx, self.Fu, self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu)
         self.terminal_model.calc(self.terminal_data, xs[-1])
         self.terminal_model.calcDiff(self.terminal_data, xs[-1])
@@ -493,13 +496,14 @@ def horizon_costs(dt, r, row_term, term_scale, w, lb, ub, node_cost, term_cost):
 
 @njit(cache=True)
 def horizon_derivatives(xs, dt, euler_dx, da_dx, da_du, J_q, J_dq, r, values, row_start, cols, row_term, term_scale,
-                        w, lb, ub, gradient, hessian, node_cost, term_cost, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu):
+                        w, lb, ub, gradient, hessian, xx, xu, uu, node_cost, term_cost, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu):
     """Per running node, what :meth:`IntegratedActionModelEuler.calcDiff` runs after the dynamics:
     the Euler transition Jacobians Fx (N, ndx, ndx), Fu (N, ndx, nu), the cost value and its
     Gauss-Newton derivatives from the residual rows r (N, nr) and Jacobian nonzeros values
-    (N, nnz), dt-scaled; returns the total running cost."""
+    (N, nnz), dt-scaled; returns the total running cost. Only the Hessian entries (xx, xu, uu)
+    the pattern can fill (:func:`~wbmpc.ocp.kernels.costs.hessian_entries`) are computed, in the
+    scratch gradient (ndx + nu,) and hessian (ndx + nu, ndx + nu), and written."""
     nv = da_dx.shape[1]
-    ndx = 2 * nv
     nq = xs.shape[1] - nv
     total = 0.0
     for k in range(dt.size):
@@ -507,7 +511,9 @@ def horizon_derivatives(xs, dt, euler_dx, da_dx, da_du, J_q, J_dq, r, values, ro
         euler_transition_jacobians(da_dx[k], da_du[k], J_q, J_dq, dt[k], 6, Fx[k], Fu[k])
         node_cost[k] = dt[k] * cost_rows_value(r[k], row_term, term_scale[k], w[k], lb[k], ub[k], term_cost[k])
         total += node_cost[k]
-        cost_rows_derivatives(r[k], values[k], row_start, cols, row_term, term_scale[k], w[k], lb[k], ub[k],
-                              gradient, hessian, False)
-        scale_cost_derivatives(dt[k], gradient, hessian, ndx, Lx[k], Lu[k], Lxx[k], Lxu[k], Luu[k])
+        gradient[:] = 0.0
+        clear_hessian_entries(hessian, xx, xu, uu)
+        add_gauss_newton_rows(r[k], values[k], row_start, cols, row_term, term_scale[k], w[k], lb[k], ub[k],
+                              gradient, hessian)
+        scale_cost_derivatives(dt[k], gradient, hessian, xx, xu, uu, Lx[k], Lu[k], Lxx[k], Lxu[k], Luu[k])
     return total
