@@ -381,7 +381,7 @@ class WalkingOCP:
                 if cone is not None:
                     cone.active = not swing
         self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
-        if self.evaluation == "batched":  # contact sets, weights and activity (references are shared)
+        if self.evaluation == "batched":  # contact sets (references, weights and activity are shared)
             self.problem.sync()
 
 
