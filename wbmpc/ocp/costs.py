@@ -94,7 +94,7 @@ class CostItem:
 
     @active.setter
     def active(self, value: bool) -> None:
-        if value != self._active:  # the walking update sets every node's activity each tick: mostly unchanged
+        if value != self._active:  # receding-horizon updates set every node's activity each tick: mostly unchanged
             self._active = bool(value)
             if self._scale_owner is not None:
                 self._scale_owner.set_term_scale(self._scale_index, self.scale)
