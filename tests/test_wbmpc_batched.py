@@ -176,6 +176,76 @@ def test_updates_are_read_from_the_node_models(bolt, config):
         batched.term_index("nose_height")
 
 
+def test_weights_and_activity_set_on_the_node_items_are_seen_without_sync(bolt):
+    """A cost item's weight or activity set after the last sync (sync reads only the contact sets)
+    is what the batched evaluation uses, a frame term switched on included (its frame's
+    kinematics are then computed at that node)."""
+    ocp = WalkingOCP(bolt, BATCHED_TERMS, n_nodes=12, dt=0.01)
+    ocp.update(standing_state(bolt), alternating_schedule(0.0, 0.01, 12), np.array([0.1, 0.0, 0.3]))
+    nodes, batched = _twin_problems(ocp)
+    xs, us = _random_trajectory(bolt, 12, ocp.nu, seed=10)
+    costs = [model.differential.costs.costs for model in batched.running_models]
+    frame_term = next(name for name in ("left_height", "right_height") if not costs[4][name].active)
+    costs[3]["state_regularization"].weight *= 3.0
+    costs[5]["control_regularization"].active = False
+    costs[6]["control_bounds"].weight = 0.0
+    costs[4][frame_term].active = True
+    costs[4][frame_term].cost.residual.reference = 0.2
+    batched.running_models[7].differential.costs.changeCostStatus("state_regularization", False)
+    assert batched.calcDiff(xs, us) == pytest.approx(nodes.calc_and_diff(xs, us), rel=1e-13)
+    _assert_same(nodes, batched)
+    assert batched.term_costs() == pytest.approx(nodes.term_costs(), rel=1e-12, abs=1e-14)
+    assert batched.node_costs()[4] == pytest.approx(nodes.running_datas[4].cost, rel=1e-12)
+    costs[4][frame_term].active = False  # and back off
+    assert batched.calc(xs, us) == pytest.approx(nodes.calc(xs, us), rel=1e-13)
+    with pytest.raises(ParameterError, match="weight=-1.0 of cost 'control_bounds' must be finite and >= 0"):
+        costs[6]["control_bounds"].weight = -1.0
+
+
+def test_sparse_gauss_newton_writes_exactly_the_dense_result_on_its_hessian_entries():
+    """The batched pass's Hessian over the entries of its Jacobian pattern equals the dense
+    Gauss-Newton Hessian, and reads and writes no other entry (NaN elsewhere stays NaN)."""
+    from wbmpc.ocp.kernels.costs import (
+        add_gauss_newton_rows,
+        clear_hessian_entries,
+        cost_rows_derivatives,
+        hessian_entries,
+        scale_cost_derivatives,
+    )
+    rng = np.random.default_rng(1)
+    ndx, nu, nr = 8, 3, 9
+    n = ndx + nu
+    mask = rng.random((nr, n)) < 0.3
+    mask[0, [1, ndx + 1]] = True  # an Lxu entry
+    mask[1, [ndx, ndx + 2]] = True  # an off-diagonal Luu entry
+    R = np.where(mask, rng.standard_normal((nr, n)), 0.0)
+    rows, cols = np.nonzero(mask)
+    row_start = np.searchsorted(rows, np.arange(nr + 1)).astype(np.int64)
+    r, w = rng.standard_normal(nr), rng.random(nr) + 0.1
+    lb, ub = -0.3 * np.ones(nr), 0.3 * np.ones(nr)  # some rows in the dead zone
+    row_term = (np.arange(nr) % 2).astype(np.int64)
+    term_scale = np.array([2.0, 0.5])
+    gradient, hessian = np.zeros(n), np.zeros((n, n))
+    cost_rows_derivatives(r, R.reshape(-1), np.arange(0, nr * n + 1, n, dtype=np.int64),
+                          np.tile(np.arange(n, dtype=np.int64), nr), row_term, term_scale, w, lb, ub, gradient, hessian)
+    entries = hessian_entries(row_start, cols, ndx)
+    assert sum(e.shape[0] for e in entries) == np.count_nonzero(np.triu(mask.T.astype(float) @ mask))
+    sparse_gradient, sparse_hessian = np.zeros(n), np.full((n, n), np.nan)
+    clear_hessian_entries(sparse_hessian, *entries)
+    add_gauss_newton_rows(r, R[rows, cols], row_start, cols, row_term, term_scale, w, lb, ub, sparse_gradient,
+                          sparse_hessian)
+    blocks = [np.full(shape, np.nan) for shape in ((ndx,), (nu,), (ndx, ndx), (ndx, nu), (nu, nu))]
+    scale_cost_derivatives(0.01, sparse_gradient, sparse_hessian, *entries, *blocks)
+    Lx, Lu, Lxx, Lxu, Luu = blocks
+    dense = 0.01 * hessian
+    for block, expected in ((Lxx, dense[:ndx, :ndx]), (Lxu, dense[:ndx, ndx:]), (Luu, dense[ndx:, ndx:])):
+        written = ~np.isnan(block)
+        assert np.array_equal(block[written], expected[written])
+        assert not np.any(expected[~written])  # what is not written is structurally zero
+    assert np.array_equal(Lx, 0.01 * gradient[:ndx]) and np.array_equal(Lu, 0.01 * gradient[ndx:])
+    assert not np.isnan(Lxu).all() and np.isnan(Luu).any()
+
+
 def test_a_term_without_batched_evaluation_is_an_error_naming_it(bolt):
     ocp = WalkingOCP(bolt, WalkingOCPConfig(contact_force_weight=1e-2, evaluation="nodes"), 5, 0.01)
     p = ocp.problem

@@ -21,8 +21,9 @@ reads the same node models (contacts, cost terms, weights, references) and evalu
   (:mod:`wbmpc.ocp.kernels.costs`) and their dt scaling.
 
 The node models stay the only configuration: every batched term's per-node references are rows
-of one array the node residuals write into (``bind_reference``), and :meth:`sync` reads the
-contact sets and the cost terms' weights and activity.
+of one array the node residuals write into (``bind_reference``), every cost item tells the
+problem when its weight or activity changes (``CostItem.bind_scale``), and :meth:`sync` reads
+the contact sets.
 
 Supported nodes: :class:`~wbmpc.ocp.integrator.IntegratedActionModelEuler` over
 :class:`~wbmpc.ocp.dynamics.DifferentialActionModelContactFwdDynamics` (Pinocchio backend) on a
@@ -48,7 +49,13 @@ from numba import njit
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.dynamics import DifferentialActionModelContactFwdDynamics
 from wbmpc.ocp.integrator import IntegratedActionModelEuler
-from wbmpc.ocp.kernels.costs import cost_rows_derivatives, cost_rows_value, scale_cost_derivatives
+from wbmpc.ocp.kernels.costs import (
+    add_gauss_newton_rows,
+    clear_hessian_entries,
+    cost_rows_value,
+    hessian_entries,
+    scale_cost_derivatives,
+)
 from wbmpc.ocp.kernels.feedback import rollout_node_start
 from wbmpc.ocp.kernels.frames import FrameKinematics, frame_kinematics_support
 from wbmpc.ocp.kernels.integration import euler_transition_jacobians, free_flyer_euler_step
@@ -105,8 +112,8 @@ class BatchedShootingProblem(ShootingProblem):
 
     Same constructor; raises :class:`~wbmpc.errors.ParameterError` when the nodes are not
     supported (see :func:`batched_evaluation_support`). References written into the node
-    residuals are seen at once; call :meth:`sync` after changing the node models' contact sets or
-    cost terms' weights and activity, before the next evaluation
+    residuals and the weights and activity set on the node cost items are seen at once; call
+    :meth:`sync` after changing the node models' contact sets, before the next evaluation
     (:meth:`~wbmpc.walking.WalkingOCP.update` does).
     """
 
@@ -139,6 +146,8 @@ class BatchedShootingProblem(ShootingProblem):
             raise ParameterError("a residual's jacobian_pattern() is not row-major with increasing columns")
         self._cols = cols
         self._row_start = np.searchsorted(rows, np.arange(nr + 1)).astype(np.int64)
+        # the Hessian entries the pattern can fill: the only ones of Lxx, Lxu, Luu (rows < N) ever written
+        self._hessian_entries = hessian_entries(self._row_start, cols, ndx)
         self._values = np.zeros((N, cols.size))
         self._r = np.zeros((N, nr))
         # every term's per-node references: rows of one array, shared with the node residuals
@@ -148,14 +157,14 @@ class BatchedShootingProblem(ShootingProblem):
             for k, model in enumerate(self.running_models):
                 model.differential.costs.costs[self._term_names[j]].cost.residual.bind_reference(storage[k], self)
             self._references.append(storage)
-        self._items = [item for m in self.running_models for item in m.differential.costs.costs.values()]
         frame_ids: list[int] = []
         for residual in self._terms:
             for frame_id in residual.batch_frames:
                 if frame_id not in frame_ids:
                     frame_ids.append(frame_id)
-        self._frame_terms = [[j for j, residual in enumerate(self._terms) if frame_id in residual.batch_frames]
-                             for frame_id in frame_ids]
+        # (n_frames, n_terms): the terms reading each frame's kinematics
+        self._frame_terms = np.array([[frame_id in residual.batch_frames for residual in self._terms]
+                                      for frame_id in frame_ids], dtype=np.bool_).reshape(len(frame_ids), n_terms)
         self._kinematics = FrameKinematics(self._pin_model, frame_ids) if frame_ids else None
         n_frames = max(len(frame_ids), 1)
         self._horizon = HorizonData(xs=np.zeros((N, nx)), us=np.zeros((N, nu)),
@@ -166,10 +175,13 @@ class BatchedShootingProblem(ShootingProblem):
         self._lb = np.stack([d.differential.costs.lb for d in self.running_datas])
         self._ub = np.stack([d.differential.costs.ub for d in self.running_datas])
         self._dt = np.array([m.dt for m in self.running_models])
-        # per-node configuration, refreshed by sync()
+        # per-node configuration: term factors written by the cost items (set_term_scale), the
+        # activity and needed frames derived from them before the next evaluation
         self._term_scale = np.zeros((N, n_terms))
+        self._term_scale_slots = memoryview(self._term_scale.reshape(-1))  # flat, fast scalar writes
         self._term_active = np.zeros((N, n_terms), dtype=np.bool_)
         self._frame_needed = np.zeros((N, n_frames), dtype=np.bool_)  # frames of active terms
+        self._activity_stale = True
         # per node: (constraint models or None, Pinocchio data, constraint datas, proximal settings)
         self._node_dynamics: list = [None] * N
         self._node_contact_keys: list = [None] * N
@@ -201,11 +213,14 @@ class BatchedShootingProblem(ShootingProblem):
         # each term: views of the stacked arrays, written in place
         self._term_arguments = [(residual, self._term_active[:, j], self._references[j], self._r[:, self._term_rows[j]],
                                  self._values[:, self._term_values[j]]) for j, residual in enumerate(self._terms)]
+        for k, model in enumerate(self.running_models):
+            for j, item in enumerate(model.differential.costs.costs.values()):
+                item.bind_scale(self, k * n_terms + j)
         self.sync()
 
     def detach(self) -> None:
-        """Called when another batched problem took over these node models' references: every
-        later evaluation of this one raises (it would read stale references)."""
+        """Called when another batched problem took over these node models' references and cost
+        items: every later evaluation of this one raises (it would read stale configuration)."""
         self._detached = True
 
     def _check_attached(self) -> None:
@@ -215,21 +230,22 @@ class BatchedShootingProblem(ShootingProblem):
 
     # ----------------------------------------------------------------- configuration
     def sync(self) -> None:
-        """Read the node models' contact sets (nodes whose set is unchanged are skipped) and their
-        cost terms' weights and activity (references need no sync: the node residuals write into
-        the batched arrays)."""
+        """Read the node models' contact sets (nodes whose set is unchanged are skipped). The
+        references, weights and activity of the cost terms need no sync: the node residuals and
+        cost items write them into the batched arrays."""
         keys = self._node_contact_keys
         for k, model in enumerate(self.running_models):
             dam = model.differential
             if dam.active_key != keys[k] or dam._moving_references:
                 self._node_dynamics[k] = self._dynamics_of(dam)
                 keys[k] = dam.active_key
-        scale = self._term_scale
-        scale.reshape(-1)[:] = [item.weight if item.active else 0.0 for item in self._items]
-        np.not_equal(scale, 0.0, out=self._term_active)
-        needed = self._frame_needed
-        for s, terms in enumerate(self._frame_terms):
-            np.any(self._term_active[:, terms], axis=1, out=needed[:, s])
+
+    def set_term_scale(self, index: int, scale: float) -> None:
+        """The factor of running cost term j at node k changed (called by the bound
+        :class:`~wbmpc.ocp.costs.CostItem`): index = k · n_terms + j, scale = its weight when
+        active, 0 otherwise."""
+        self._term_scale_slots[index] = scale
+        self._activity_stale = True
 
     def term_index(self, name: str) -> int:
         """Column of the running cost term ``name`` in the batched arrays."""
@@ -377,6 +393,9 @@ class BatchedShootingProblem(ShootingProblem):
     def _residuals(self, xs: np.ndarray, us: np.ndarray, jacobians: bool) -> None:
         """Every term's residual rows (and Jacobian nonzeros) at the nodes where it is active."""
         N = self.T
+        if self._activity_stale:
+            term_activity(self._term_scale, self._frame_terms, self._term_active, self._frame_needed)
+            self._activity_stale = False
         h = self._horizon
         h.xs, h.us = xs[:N], us
         self._frame_kinematics(xs, jacobians)
@@ -417,7 +436,7 @@ class BatchedShootingProblem(ShootingProblem):
         cost = horizon_derivatives(
             xs, self._dt, self._euler_dx, self._da_dx, self._da_du, self._J_q, self._J_dq, self._r, self._values,
             self._row_start, self._cols, self._row_term, self._term_scale, self._w, self._lb, self._ub,
-            self._gradient, self._hessian, self._node_cost, self._term_cost,
+            self._gradient, self._hessian, *self._hessian_entries, self._node_cost, self._term_cost,
             self.Fx, self.Fu, self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu)
         self.terminal_model.calc(self.terminal_data, xs[-1])
         self.terminal_model.calcDiff(self.terminal_data, xs[-1])
@@ -480,6 +499,20 @@ class BatchedShootingProblem(ShootingProblem):
 
 
 @njit(cache=True)
+def term_activity(term_scale, frame_terms, term_active, frame_needed):
+    """term_active (N, n_terms): term_scale (N, n_terms) != 0; frame_needed (N, n_frames): some
+    active term of the node reads the frame (frame_terms (n_frames, n_terms) says which do)."""
+    for k in range(term_scale.shape[0]):
+        for j in range(term_scale.shape[1]):
+            term_active[k, j] = term_scale[k, j] != 0.0
+        for s in range(frame_terms.shape[0]):
+            needed = False
+            for j in range(frame_terms.shape[1]):
+                needed |= frame_terms[s, j] and term_active[k, j]
+            frame_needed[k, s] = needed
+
+
+@njit(cache=True)
 def horizon_costs(dt, r, row_term, term_scale, w, lb, ub, node_cost, term_cost):
     """The cost of every running node from its residual rows r (N, nr), as the node-wise cost sum
     and Euler model compute it: node_cost (N,) dt-scaled, term_cost (N, n_terms) unscaled;
@@ -493,13 +526,14 @@ def horizon_costs(dt, r, row_term, term_scale, w, lb, ub, node_cost, term_cost):
 
 @njit(cache=True)
 def horizon_derivatives(xs, dt, euler_dx, da_dx, da_du, J_q, J_dq, r, values, row_start, cols, row_term, term_scale,
-                        w, lb, ub, gradient, hessian, node_cost, term_cost, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu):
+                        w, lb, ub, gradient, hessian, xx, xu, uu, node_cost, term_cost, Fx, Fu, Lx, Lu, Lxx, Lxu, Luu):
     """Per running node, what :meth:`IntegratedActionModelEuler.calcDiff` runs after the dynamics:
     the Euler transition Jacobians Fx (N, ndx, ndx), Fu (N, ndx, nu), the cost value and its
     Gauss-Newton derivatives from the residual rows r (N, nr) and Jacobian nonzeros values
-    (N, nnz), dt-scaled; returns the total running cost."""
+    (N, nnz), dt-scaled; returns the total running cost. Only the Hessian entries (xx, xu, uu)
+    the pattern can fill (:func:`~wbmpc.ocp.kernels.costs.hessian_entries`) are computed, in the
+    scratch gradient (ndx + nu,) and hessian (ndx + nu, ndx + nu), and written."""
     nv = da_dx.shape[1]
-    ndx = 2 * nv
     nq = xs.shape[1] - nv
     total = 0.0
     for k in range(dt.size):
@@ -507,7 +541,9 @@ def horizon_derivatives(xs, dt, euler_dx, da_dx, da_du, J_q, J_dq, r, values, ro
         euler_transition_jacobians(da_dx[k], da_du[k], J_q, J_dq, dt[k], 6, Fx[k], Fu[k])
         node_cost[k] = dt[k] * cost_rows_value(r[k], row_term, term_scale[k], w[k], lb[k], ub[k], term_cost[k])
         total += node_cost[k]
-        cost_rows_derivatives(r[k], values[k], row_start, cols, row_term, term_scale[k], w[k], lb[k], ub[k],
-                              gradient, hessian, False)
-        scale_cost_derivatives(dt[k], gradient, hessian, ndx, Lx[k], Lu[k], Lxx[k], Lxu[k], Luu[k])
+        gradient[:] = 0.0
+        clear_hessian_entries(hessian, xx, xu, uu)
+        add_gauss_newton_rows(r[k], values[k], row_start, cols, row_term, term_scale[k], w[k], lb[k], ub[k],
+                              gradient, hessian)
+        scale_cost_derivatives(dt[k], gradient, hessian, xx, xu, uu, Lx[k], Lu[k], Lxx[k], Lxu[k], Luu[k])
     return total

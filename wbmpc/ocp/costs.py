@@ -14,13 +14,13 @@ activation is the row-wise dead-zone quadratic of :mod:`wbmpc.ocp.activations`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
 
 import numpy as np
 
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.activations import ActivationQuad
-from wbmpc.ocp.kernels.costs import cost_rows_derivatives, cost_rows_value
+from wbmpc.ocp.kernels.costs import cost_rows_derivatives, cost_rows_value, hessian_entries
 from wbmpc.ocp.residuals.base import DataCollector
 from wbmpc.ocp.state import StateMultibody
 
@@ -48,14 +48,72 @@ class CostDataResidual:
         self.cost = 0.0
 
 
-@dataclass
-class CostItem:
-    """A named, weighted term of a :class:`CostModelSum`; ``active`` switches it on and off."""
+def _checked_weight(name: str, weight) -> float:
+    """``weight`` as a float; ParameterError unless it is finite and >= 0."""
+    if not (math.isfinite(weight) and weight >= 0):
+        raise ParameterError(f"weight={weight} of cost {name!r} must be finite and >= 0")
+    return float(weight)
 
-    name: str
-    cost: CostModelResidual
-    weight: float
-    active: bool = True
+
+class CostItem:
+    """A named, weighted term of a :class:`CostModelSum`; ``active`` switches it on and off.
+
+    The node-wise cost sum reads ``weight`` and ``active`` at each evaluation. A batched evaluator
+    keeps every node's term factors in one array instead: it binds the item to its slot
+    (:meth:`bind_scale`) and is told each change of :attr:`scale`, so setting ``weight`` or
+    ``active`` is seen by its next evaluation without a sync.
+    """
+
+    __slots__ = ("name", "cost", "_weight", "_active", "_scale_owner", "_scale_index")
+
+    def __init__(self, name: str, cost: CostModelResidual, weight: float, active: bool = True):
+        self.name = name
+        self.cost = cost
+        self._weight = _checked_weight(name, weight)
+        self._active = bool(active)
+        self._scale_owner = None
+        self._scale_index = -1
+
+    def __repr__(self) -> str:
+        return f"CostItem(name={self.name!r}, weight={self._weight}, active={self._active})"
+
+    @property
+    def weight(self) -> float:
+        """Weight of the term (>= 0; ParameterError otherwise)."""
+        return self._weight
+
+    @weight.setter
+    def weight(self, value: float) -> None:
+        self._weight = _checked_weight(self.name, value)
+        if self._scale_owner is not None:
+            self._scale_owner.set_term_scale(self._scale_index, self.scale)
+
+    @property
+    def active(self) -> bool:
+        return self._active
+
+    @active.setter
+    def active(self, value: bool) -> None:
+        if value != self._active:  # receding-horizon updates set every node's activity each tick: mostly unchanged
+            self._active = bool(value)
+            if self._scale_owner is not None:
+                self._scale_owner.set_term_scale(self._scale_index, self.scale)
+
+    @property
+    def scale(self) -> float:
+        """The term's factor at its node: ``weight`` when active, 0 otherwise."""
+        return self._weight if self._active else 0.0
+
+    def bind_scale(self, owner, index: int) -> None:
+        """From now on call ``owner.set_term_scale(index, scale)`` at each change of :attr:`scale`,
+        and once now. A previous, different owner is told by ``owner.detach()`` (it no longer
+        sees this item), as :meth:`~wbmpc.ocp.residuals.base.BatchedResidual.bind_reference` does."""
+        previous = self._scale_owner
+        if previous is not None and previous is not owner:
+            previous.detach()
+        self._scale_owner = owner
+        self._scale_index = int(index)
+        owner.set_term_scale(self._scale_index, self.scale)
 
 
 class CostModelSum:
@@ -75,9 +133,7 @@ class CostModelSum:
         """Add a term; ``weight`` ≥ 0. Names are unique within a node."""
         if name in self.costs:
             raise ParameterError(f"cost name {name!r} is already used in this node (terms: {list(self.costs)})")
-        if not (np.isfinite(weight) and weight >= 0):
-            raise ParameterError(f"weight={weight} of cost {name!r} must be finite and >= 0")
-        self.costs[name] = CostItem(name, cost, float(weight), active)
+        self.costs[name] = CostItem(name, cost, weight, active)
 
     def changeCostStatus(self, name: str, active: bool) -> None:
         if name not in self.costs:
@@ -166,6 +222,7 @@ class CostDataSum:
         self.R_values = self.R.reshape(-1)
         self.R_row_start = np.arange(0, nr_total * n + 1, n, dtype=np.int64)
         self.R_cols = np.tile(np.arange(n, dtype=np.int64), nr_total)
+        self.hessian_entries = hessian_entries(self.R_row_start, self.R_cols, ndx)  # every entry (R is dense)
         self.gradient = np.zeros(ndx + nu)
         self.hessian = np.zeros((ndx + nu, ndx + nu))
         self.cost = 0.0

@@ -84,7 +84,7 @@ class IntegratedActionModelEuler:
             n_base = nv
         euler_transition_jacobians(dd.Fx, dd.Fu, J_q, J_dq, dt, n_base, data.Fx, data.Fu)
         costs = dd.costs
-        scale_cost_derivatives(dt, costs.gradient, costs.hessian, state.ndx,
+        scale_cost_derivatives(dt, costs.gradient, costs.hessian, *costs.hessian_entries,
                                data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu)
 
 

@@ -454,7 +454,7 @@ class WalkingOCP:
                     if swing:
                         orientation.cost.residual.reference[:] = yaw_rotation(touchdown_yaw[k, j])
         self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
-        if self.evaluation == "batched":  # contact sets, weights and activity (references are shared)
+        if self.evaluation == "batched":  # contact sets (references, weights and activity are shared)
             self.problem.sync()
 
     def _set_node_spacing(self, spacing) -> None:

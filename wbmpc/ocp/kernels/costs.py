@@ -4,6 +4,7 @@ rows, and the dt scaling of integrated cost derivatives."""
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 
@@ -53,20 +54,15 @@ def cost_rows_value(r, row_term, term_scale, w, lb, ub, term_cost):
 
 
 @njit(cache=True)
-def cost_rows_derivatives(r, values, row_start, cols, row_term, term_scale, w, lb, ub, gradient, hessian,
-                          symmetric=True):
-    """Gauss-Newton gradient Rᵀ c (n,) and Hessian Rᵀ diag(h) R (n, n) of the stacked residual
-    rows, c and h the :func:`dead_zone` coefficients of each row.
+def add_gauss_newton_rows(r, values, row_start, cols, row_term, term_scale, w, lb, ub, gradient, hessian):
+    """Add the Gauss-Newton gradient Rᵀ c to gradient (n,) and the upper triangle of
+    Rᵀ diag(h) R to hessian (n, n), c and h the :func:`dead_zone` coefficients of each row of r.
 
     R is given by its row-major structural nonzeros: row i holds values[row_start[i]:row_start[i + 1]]
     at the increasing columns cols[row_start[i]:row_start[i + 1]] (a dense R (nrows, n) is the
     pattern of every column: ``R.reshape(-1)``, row_start = n·i). Rows of inactive terms
-    (term_scale 0) are skipped. ``symmetric=False`` fills only the upper triangle (what
-    :func:`scale_cost_derivatives` reads).
+    (term_scale 0) are skipped. Writes only the entries :func:`hessian_entries` lists for the pattern.
     """
-    n = gradient.size
-    gradient[:] = 0.0
-    hessian[:, :] = 0.0
     for i in range(r.size):
         scale = term_scale[row_term[i]]
         if scale == 0.0:
@@ -85,29 +81,74 @@ def cost_rows_derivatives(r, values, row_start, cols, row_term, term_scale, w, l
                 v = ch * ra
                 for q in range(p, end):
                     hessian[a, cols[q]] += v * values[q]
-    if symmetric:
-        for a in range(n):
-            for b in range(a + 1, n):
-                hessian[b, a] = hessian[a, b]
 
 
 @njit(cache=True)
-def scale_cost_derivatives(dt, gradient, hessian, ndx, Lx, Lu, Lxx, Lxu, Luu):
-    """Integrated cost derivatives: dt × the continuous gradient (ndx + nu,) and Hessian blocks,
-    read from the Hessian's upper triangle (all a ``symmetric=False`` :func:`cost_rows_derivatives`
-    fills)."""
+def cost_rows_derivatives(r, values, row_start, cols, row_term, term_scale, w, lb, ub, gradient, hessian):
+    """Gauss-Newton gradient Rᵀ c (n,) and Hessian Rᵀ diag(h) R (n, n), both triangles, of the
+    stacked residual rows (:func:`add_gauss_newton_rows`, from zero)."""
     n = gradient.size
+    gradient[:] = 0.0
+    hessian[:, :] = 0.0
+    add_gauss_newton_rows(r, values, row_start, cols, row_term, term_scale, w, lb, ub, gradient, hessian)
+    for a in range(n):
+        for b in range(a + 1, n):
+            hessian[b, a] = hessian[a, b]
+
+
+def hessian_entries(row_start: np.ndarray, cols: np.ndarray, ndx: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The entries (a, b), a ≤ b, of the Hessian's upper triangle that rows of this Jacobian
+    pattern (row_start, cols as :func:`add_gauss_newton_rows` reads them) can make nonzero: the
+    pairs of columns some row holds both of.
+
+    Returns:
+        (xx, xu, uu): (m, 2) int64 arrays of (a, b) in Hessian coordinates (columns 0..ndx−1 the
+        state tangent, ndx.. the control), the entries falling in the Lxx, Lxu and Luu blocks,
+        row-major.
+    """
+    row_start = np.asarray(row_start, dtype=np.int64)
+    cols = np.asarray(cols, dtype=np.int64)
+    n = int(cols.max()) + 1 if cols.size else 0
+    incidence = np.zeros((row_start.size - 1, n))
+    incidence[np.repeat(np.arange(row_start.size - 1), np.diff(row_start)), cols] = 1.0
+    a, b = np.nonzero(np.triu(incidence.T @ incidence))
+    pairs = np.stack([a, b], axis=1).astype(np.int64)
+    in_x = pairs < ndx
+    return (np.ascontiguousarray(pairs[in_x[:, 1]]), np.ascontiguousarray(pairs[in_x[:, 0] & ~in_x[:, 1]]),
+            np.ascontiguousarray(pairs[~in_x[:, 0]]))
+
+
+@njit(cache=True)
+def clear_hessian_entries(hessian, xx, xu, uu):
+    """Zero the listed entries (a, b) of hessian (n, n) (the ones :func:`add_gauss_newton_rows`
+    can write for the pattern of :func:`hessian_entries`)."""
+    for entries in (xx, xu, uu):
+        for e in range(entries.shape[0]):
+            hessian[entries[e, 0], entries[e, 1]] = 0.0
+
+
+@njit(cache=True)
+def scale_cost_derivatives(dt, gradient, hessian, xx, xu, uu, Lx, Lu, Lxx, Lxu, Luu):
+    """Integrated cost derivatives: Lx (ndx,), Lu (nu,) = dt × the continuous gradient
+    (ndx + nu,), and dt × each listed entry (a, b) of the Hessian's upper triangle (the
+    :func:`hessian_entries` of its pattern) into its block: Lxx (ndx, ndx) and Luu (nu, nu) at
+    (a, b) and (b, a), Lxu (ndx, nu) at (a, b). Block entries not listed are not written (they
+    stay structurally zero)."""
+    ndx = Lx.size
     for i in range(ndx):
         Lx[i] = dt * gradient[i]
-        for j in range(i, ndx):
-            value = dt * hessian[i, j]
-            Lxx[i, j] = value
-            Lxx[j, i] = value
-        for j in range(ndx, n):
-            Lxu[i, j - ndx] = dt * hessian[i, j]
-    for i in range(ndx, n):
-        Lu[i - ndx] = dt * gradient[i]
-        for j in range(i, n):
-            value = dt * hessian[i, j]
-            Luu[i - ndx, j - ndx] = value
-            Luu[j - ndx, i - ndx] = value
+    for i in range(Lu.size):
+        Lu[i] = dt * gradient[ndx + i]
+    for e in range(xx.shape[0]):
+        a, b = xx[e, 0], xx[e, 1]
+        value = dt * hessian[a, b]
+        Lxx[a, b] = value
+        Lxx[b, a] = value
+    for e in range(xu.shape[0]):
+        a, b = xu[e, 0], xu[e, 1]
+        Lxu[a, b - ndx] = dt * hessian[a, b]
+    for e in range(uu.shape[0]):
+        a, b = uu[e, 0], uu[e, 1]
+        value = dt * hessian[a, b]
+        Luu[a - ndx, b - ndx] = value
+        Luu[b - ndx, a - ndx] = value

@@ -9,6 +9,10 @@ more than the arithmetic. They agree with Pinocchio to rounding (see tests/test_
 The SE(3) Jacobians follow Barfoot's closed forms (State Estimation for Robotics, sec. 7.1.5):
 exp6's right Jacobian J_r(ξ) = J_l(−ξ) = [[J3, Q], [0, J3]] with the SO(3) right Jacobian J3 and
 the coupling block Q; dDifference is its inverse at ξ = log6(M0⁻¹ M1).
+
+These kernels run for every node of every evaluation (rollouts, gaps, state residuals and their
+Jacobians). Numba puts every array on the heap (~20 ns to allocate and release), so each kernel
+takes its small temporaries as views of one ``work`` allocation.
 """
 
 from __future__ import annotations
@@ -120,6 +124,14 @@ def _matrix_quaternion(R, out):
     out[k] = (R[k, i] + R[i, k]) * t
 
 
+@njit(cache=True, inline="always")
+def _negate_twist(xi, minus_v, minus_w):
+    """minus_v (3,) = −ξ[:3], minus_w (3,) = −ξ[3:6]."""
+    for i in range(3):
+        minus_v[i] = -xi[i]
+        minus_w[i] = -xi[3 + i]
+
+
 @njit(cache=True)
 def se3_exp(xi):
     """exp6 of ξ = (v, ω): rotation R = I + (sin θ/θ)[ω]× + ((1 − cos θ)/θ²)[ω]×² and
@@ -127,9 +139,8 @@ def se3_exp(xi):
     w = xi[3:6]
     theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
     a, b, c = _so3_coefficients(theta)
-    R = np.empty((3, 3))
-    V = np.empty((3, 3))
-    p = np.empty(3)
+    work = np.empty((3, 3, 3))  # R, V, p
+    R, V, p = work[0], work[1], work[2, 0]
     _so3_polynomial(w, a, b, R)
     _so3_polynomial(w, b, c, V)
     mat3_vec(V, xi[:3], p)
@@ -141,15 +152,13 @@ def free_flyer_integrate(q, dq, out):
     """out (nq,) = q ⊕ dq: base M(q) exp6(dq[:6]), joints q + dq (Pinocchio's integrate)."""
     nq = q.size
     R_exp, p_exp = se3_exp(dq[:6])
-    R0 = np.empty((3, 3))
+    work = np.empty((3, 3, 4))  # R0, R1, p1, quat
+    R0, R1, p1, quat = work[0, :, :3], work[1, :, :3], work[2, 0, :3], work[2, 1]
     quaternion_matrix(q[3:7], R0)
-    p1 = np.empty(3)
     mat3_vec(R0, p_exp, p1)
     for i in range(3):
         out[i] = q[i] + p1[i]
-    R1 = np.empty((3, 3))
     mat3_mul(R0, R_exp, R1)
-    quat = np.empty(4)
     _matrix_quaternion(R1, quat)
     dot = quat[0] * q[3] + quat[1] * q[4] + quat[2] * q[5] + quat[3] * q[6]
     sign = -1.0 if dot < 0.0 else 1.0  # same hemisphere as q's quaternion
@@ -183,17 +192,11 @@ def _se3_left_coupling(rho, phi, Q):
         c1 = (theta - s) / (t2 * theta)
         c2 = (t2 + 2.0 * c - 2.0) / (2.0 * t2 * t2)
         c3 = (2.0 * theta - 3.0 * s + theta * c) / (2.0 * t2 * t2 * theta)
-    P = np.empty((3, 3))
-    Rh = np.empty((3, 3))
+    work = np.empty((9, 3, 3))  # the nine products
+    P, Rh, PR, RP, PRP, PPR, RPP, PRPP, PPRP = (work[0], work[1], work[2], work[3], work[4], work[5], work[6],
+                                                work[7], work[8])
     skew_into(phi, P)
     skew_into(rho, Rh)
-    PR = np.empty((3, 3))
-    RP = np.empty((3, 3))
-    PRP = np.empty((3, 3))
-    PPR = np.empty((3, 3))
-    RPP = np.empty((3, 3))
-    PRPP = np.empty((3, 3))
-    PPRP = np.empty((3, 3))
     mat3_mul(P, Rh, PR)
     mat3_mul(Rh, P, RP)
     mat3_mul(PR, P, PRP)
@@ -211,10 +214,11 @@ def _se3_left_coupling(rho, phi, Q):
 def se3_right_jacobian(xi, J):
     """J (6, 6): Pinocchio's Jexp6 at ξ = (v, ω), the right Jacobian of exp6."""
     J[:, :] = 0.0
-    J3 = np.empty((3, 3))
+    work = np.empty((3, 3, 3))  # J3, Q and −ξ
+    J3, Q, minus_v, minus_w = work[0], work[1], work[2, 0], work[2, 1]
+    _negate_twist(xi, minus_v, minus_w)
     _so3_right_jacobian(xi[3:6], J3)
-    Q = np.empty((3, 3))
-    _se3_left_coupling(-xi[:3], -xi[3:6], Q)
+    _se3_left_coupling(minus_v, minus_w, Q)
     J[:3, :3] = J3
     J[3:, 3:] = J3
     J[:3, 3:] = Q
@@ -241,18 +245,15 @@ def free_flyer_dintegrate(q, dq, J_q, J_dq):
         J_q[i, i] = 1.0
         J_dq[i, i] = 1.0
     R, p = se3_exp(dq[:6])
-    S = np.empty((3, 3))
+    work = np.empty((3, 3, 3))  # S, Rᵀ, Rᵀ S
+    S, RT, RTS = work[0], work[1], work[2]
     skew_into(p, S)
-    RT = np.empty((3, 3))
     for i in range(3):
         for j in range(3):
             RT[i, j] = R[j, i]
-    RTS = np.empty((3, 3))
     mat3_mul(RT, S, RTS)
     _write_base_block(J_q, RT, RTS)
-    J6 = np.empty((6, 6))
-    se3_right_jacobian(dq[:6], J6)
-    J_dq[:6, :6] = J6
+    se3_right_jacobian(dq[:6], J_dq[:6, :6])
 
 
 @njit(cache=True)
@@ -275,12 +276,11 @@ def free_flyer_ddifference_second(q0, q1, J):
         d = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0 + t2 * t2 * t2 / 1209600.0
     else:
         d = 1.0 / (theta * theta) - (1.0 + np.cos(theta)) / (2.0 * theta * np.sin(theta))
-    A_inv = np.empty((3, 3))
+    work = np.empty((5, 3, 3))  # A⁻¹, Q, A⁻¹Q, A⁻¹QA⁻¹ and −ξ
+    A_inv, Q, AQ, AQA, minus_v, minus_w = work[0], work[1], work[2], work[3], work[4, 0], work[4, 1]
     _so3_polynomial(w, 0.5, d, A_inv)
-    Q = np.empty((3, 3))
-    _se3_left_coupling(-xi[:3], -xi[3:6], Q)
-    AQ = np.empty((3, 3))
-    AQA = np.empty((3, 3))
+    _negate_twist(xi, minus_v, minus_w)
+    _se3_left_coupling(minus_v, minus_w, Q)
     mat3_mul(A_inv, Q, AQ)
     mat3_mul(AQ, A_inv, AQA)
     _write_base_block(J, A_inv, AQA)
@@ -292,16 +292,13 @@ def free_flyer_difference(q0, q1, nq, out):
     """pin.difference for a free-flyer root followed by 1-dof joints (nq = nv + 1), written in out
     (nv,). Returns False (out untouched beyond use) when the relative rotation is within 1e-2 rad
     of π, where Pinocchio's log3 takes a special branch: the caller then uses Pinocchio."""
-    R0 = np.empty((3, 3))
-    R1 = np.empty((3, 3))
+    work = np.empty((4, 3, 3))  # R0, R1, R0ᵀ R1, Δp, p
+    R0, R1, R, dp, p = work[0], work[1], work[2], work[3, 0], work[3, 1]
     quaternion_matrix(q0[3:7], R0)
     quaternion_matrix(q1[3:7], R1)
-    R = np.empty((3, 3))
     mat3_tmul(R0, R1, R)
-    dp = np.empty(3)
     for i in range(3):
         dp[i] = q1[i] - q0[i]
-    p = np.empty(3)
     mat3_tvec(R0, dp, p)
     trace = R[0, 0] + R[1, 1] + R[2, 2]
     if trace >= 3.0:

@@ -47,6 +47,19 @@ def _lower_triangular_inverse(L, Linv):
 
 
 @njit(cache=True)
+def _all_finite(v, M):
+    """True if every entry of v (n,) and M (n, n) is finite."""
+    for i in range(v.size):
+        if not np.isfinite(v[i]):
+            return False
+    for i in range(M.shape[0]):
+        for j in range(M.shape[1]):
+            if not np.isfinite(M[i, j]):
+                return False
+    return True
+
+
+@njit(cache=True)
 def riccati_backward(Fx, Fu, Lx, Lu, Lxx, Lxu, Luu, fs, preg, is_feasible, Vx, Vxx, Qu, Quu, Quuk, k, K):
     """Fill Vx (N+1, ndx), Vxx (N+1, ndx, ndx), Qu, Quu, Quuk, k (N, nu), K (N, nu, ndx).
 
@@ -75,15 +88,22 @@ def riccati_backward(Fx, Fu, Lx, Lu, Lxx, Lxu, Luu, fs, preg, is_feasible, Vx, V
     QuuInv = np.empty((nu, nu))
     Kk = np.empty((nu, ndx + 1))
     QxuK = np.empty((ndx, ndx))
+    product_x = np.empty(ndx)  # matrix-vector products, written in place (no allocation per node)
+    product_u = np.empty(nu)
+    Vx_t = np.empty(ndx)
     for t in range(N - 1, -1, -1):
         FxT[:, :] = Fx[t].T
         FuT[:, :] = Fu[t].T
         np.dot(FxT, Vxx[t + 1], FxTVxx)
         np.dot(FuT, Vxx[t + 1], FuTVxx)
-        Qx[:] = Lx[t] + np.dot(FxT, Vx[t + 1])
+        np.dot(FxT, Vx[t + 1], product_x)
+        for i in range(ndx):
+            Qx[i] = Lx[t, i] + product_x[i]
         np.dot(FxTVxx, Fx[t], Qxx)
         Qxx += Lxx[t]
-        Qu[t] = Lu[t] + np.dot(FuT, Vx[t + 1])
+        np.dot(FuT, Vx[t + 1], product_u)
+        for i in range(nu):
+            Qu[t, i] = Lu[t, i] + product_u[i]
         np.dot(FuTVxx, Fu[t], Quu[t])
         Quu[t] += Luu[t]
         np.dot(FxTVxx, Fu[t], Qxu)
@@ -101,9 +121,11 @@ def riccati_backward(Fx, Fu, Lx, Lu, Lxx, Lxu, Luu, fs, preg, is_feasible, Vx, V
         np.dot(QuuInv, rhs, Kk)
         K[t] = Kk[:, :ndx]
         k[t] = Kk[:, ndx]
-        Quuk[t] = np.dot(Quu[t], k[t])
+        np.dot(Quu[t], k[t], Quuk[t])
         Kt = K[t]
-        Vx_t = Qx - np.dot(Kt.T, Qu[t])
+        np.dot(Kt.T, Qu[t], product_x)
+        for i in range(ndx):
+            Vx_t[i] = Qx[i] - product_x[i]
         np.dot(Qxu, Kt, QxuK)
         for i in range(ndx):
             for j in range(i, ndx):
@@ -112,8 +134,10 @@ def riccati_backward(Fx, Fu, Lx, Lu, Lxx, Lxu, Luu, fs, preg, is_feasible, Vx, V
                 Vxx[t, j, i] = s
             Vxx[t, i, i] += preg
         if not is_feasible:
-            Vx_t = Vx_t + np.dot(Vxx[t], fs[t])
+            np.dot(Vxx[t], fs[t], product_x)
+            for i in range(ndx):
+                Vx_t[i] += product_x[i]
         Vx[t] = Vx_t
-        if not (np.all(np.isfinite(Vx_t)) and np.all(np.isfinite(Vxx[t]))):
+        if not _all_finite(Vx_t, Vxx[t]):
             return t
     return -1
