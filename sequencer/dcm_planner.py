@@ -48,7 +48,7 @@ from sequencer.corrections import LipmCorrections
 from sequencer.horizon import FootstepPlan, FootstepSequencer
 from sequencer.nominal import FEET, other_foot
 from sequencer.params import SequencerParams
-from sequencer.planner import ReducedState, StanceState, VelocityCommand
+from sequencer.planner import ReducedState, StanceState, VelocityCommand, as_velocity_command, rotate_xy
 from wbmpc.errors import ParameterError
 
 
@@ -123,7 +123,7 @@ class DcmFootstepPlanner:
     def check_command(self, command: VelocityCommand) -> None:
         """Raise ParameterError, naming the component, its value and the allowed range, when
         ``command`` is outside :meth:`command_range`."""
-        command = _velocity_command(command)
+        command = as_velocity_command(command)
         self.params.check_velocity(command.v_x, command.v_y)
 
     # ------------------------------------------------------------------ planning
@@ -154,7 +154,7 @@ class DcmFootstepPlanner:
             raise ParameterError(f"measured must be a ReducedState, got {type(measured).__name__}")
         if stance.foot not in self.feet:
             raise ParameterError(f"stance foot={stance.foot!r} must be one of {self.feet}")
-        command = _velocity_command(command)
+        command = as_velocity_command(command)
         dcm = measured.dcm
         if t < stance.t_start:  # start from standing (see above)
             dcm = self.stance_start_dcm(stance, command)
@@ -165,21 +165,11 @@ class DcmFootstepPlanner:
             corrections=self.corrections,
         )
 
-
     def stance_start_dcm(self, stance: StanceState, command: VelocityCommand) -> np.ndarray:
         """The DCM (world (x, y) [m]) the nominal gait of ``command`` has when a stance on
         ``stance.foot`` begins: the stance position plus the offset aimed at by the touchdown that
         ends a stance on the other foot, rotated by the stance yaw."""
-        command = _velocity_command(command)
+        command = as_velocity_command(command)
         gait = self.sequencer.nominal_gait((command.v_x, command.v_y), self.corrections)
-        b_x, b_y = gait.dcm_offset(other_foot(stance.foot))
-        c, s = math.cos(stance.yaw), math.sin(stance.yaw)
-        return stance.position + np.array((c * b_x - s * b_y, s * b_x + c * b_y))
+        return stance.position + rotate_xy(gait.dcm_offset(other_foot(stance.foot)), stance.yaw)
 
-
-def _velocity_command(command) -> VelocityCommand:
-    if isinstance(command, VelocityCommand):
-        return command
-    if isinstance(command, (tuple, list)):
-        return VelocityCommand.from_tuple(command)
-    raise ParameterError(f"command must be a VelocityCommand or (v_x, v_y, yaw_rate), got {type(command).__name__}")

@@ -45,6 +45,13 @@ def _finite_scalar(name: str, value) -> float:
     return value
 
 
+def rotate_xy(vector_xy, yaw: float) -> np.ndarray:
+    """``vector_xy`` (2,) rotated by ``yaw`` [rad] about z: heading frame -> world frame for a
+    heading of yaw (``-yaw``: world -> heading)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array((c * vector_xy[0] - s * vector_xy[1], s * vector_xy[0] + c * vector_xy[1]))
+
+
 @dataclass(frozen=True)
 class VelocityCommand:
     """Desired walking velocity, in the robot's heading frame.
@@ -128,6 +135,15 @@ class ReducedState:
         if self.angular_momentum is not None:
             object.__setattr__(self, "angular_momentum",
                                _finite_vector("angular_momentum", self.angular_momentum, 3))
+
+
+def as_velocity_command(command) -> VelocityCommand:
+    """``command`` as a :class:`VelocityCommand` (one, or a (v_x, v_y, yaw_rate) tuple or list)."""
+    if isinstance(command, VelocityCommand):
+        return command
+    if isinstance(command, (tuple, list)):
+        return VelocityCommand.from_tuple(command)
+    raise ParameterError(f"command must be a VelocityCommand or (v_x, v_y, yaw_rate), got {type(command).__name__}")
 
 
 @runtime_checkable

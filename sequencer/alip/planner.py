@@ -31,15 +31,10 @@ from sequencer.alip.params import AlipParams
 from sequencer.alip.s2s import B_D, heading_change_entries
 from sequencer.alip.sqp_ import SqpSolver
 from sequencer.horizon import FootstepPlan, PlannedStep
-from sequencer.planner import ReducedState, StanceState, VelocityCommand
+from sequencer.planner import ReducedState, StanceState, VelocityCommand, as_velocity_command, rotate_xy
 from wbmpc.errors import ParameterError
 
 SOLVERS = {"sqp": SqpSolver, "ipopt": IpoptSolver}
-
-
-def _rotation(yaw: float) -> np.ndarray:
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array(((c, -s), (s, c)))
 
 
 class AlipFootstepPlanner:
@@ -89,18 +84,17 @@ class AlipFootstepPlanner:
         return {**self.params.velocity_range(), "yaw_rate": (-math.inf, math.inf)}
 
     def check_command(self, command: VelocityCommand) -> None:
-        command = _velocity_command(command)
+        command = as_velocity_command(command)
         self.params.check_velocity(command.v_x, command.v_y)
 
     # ------------------------------------------------------------------ planning
     def measured_state(self, stance: StanceState, measured: ReducedState) -> np.ndarray:
         """ALIP state (p_x, L_y, p_y, L_x) about the stance contact, stance heading frame, shape (4,)."""
-        to_heading = _rotation(stance.yaw).T
-        p = to_heading @ (measured.com[:2] - stance.position)
+        p = rotate_xy(measured.com[:2] - stance.position, -stance.yaw)
         if measured.angular_momentum is None:
-            v = np.concatenate([to_heading @ measured.com_velocity[:2], measured.com_velocity[2:]])
+            v = np.concatenate([rotate_xy(measured.com_velocity[:2], -stance.yaw), measured.com_velocity[2:]])
             return self.model.state_from_velocity(p, v)
-        L = to_heading @ measured.angular_momentum[:2]  # (L_x, L_y)
+        L = rotate_xy(measured.angular_momentum[:2], -stance.yaw)  # (L_x, L_y)
         return np.array([p[0], L[1], p[1], L[0]])
 
     def instance(self, t: float, stance: StanceState, measured: ReducedState, command) -> AlipInstance:
@@ -111,7 +105,7 @@ class AlipFootstepPlanner:
             raise ParameterError(f"measured must be a ReducedState, got {type(measured).__name__}")
         if stance.foot not in self.feet:
             raise ParameterError(f"stance foot={stance.foot!r} must be one of {self.feet}")
-        command = _velocity_command(command)
+        command = as_velocity_command(command)
         t = float(t)
         if not math.isfinite(t) or t < stance.t_start:
             raise ParameterError(f"t={t} s must be finite and >= the stance start t_start={stance.t_start} s")
@@ -185,24 +179,23 @@ class AlipFootstepPlanner:
         position, start = stance.position.copy(), stance.t_start
         planned = []
         for k, (period, ell, state) in enumerate(zip(periods, steps, states)):
-            rotation = _rotation(yaw)
             touchdown = start + period
             landing = other[foot]
-            foothold = position + rotation @ ell
-            zeta = position + rotation @ dcm_offset(state)  # DCM continuous through the impact
+            foothold = position + rotate_xy(ell, yaw)
+            zeta = position + rotate_xy(dcm_offset(state), yaw)  # DCM continuous through the impact
             yaw_next = yaw + rate * period
             next_torque = torques[k + 1] if k + 1 < len(torques) else np.zeros(2)
-            cop = _rotation(yaw_next) @ model.cop_offset(next_torque)
+            cop = rotate_xy(model.cop_offset(next_torque), yaw_next)
             planned.append(PlannedStep(landing, foothold, touchdown, zeta - foothold, zeta, start,
                                        solution.active if k == 0 else (), yaw_next, cop))
             position, start, foot, yaw = foothold, touchdown, landing, yaw_next
         x0 = instance.x0
-        dcm0 = stance.position + _rotation(stance.yaw) @ dcm_offset(x0)
+        dcm0 = stance.position + rotate_xy(dcm_offset(x0), stance.yaw)
         return FootstepPlan(
             t0=t, stance_foot=stance.foot, stance_position=stance.position.copy(), dcm_measured=dcm0, omega=omega,
             steps=tuple(planned), t_stance_start=stance.t_start, horizon=params.horizon, com_height=params.com_height,
             stance_yaw=stance.yaw, double_support=params.double_support, feet=self.feet,
-            stance_cop_offset=_rotation(stance.yaw) @ model.cop_offset(solution.torques[0]),
+            stance_cop_offset=rotate_xy(model.cop_offset(solution.torques[0]), stance.yaw),
         )
 
 
@@ -210,10 +203,3 @@ def desired_orbit(params: AlipParams, command: VelocityCommand) -> dict[str, np.
     """The desired pre-impact states of ``command`` (see :func:`sequencer.alip.nlp.orbit`)."""
     return orbit(params, command.v_x, command.v_y)
 
-
-def _velocity_command(command) -> VelocityCommand:
-    if isinstance(command, VelocityCommand):
-        return command
-    if isinstance(command, (tuple, list)):
-        return VelocityCommand.from_tuple(command)
-    raise ParameterError(f"command must be a VelocityCommand or (v_x, v_y, yaw_rate), got {type(command).__name__}")

@@ -22,12 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sequencer.corrections import LipmCorrections
-
-
-def rotate_xy(vector_xy: np.ndarray, yaw: float) -> np.ndarray:
-    """``vector_xy`` (2,) rotated by ``yaw`` [rad] about z (heading -> world for a heading yaw)."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array((c * vector_xy[0] - s * vector_xy[1], s * vector_xy[0] + c * vector_xy[1]))
+from sequencer.planner import rotate_xy
 
 
 class VelocityIntegral:

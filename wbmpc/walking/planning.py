@@ -18,10 +18,10 @@ import pinocchio as pin
 
 from robots.conventions import base_yaw
 from sequencer.dcm_planner import DcmFootstepPlanner
-from sequencer.planner import FootstepPlanner, ReducedState, StanceState, VelocityCommand
+from sequencer.planner import FootstepPlanner, ReducedState, StanceState, VelocityCommand, rotate_xy
 from wbmpc.errors import ParameterError, SolverError
 from wbmpc.walking.controller_config import WalkingControllerConfig
-from wbmpc.walking.estimators import LipmCorrectionEstimator, StanceSlide, VelocityIntegral, rotate_xy
+from wbmpc.walking.estimators import LipmCorrectionEstimator, StanceSlide, VelocityIntegral
 from wbmpc.walking.stance import StanceTracker
 
 
