@@ -368,7 +368,7 @@ class WalkingOCP:
         return IntegratedActionModelEuler(dam, 0.0 if terminal else self.dt)
 
     def _sole_size(self) -> tuple[float, float]:
-        size = getattr(self.robot, "sole_size", None)
+        size = self.robot.sole_size
         if size is None:
             raise ParameterError(f"wrench_cone_weight > 0 needs the robot's sole_size (robot {self.robot.name!r} has none)")
         return size
