@@ -69,24 +69,12 @@ class IntegratedActionModelEuler:
             data.Lx[:] = dd.Lx
             data.Lxx[:] = dd.Lxx
             return
-        state = self.state
-        nq, nv = state.nq, state.nv
-        model = state.pinocchio
         dt = self.dt
-        q = x[:nq]
-        dq = data.dx[:nv]
-        if state._compiled_difference:
-            J_q, J_dq, n_base = data.J_q, data.J_dq, 6
-            free_flyer_dintegrate(q, dq, J_q, J_dq)
-        else:
-            J_dq = pin.dIntegrate(model, q, dq, pin.ARG1)
-            J_q = pin.dIntegrate(model, q, dq, pin.ARG0)
-            n_base = nv
+        J_q, J_dq, n_base = self._integrate_jacobians(x, data.dx[: self.state.nv], data.J_q, data.J_dq)
         euler_transition_jacobians(dd.Fx, dd.Fu, J_q, J_dq, dt, n_base, data.Fx, data.Fu)
         costs = dd.costs
         scale_cost_derivatives(dt, costs.gradient, costs.hessian, *costs.hessian_entries,
                                data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu)
-
 
     def calcDiffDt(self, data, x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Analytic derivatives of the node with respect to its spacing dt (a running node; needs
@@ -103,7 +91,7 @@ class IntegratedActionModelEuler:
         nq, nv = state.nq, state.nv
         dd = data.differential
         a = dd.xout
-        J_dq = self._integrate_jacobians(data, x)[1]
+        J_dq = self._integrate_jacobians(x, data.dx[: state.nv])[1]
         dxnext = np.empty(state.ndx)
         dxnext[:nv] = J_dq @ (x[nq:] + 2.0 * self.dt * a)
         dxnext[nv:] = a
@@ -131,21 +119,23 @@ class IntegratedActionModelEuler:
         Fu = np.empty((ndx, nu))
         for sign in (1.0, -1.0):
             dt = self.dt + sign * step
-            J_q, J_dq, n_base = self._integrate_jacobians(data, x, v * dt + a * dt * dt)
+            J_q, J_dq, n_base = self._integrate_jacobians(x, v * dt + a * dt * dt)
             euler_transition_jacobians(dd.Fx, dd.Fu, J_q, J_dq, dt, n_base, Fx, Fu)
             out_x += sign * (Fx.T @ lam)
             out_u += sign * (Fu.T @ lam)
         return out_x / (2.0 * step), out_u / (2.0 * step)
 
-    def _integrate_jacobians(self, data, x: np.ndarray, dq: np.ndarray | None = None):
-        """(J_q, J_dq, n_base): Jacobians (nv, nv) of q ⊕ dq with respect to q and dq (dq: the
-        node's step data.dx[:nv] after calc by default), identity outside the leading n_base block."""
+    def _integrate_jacobians(self, x: np.ndarray, dq: np.ndarray, J_q: np.ndarray | None = None,
+                             J_dq: np.ndarray | None = None):
+        """(J_q, J_dq, n_base): Jacobians (nv, nv) of q ⊕ dq with respect to q and dq (the node's
+        step data.dx[:nv] in calcDiff), identity outside the leading n_base block; the compiled
+        free-flyer path writes them into J_q, J_dq when given (a node data's buffers)."""
         state = self.state
         nq, nv = state.nq, state.nv
         q = x[:nq]
-        dq = data.dx[:nv] if dq is None else dq
         if state._compiled_difference:
-            J_q, J_dq = np.zeros((nv, nv)), np.zeros((nv, nv))
+            J_q = np.zeros((nv, nv)) if J_q is None else J_q
+            J_dq = np.zeros((nv, nv)) if J_dq is None else J_dq
             free_flyer_dintegrate(q, dq, J_q, J_dq)
             return J_q, J_dq, 6
         model = state.pinocchio
