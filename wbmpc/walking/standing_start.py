@@ -33,6 +33,12 @@ class StandingStart:
     sequencer: object
     plan: object
 
+    def com_terminal_reference(self, t: float, plan=None) -> np.ndarray:
+        """The terminal CoM reference (3,) [m], world, of an OCP ending at ``t`` [s]: the LIPM CoM of
+        ``plan`` (None: this start's) at t from the standing CoM, at the standing CoM height."""
+        plan = self.plan if plan is None else plan
+        return np.append(plan.lipm_com_at(t, self.com0[:2]), self.com0[2])
+
 
 def standing_start(robot_name: str = "bolt", speed: float | None = None, dcm_offset=(0.0, 0.0)) -> StandingStart:
     """The standing robot and its footstep plan at t = 0 (the DCM of a still robot is its CoM; a
@@ -84,12 +90,12 @@ def solve_walking_ocp(robot_name: str = "bolt", speed: float | None = None, n_no
     if int(iterations) != iterations or iterations < 1:
         raise ParameterError(f"iterations={iterations} must be an integer >= 1")
     start = standing_start(robot_name, speed)
-    robot, preset, x0, com0, plan = start.robot, start.preset, start.x0, start.com0, start.plan
+    robot, preset, x0, plan = start.robot, start.preset, start.x0, start.plan
     model = robot.pinocchio_model
     data = model.createData()
     feet = start.feet
     schedule = contact_schedule(plan, 0.0, dt, n_nodes)
-    com_terminal = np.append(plan.lipm_com_at(n_nodes * dt, com0[:2]), com0[2])
+    com_terminal = start.com_terminal_reference(n_nodes * dt)
     config = preset.ocp if foothold_weight is None else dataclasses.replace(preset.ocp, foothold_weight=foothold_weight)
     ocp = WalkingOCP(robot, config, n_nodes=n_nodes, dt=dt)
     ocp.update(x0, schedule, com_terminal)

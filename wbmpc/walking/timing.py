@@ -333,17 +333,18 @@ def _route_outputs(timed: ContactTimingOCP, xs, us, dxs, dus) -> dict:
 # ---------------------------------------------------------------------- the default Bolt problem
 def standing_start_timing_ocp(robot_name: str = "bolt", n_nodes: int = 100, dt: float = 0.01,
                               dcm_offset=(0.0, 0.0), foothold_weight: float = 0.0,
-                              speed: float | None = None) -> ContactTimingOCP:
+                              speed: float | None = None, start=None) -> ContactTimingOCP:
     """The timed walking OCP from a standing start (what ``wbmpc ocp`` solves, with timed phases):
     the preset's planner and OCP weights (footholds emerge: foothold_weight 0), the terminal CoM
     reference the plan's LIPM prediction at t_end; ``dcm_offset`` (2,) [m] disturbs the measured
-    DCM the plan is made from."""
+    DCM the plan is made from; ``start``: the :class:`~wbmpc.walking.standing_start.StandingStart`
+    of these arguments when the caller has it already (None: made here)."""
     from wbmpc.walking.standing_start import standing_start
 
-    start = standing_start(robot_name, speed, dcm_offset)
+    start = standing_start(robot_name, speed, dcm_offset) if start is None else start
     config = dataclasses.replace(start.preset.ocp, foothold_weight=foothold_weight, evaluation="nodes")
     ocp = WalkingOCP(start.robot, config, n_nodes=n_nodes, dt=dt)
-    com_terminal = np.append(start.plan.lipm_com_at(n_nodes * dt, start.com0[:2]), start.com0[2])
+    com_terminal = start.com_terminal_reference(n_nodes * dt)
     return ContactTimingOCP(ocp, start.plan, 0.0, start.x0, com_terminal)
 
 
@@ -403,17 +404,17 @@ def dcm_sensitivity(robot_name: str = "bolt", n_nodes: int = 100, dt: float = 0.
     from wbmpc.walking.standing_start import standing_start
 
     fd_step = check_fd_step(fd_step)
-    timed = standing_start_timing_ocp(robot_name, n_nodes, dt)
+    start = standing_start(robot_name)
+    timed = standing_start_timing_ocp(robot_name, n_nodes, dt, start=start)
     solver = timed.solve(th_stop=th_stop)
     xs, us = solver.xs.copy(), solver.us.copy()
     m = timed.touchdown_times.size
-    start = standing_start(robot_name)
     dtau = touchdown_dcm_jacobian(start.sequencer, start.plan, m + 1)
     t_end = n_nodes * dt
 
     def planned(theta):
         plan = standing_start(robot_name, dcm_offset=theta).plan
-        return plan.touchdown_times[: m + 1], np.append(plan.lipm_com_at(t_end, start.com0[:2]), start.com0[2])
+        return plan.touchdown_times[: m + 1], start.com_terminal_reference(t_end, plan)
 
     dtau_fd, dcom = np.zeros((m + 1, 2)), np.zeros((3, 2))
     for j in range(2):
