@@ -28,7 +28,7 @@ from numba import njit
 
 from sensitivity.ocp_parametric import LinearQuadratic
 from wbmpc.errors import SolverError
-from wbmpc.ocp.solvers.riccati import riccati_backward
+from wbmpc.ocp.solvers.riccati import cholesky_in_place, riccati_backward
 
 
 @dataclass(frozen=True)
@@ -81,19 +81,12 @@ def factorise(lq: LinearQuadratic) -> RiccatiFactorisation:
 
 @njit(cache=True)
 def _cholesky_solve(A, B, X):
-    """X = A⁻¹ B for A (n, n) positive definite (checked by the factorisation), B (n, m)."""
+    """X = A⁻¹ B for A (n, n) positive definite (checked by the factorisation), B (n, m); the
+    Cholesky factor is the solver's (:func:`wbmpc.ocp.solvers.riccati.cholesky_in_place`, lower
+    triangle only)."""
     n = A.shape[0]
-    L = np.zeros((n, n))
-    for j in range(n):
-        s = A[j, j]
-        for p in range(j):
-            s -= L[j, p] * L[j, p]
-        L[j, j] = np.sqrt(s)
-        for i in range(j + 1, n):
-            s = A[i, j]
-            for p in range(j):
-                s -= L[i, p] * L[j, p]
-            L[i, j] = s / L[j, j]
+    L = A.copy()
+    cholesky_in_place(L)
     for c in range(B.shape[1]):
         for i in range(n):  # L y = b
             s = B[i, c]

@@ -13,7 +13,7 @@ from numba import njit
 
 
 @njit(cache=True)
-def _cholesky_in_place(A):
+def cholesky_in_place(A):
     """Lower Cholesky factor of A (n, n) written in its lower triangle; False if not PD."""
     n = A.shape[0]
     for j in range(n):
@@ -111,7 +111,7 @@ def riccati_backward(Fx, Fu, Lx, Lu, Lxx, Lxu, Luu, fs, preg, is_feasible, Vx, V
         for i in range(nu):
             Quu[t, i, i] += preg
         L[:, :] = Quu[t]
-        if not _cholesky_in_place(L):
+        if not cholesky_in_place(L):
             return t
         # Quu⁻¹ = L⁻ᵀ L⁻¹, then [K | k] = Quu⁻¹ [Qxuᵀ | Qu] in one BLAS product
         _lower_triangular_inverse(L, Linv)
