@@ -111,6 +111,22 @@ class AlipModel:
         vx, vy, vz = (float(v) for v in v_xyz)
         return np.array([px, self.mass * (p_z * vx - px * vz), py, self.mass * (py * vz - p_z * vy)])
 
+    def impulse_state_change(self, impulse, p_xy=(0.0, 0.0), p_z: float | None = None) -> np.ndarray:
+        """Jump of the ALIP state when an impulse Δp [N·s] (shape (2,) horizontal or (3,)) hits the CoM at
+        (p_x, p_y, p_z) from the contact (heading frame; p_z = com_height by default), shape (4,).
+
+        The CoM does not move during the impulse and its velocity jumps by Δp / m; L about the contact is
+        linear in that velocity (:meth:`state_from_velocity`), so ΔL = r × Δp: ΔL_y = p_z Δp_x − p_x Δp_z,
+        ΔL_x = p_y Δp_z − p_z Δp_y. A forward push (Δp_x > 0) raises L_y by z Δp_x, a push to the left
+        (Δp_y > 0) lowers L_x by z Δp_y (L_x = −m z v_y).
+        """
+        impulse = np.asarray(impulse, dtype=float).reshape(-1)
+        if impulse.shape not in ((2,), (3,)) or not np.all(np.isfinite(impulse)):
+            raise ParameterError(f"impulse={impulse!r} must be 2 or 3 finite numbers [N·s]")
+        jump = self.state_from_velocity(p_xy, np.append(impulse, 0.0)[:3] / self.mass, p_z)
+        jump[[0, 2]] = 0.0
+        return jump
+
     def cop_offset(self, tau) -> np.ndarray:
         """CoP offset from the contact (c_x, c_y) [m] equivalent to the ankle torque τ = (τ_y, τ_x)."""
         return np.array([-float(tau[0]) / self.mg, float(tau[1]) / self.mg])

@@ -34,6 +34,9 @@ from sequencer.alip.s2s import B_D, heading_change_entries
 from wbmpc.errors import ParameterError, SolverError
 
 FEET = ("left", "right")
+#: The instance's continuous data, in the order of :meth:`AlipNlp.parameter_jacobian`'s columns: the measured
+#: state x0 (p_x [m], L_y [kg·m²/s], p_y [m], L_x [kg·m²/s]), t_curr [s] and the command (v_x, v_y [m/s], yaw_rate [rad/s]).
+SENSITIVITY_PARAMETERS = ("p_x", "L_y", "p_y", "L_x", "t_curr", "v_x", "v_y", "yaw_rate")
 
 
 class AlipSolverError(SolverError):
@@ -50,15 +53,25 @@ def desired_steps(params: AlipParams, v_x: float, v_y: float, stance_foot: str) 
     return np.array([v_x * params.t_des, v_y * params.t_des + gamma * params.width_offset])
 
 
-def orbit(params: AlipParams, v_x: float, v_y: float) -> dict[str, np.ndarray]:
-    """Desired pre-impact ALIP state at the end of a left and of a right stance (H-LIP orbits), shape (4,) each."""
+def orbit_from_steps(params: AlipParams, step_left, step_right) -> dict[str, np.ndarray]:
+    """Pre-impact states at the end of a left and of a right stance of the period-2 orbit (τ = 0, T = T_des)
+    whose steps from a left / right stance are ``step_left`` / ``step_right`` [m], heading frame.
+
+    Linear in the steps: each may be shape (2,) (a step; states shape (4,)) or (2, n) (n columns, e.g. the
+    steps' derivatives, giving the states' derivatives, shape (4, n)).
+    """
     model = params.model
     phi = np.array(phi_gamma_entries(params.t_des, model.omega, model.mz, model.mg)[0])
-    l_left, l_right = (B_D @ desired_steps(params, v_x, v_y, foot) for foot in FEET)
+    l_left, l_right = B_D @ np.asarray(step_left, dtype=float), B_D @ np.asarray(step_right, dtype=float)
     # x_L = Φ (x_R + B ℓ_R), x_R = Φ (x_L + B ℓ_L)  ->  (I − Φ²) x_L = Φ² B ℓ_L + Φ B ℓ_R
     x_left = np.linalg.solve(np.eye(4) - phi @ phi, phi @ phi @ l_left + phi @ l_right)
     x_right = phi @ (x_left + l_left)
     return {"left": x_left, "right": x_right}
+
+
+def orbit(params: AlipParams, v_x: float, v_y: float) -> dict[str, np.ndarray]:
+    """Desired pre-impact ALIP state at the end of a left and of a right stance (H-LIP orbits), shape (4,) each."""
+    return orbit_from_steps(params, *(desired_steps(params, v_x, v_y, foot) for foot in FEET))
 
 
 @dataclass(frozen=True)
@@ -96,6 +109,19 @@ class AlipInstance:
         if self.stance_foot not in FEET:
             raise ParameterError(f"stance_foot={self.stance_foot!r} must be one of {FEET}")
 
+    @property
+    def theta(self) -> np.ndarray:
+        """The continuous data (x0, t_curr, v_x, v_y, yaw_rate) in the order of :data:`SENSITIVITY_PARAMETERS`, shape (8,)."""
+        return np.concatenate([self.x0, [self.t_curr, self.v_x, self.v_y, self.yaw_rate]])
+
+    def with_theta(self, theta) -> "AlipInstance":
+        """The same stance foot with the continuous data ``theta`` (shape (8,), see :attr:`theta`), validated."""
+        theta = np.asarray(theta, dtype=float).reshape(-1)
+        if theta.shape != (len(SENSITIVITY_PARAMETERS),):
+            raise ParameterError(f"theta must have {len(SENSITIVITY_PARAMETERS)} entries {SENSITIVITY_PARAMETERS}, "
+                                 f"got shape {theta.shape}")
+        return AlipInstance(theta[:4], float(theta[4]), self.stance_foot, *(float(v) for v in theta[5:]))
+
 
 @dataclass(frozen=True)
 class AlipSolution:
@@ -127,7 +153,10 @@ class AlipNlp:
     """The symbolic NLP of eq. (11) for one parameter set, and its numeric data per instance.
 
     ``nlp`` (x, p, f, g) is what both solvers are built on; :meth:`parameters` and :meth:`bounds` give an
-    instance's p and (lbw, ubw); :meth:`initial_guess` a consistent cold start; :meth:`solution` unpacks.
+    instance's p and (lbw, ubw), :meth:`parameter_jacobian` their derivatives in the instance's data (the
+    sensitivity routes of ``sensitivity/alip_*.py``); :meth:`initial_guess` a consistent cold start;
+    :meth:`solution` unpacks. ``scale`` (n_w,) maps the scaled decision vector to physical units,
+    ``parameter_scale`` (8,) gives each of :data:`SENSITIVITY_PARAMETERS` its natural unit.
     """
 
     def __init__(self, params: AlipParams) -> None:
@@ -140,6 +169,8 @@ class AlipNlp:
         omega, mz, mg = model.omega, model.mz, model.mg
         # decision variables are scaled to metres, seconds and m/s: L / (m z) and τ / (m g) (the CoP offset)
         self.scale = np.concatenate([np.ones(K), np.tile([mg, mg], K), np.ones(2 * K), np.tile([1.0, mz, 1.0, mz], K)])
+        # the natural unit of each of SENSITIVITY_PARAMETERS (the same scaling: L in m z · 1 m/s)
+        self.parameter_scale = np.array([1.0, mz, 1.0, mz, 1.0, 1.0, 1.0, 1.0])
         w_scaled = ca.SX.sym("w", 9 * K)
         w = w_scaled * ca.DM(self.scale)
         T = w[0:K]
@@ -217,6 +248,34 @@ class AlipNlp:
         box = np.tile([params.position_max, params.momentum_max], 2 * K)
         lb[5 * K:], ub[5 * K:] = -box, box
         return lb, ub
+
+    def parameter_jacobian(self, instance: AlipInstance) -> tuple[np.ndarray, np.ndarray]:
+        """Derivatives of :meth:`parameters` and :meth:`bounds` with respect to the instance's continuous data
+        θ = :data:`SENSITIVITY_PARAMETERS` (x0 (4), t_curr [s], v_x, v_y [m/s], yaw_rate [rad/s]).
+
+        p is affine in θ: x0 and the yaw rate enter as they are, t_curr too below t_max (its clamp; at or
+        above t_max the derivative is 0), (v_x, v_y) through ℓ^des (∂ℓ^des/∂v = T_des I) and x^des
+        (:func:`orbit_from_steps` of those columns, the orbit being linear in the steps). Of the bounds only
+        T_0's lower one, max(t_min, min(t_curr, t_max)), moves: with slope 1 for t_min < t_curr < t_max (at the
+        kinks t_curr = t_min, t_max the right derivative, 1 and 0).
+
+        Returns:
+            (dp/dθ shape (n_p, 8), d lbw/dθ shape (n_w, 8)), physical units; ubw does not depend on θ.
+        """
+        self.parameters(instance)  # validates the command
+        K, params = self.K, self.params
+        dp = np.zeros((6 + 6 * K, len(SENSITIVITY_PARAMETERS)))
+        dp[0:4, 0:4] = np.eye(4)
+        dp[4, 4] = 1.0 if instance.t_curr < params.t_max else 0.0
+        dp[5, 7] = 1.0
+        dstep = params.t_des * np.eye(2)  # ∂ℓ^des/∂(v_x, v_y), either stance
+        dorbit = orbit_from_steps(params, dstep, dstep)
+        for k, foot in enumerate(self.stance_sequence(instance.stance_foot)):
+            dp[6 + 2 * k:8 + 2 * k, 5:7] = dstep
+            dp[6 + 2 * K + 4 * k:10 + 2 * K + 4 * k, 5:7] = dorbit[foot]
+        dlb = np.zeros((self.n_w, len(SENSITIVITY_PARAMETERS)))
+        dlb[0, 4] = 1.0 if params.t_min <= instance.t_curr < params.t_max else 0.0
+        return dp, dlb
 
     def scaled_bounds(self, instance: AlipInstance) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`bounds` in the NLP's scaled variables."""
