@@ -1,0 +1,147 @@
+"""ALIP NMPC sensitivities (issue 14): implicit-function theorem = CasADi's solver derivative = re-solved
+finite differences, the active set (held, weakly active, changing within the FD step), the parameter map."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from sensitivity.alip_active_set import detect_active_set
+from sensitivity.alip_crosscheck import AlipSensitivityAnalysis, relative_disagreement
+from sensitivity.alip_finite_differences import AlipFiniteDifferenceRoute, check_fd_step
+from sensitivity.alip_kkt import alip_kkt_sensitivity
+from sequencer.alip.instances import orbit_instance, random_instances
+from sequencer.alip.model import AlipModel
+from sequencer.alip.nlp import SENSITIVITY_PARAMETERS, AlipInstance
+from sequencer.alip.params import AlipParams
+from wbmpc.errors import ParameterError
+
+PARAMS = AlipParams.preset("g1")
+
+
+@pytest.fixture(scope="module")
+def analysis():
+    return AlipSensitivityAnalysis(PARAMS, fd_step=1e-6)
+
+
+@pytest.mark.parametrize("t_curr", [0.1, 0.3, 0.55])  # below t_min, inside (t_min, t_max), above t_max
+def test_parameter_jacobian_matches_differences_of_the_nlp_data(analysis, t_curr):
+    nlp = analysis.nlp
+    instance = AlipInstance([0.02, 3.0, -0.05, -1.0], t_curr, "right", 0.2, -0.05, 0.3)
+    dp, dlb = nlp.parameter_jacobian(instance)
+    h = 1e-4
+    for j in range(len(SENSITIVITY_PARAMETERS)):
+        step = np.zeros(8)
+        step[j] = h
+        plus, minus = instance.with_theta(instance.theta + step), instance.with_theta(instance.theta - step)
+        np.testing.assert_allclose((nlp.parameters(plus) - nlp.parameters(minus)) / (2 * h), dp[:, j], atol=1e-9)
+        np.testing.assert_allclose((nlp.bounds(plus)[0] - nlp.bounds(minus)[0]) / (2 * h), dlb[:, j], atol=1e-9)
+        np.testing.assert_array_equal(nlp.bounds(plus)[1], nlp.bounds(minus)[1])
+    assert dlb[0, 4] == (1.0 if PARAMS.t_min < t_curr < PARAMS.t_max else 0.0)
+    assert dp[4, 4] == (1.0 if t_curr < PARAMS.t_max else 0.0)
+
+
+def test_three_routes_agree_on_random_instances_with_active_bounds(analysis):
+    kinds, with_active, worst = set(), 0, 0.0
+    for instance in random_instances(PARAMS, 14, seed=7):
+        check = analysis.crosscheck(instance)
+        assert check.active.differentiable and not check.fd_changes
+        assert check.max_relative_disagreement <= 1e-6, (check.disagreement, instance)
+        assert np.max(check.disagreement["casadi"]) <= 1e-9
+        worst = max(worst, check.max_relative_disagreement)
+        with_active += bool(check.active.names)
+        kinds |= {name.split("_")[0] + ":" + name.split(":")[1] for name in check.active.names}
+        assert check.active.names == check.solution.active  # the planner's own reading of the bounds
+    assert with_active >= 8
+    assert {"T:lower", "T:upper", "tau:lower", "tau:upper", "l:upper"} <= kinds
+
+
+def test_held_bounds_move_with_their_bound_only(analysis):
+    """A variable on an upper bound does not move; T_0 on its lower bound max(t_min, t_curr) follows t_curr."""
+    found_upper = found_t_curr = 0
+    for instance in random_instances(PARAMS, 30, seed=2):
+        solution = analysis.solve(instance)
+        sens = analysis.sensitivity(instance, solution)
+        active = sens.active
+        for i in np.flatnonzero(active.upper):
+            np.testing.assert_array_equal(sens.dw_dtheta[i], 0.0)
+            found_upper += 1
+        if active.lower[0] and PARAMS.t_min < instance.t_curr:  # touchdown now: T_0 = t_curr
+            expected = np.zeros(8)
+            expected[4] = 1.0
+            np.testing.assert_array_equal(sens.dperiods_dtheta[0], expected)
+            found_t_curr += 1
+    assert found_upper >= 5 and found_t_curr >= 1
+
+
+def test_orbit_derivatives_have_the_structure_of_the_model(analysis):
+    """On the undisturbed orbit: no bound is active, the optimum is the orbit (T = T_des), more forward angular
+    momentum lengthens the next step, and the last step (in no state of the horizon: ℓ_{K-1} = ℓ^des) moves
+    with the command by exactly ∂ℓ^des/∂v = T_des."""
+    instance = orbit_instance(PARAMS, 0.3, 0.0, "left", 0.1)
+    check = analysis.crosscheck(instance)
+    assert check.active.names == () and check.max_relative_disagreement <= 1e-6
+    sens = check.routes["kkt"]
+    np.testing.assert_allclose(check.solution.periods, PARAMS.t_des, atol=1e-9)
+    assert sens.dsteps_dtheta[0, 0, 1] > 0  # dℓ_x,0 / dL_y
+    assert sens.dsteps_dtheta[-1, 0, 5] == pytest.approx(PARAMS.t_des, rel=1e-9)  # ℓ_{K-1} = ℓ^des (free)
+    assert sens.dsteps_dtheta[-1, 1, 6] == pytest.approx(PARAMS.t_des, rel=1e-9)
+
+
+def test_weakly_active_bounds_are_reported():
+    """At the command whose desired step is the step bound the orbit's steps touch it with zero multipliers."""
+    instance = orbit_instance(PARAMS, PARAMS.length_max / PARAMS.t_des, 0.0, "left", 0.1)
+    sens = alip_kkt_sensitivity(AlipSensitivityAnalysis(PARAMS).nlp, instance)
+    assert not sens.active.differentiable
+    assert set(sens.active.weakly_active) == {f"l_x_{k}:upper" for k in range(PARAMS.steps)}
+
+
+def test_an_active_set_change_within_the_fd_step_is_reported_not_averaged(analysis):
+    route = AlipFiniteDifferenceRoute(analysis.ipopt, fd_step=1e-3)
+    seen = 0
+    for instance in random_instances(PARAMS, 12, seed=0):
+        solution = analysis.solve(instance)
+        active = detect_active_set(analysis.nlp, instance, solution)
+        result = route.sensitivity(instance, solution, active)
+        reference = analysis.kkt.sensitivity(instance, solution, active).dw_dtheta
+        for change in result.changes:
+            seen += 1
+            j = SENSITIVITY_PARAMETERS.index(change.parameter)
+            assert np.all(np.isnan(result.sensitivity.dw_dtheta[:, j]))
+            assert change.plus_entered or change.plus_left or change.minus_entered or change.minus_left
+            # the side that kept the active set is the derivative to O(h)
+            if not (change.plus_entered or change.plus_left):
+                one_sided = change.forward
+            elif not (change.minus_entered or change.minus_left):
+                one_sided = change.backward
+            else:
+                continue
+            column = np.column_stack([one_sided] * 8)
+            assert relative_disagreement(analysis.nlp, column, np.column_stack([reference[:, j]] * 8))[0] <= 5e-2
+    assert seen >= 3
+
+
+@pytest.mark.parametrize("bad", [0.0, -1e-6, float("nan"), float("inf"), True, "1e-6"])
+def test_bad_fd_step_is_refused(bad):
+    with pytest.raises(ParameterError, match="fd_step="):
+        check_fd_step(bad)
+
+
+def test_a_perturbation_out_of_the_domain_is_refused(analysis):
+    instance = dataclasses.replace(orbit_instance(PARAMS, 0.3, 0.0, "left", 0.1), t_curr=0.0)
+    with pytest.raises(ParameterError, match="fd_step=.*t_curr"):
+        analysis.finite_differences.sensitivity(instance, analysis.solve(instance))
+
+
+def test_impulse_changes_the_angular_momentum_by_r_cross_dp():
+    model = AlipModel(PARAMS.mass, PARAMS.com_height)
+    p, v, impulse = np.array([0.03, -0.04]), np.array([0.2, 0.1, -0.05]), np.array([6.0, -4.0, 2.0])
+    jump = model.impulse_state_change(impulse, p, 0.6)
+    after = model.state_from_velocity(p, v + impulse / model.mass, 0.6) - model.state_from_velocity(p, v, 0.6)
+    np.testing.assert_allclose(jump, after, atol=1e-12)
+    r = np.array([p[0], p[1], 0.6])
+    L = np.cross(r, impulse)
+    np.testing.assert_allclose(jump, [0.0, L[1], 0.0, L[0]], atol=1e-12)
+    np.testing.assert_allclose(model.impulse_state_change([5.0, 0.0]), [0, model.com_height * 5.0, 0, 0])
+    with pytest.raises(ParameterError, match="impulse="):
+        model.impulse_state_change([1.0, np.nan])
