@@ -13,6 +13,14 @@ at once): the derivative call fails ("Evaluation failed"; casadi 3.8.2) or retur
 handed to the forward function therefore carry the multipliers of
 :meth:`~sensitivity.alip_active_set.AlipActiveSet.clean_multipliers` (inactive ones exactly 0), the same
 active set as route (a); the KKT assembly, factorisation and solve are CasADi's.
+
+CasADi reads the equality constraints' activity from their multipliers' signs as well (``lam_g > min_lam``
+or ``< −min_lam``, ``Nlpsol::get_forward``; casadi issue #2545). An S2S constraint whose multiplier is exactly
+0 (e.g. the sagittal ones on the orbit at v_x = 0: the sagittal state is on its target, no cost gradient)
+is then dropped from the sensitivity system and the derivative comes out wrong (0 for every sagittal
+quantity on that instance, against route (a) and the re-solves). The S2S constraints are equalities, always
+active: their exact zeros are handed to CasADi as 1e-300, which marks them active and changes the Hessian
+λ_gᵀ∇²g by 1e-300 (:data:`EQUALITY_MARK`).
 """
 
 from __future__ import annotations
@@ -24,6 +32,9 @@ from sensitivity.alip_kkt import AlipSensitivity
 from sequencer.alip.ipopt_ import IpoptSolver
 from sequencer.alip.nlp import SENSITIVITY_PARAMETERS, AlipInstance, AlipSolution
 from wbmpc.errors import SolverError
+
+#: what an exactly-zero S2S multiplier is replaced by so that CasADi keeps the equality in its KKT system
+EQUALITY_MARK = 1e-300
 
 
 class AlipCasadiRoute:
@@ -50,11 +61,12 @@ class AlipCasadiRoute:
         lbw, ubw = nlp.scaled_bounds(instance)
         w_s = solution.w / nlp.scale
         n = len(SENSITIVITY_PARAMETERS)
+        lam_g = np.where(solution.lam_g == 0.0, EQUALITY_MARK, solution.lam_g)  # equalities: always active
         try:
             out = self._forward(
                 x0=w_s, p=nlp.parameters(instance), lbx=lbw, ubx=ubw, lbg=0.0, ubg=0.0, lam_x0=solution.lam_w,
-                lam_g0=solution.lam_g, out_x=w_s, out_f=solution.cost, out_g=0.0,
-                out_lam_x=active.clean_multipliers(solution.lam_w), out_lam_g=solution.lam_g, out_lam_p=0.0,
+                lam_g0=lam_g, out_x=w_s, out_f=solution.cost, out_g=0.0,
+                out_lam_x=active.clean_multipliers(solution.lam_w), out_lam_g=lam_g, out_lam_p=0.0,
                 fwd_x0=np.zeros((nlp.n_w, n)), fwd_p=dp, fwd_lbx=dlb / nlp.scale[:, None], fwd_ubx=np.zeros((nlp.n_w, n)),
                 fwd_lbg=np.zeros((nlp.n_g, n)), fwd_ubg=np.zeros((nlp.n_g, n)), fwd_lam_x0=np.zeros((nlp.n_w, n)),
                 fwd_lam_g0=np.zeros((nlp.n_g, n)))
