@@ -2,6 +2,7 @@
 finite differences, the active set (held, weakly active, changing within the FD step), the parameter map."""
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ from sequencer.alip.instances import orbit_instance, random_instances
 from sequencer.alip.model import AlipModel
 from sequencer.alip.nlp import SENSITIVITY_PARAMETERS, AlipInstance
 from sequencer.alip.params import AlipParams
+from wbmpc.cli import main
 from wbmpc.errors import ParameterError
 
 PARAMS = AlipParams.preset("g1")
@@ -145,3 +147,49 @@ def test_impulse_changes_the_angular_momentum_by_r_cross_dp():
     np.testing.assert_allclose(model.impulse_state_change([5.0, 0.0]), [0, model.com_height * 5.0, 0, 0])
     with pytest.raises(ParameterError, match="impulse="):
         model.impulse_state_change([1.0, np.nan])
+
+
+def test_casadi_route_keeps_equalities_with_a_zero_multiplier(analysis):
+    """Standing still (v = 0) the sagittal S2S multipliers are exactly 0; CasADi would drop those equalities."""
+    instance = orbit_instance(PARAMS, 0.0, 0.0, "left", 0.1)
+    check = analysis.crosscheck(instance)
+    assert np.any(check.solution.lam_g == 0.0)
+    assert check.max_relative_disagreement <= 1e-6
+    assert abs(check.routes["casadi"].dsteps_dtheta[0, 0, 0]) > 0.1  # dℓ_x,0 / dp_x, not the 0 CasADi gave
+
+
+# ----------------------------------------------------------------------------- CLI
+def test_cli_alip_json_has_every_route_and_the_active_bounds(capsys):
+    assert main(["sensitivity", "--planner", "alip", "--push", "8", "-3", "--t", "0.3", "--vx", "0.3", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["planner"] == "alip" and set(report["routes"]) == {"kkt", "casadi", "finite_differences"}
+    assert report["parameters"] == list(SENSITIVITY_PARAMETERS)
+    assert np.asarray(report["routes"]["kkt"]).shape == (5 * PARAMS.steps, 8)
+    assert report["max_relative_disagreement"] <= 1e-6
+    assert report["active_bounds"] == ["tau_y_0:lower"] and report["differentiable"]
+    assert report["instance"]["x0"][1] == pytest.approx(
+        orbit_instance(PARAMS, 0.3, 0.0, "left", 0.3).x0[1] + PARAMS.com_height * 8.0)
+    assert set(report["cost_ms"]) == {"ipopt_solve", "kkt", "casadi", "finite_differences"}
+
+
+def test_cli_alip_text_and_a_reported_active_set_change(capsys):
+    assert main(["sensitivity", "--planner", "alip", "--push", "8", "-3", "--t", "0.3", "--vx", "0.3",
+                 "--fd-step", "0.02"]) == 0
+    out = capsys.readouterr().out
+    assert "active set changes within the FD step of v_x (+: entered -, left ('tau_y_0:lower',)" in out
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--planner", "lip"], "argument --planner: invalid choice: 'lip'"),
+    (["--planner", "alip", "--fd-step", "0"], "argument --fd-step: invalid value '0'"),
+    (["--planner", "alip", "--fd-step", "nan"], "argument --fd-step: invalid value 'nan'"),
+    (["--planner", "alip", "--fd-step=-1e-6"], "argument --fd-step: invalid value '-1e-6'"),
+    (["--planner", "alip", "--alpha1", "3"], "--alpha1"),
+    (["--planner", "alip", "--wrt", "dcm"], "--wrt"),
+    (["--planner", "alip", "--vx", "3"], "v_x=3.0 m/s"),
+    (["--push", "1", "0"], "--push"),
+])
+def test_cli_bad_input_is_one_line_naming_the_parameter(capsys, argv, needle):
+    assert main(["sensitivity", *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and needle in err, err

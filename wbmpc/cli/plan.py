@@ -137,12 +137,13 @@ def plan_table(plan: FootstepPlan) -> str:
     return "\n".join(lines)
 
 
-def run_alip_plan(args: argparse.Namespace) -> int:
-    """``--planner alip``: the ALIP NMPC from the robot standing (left stance, CoM at rest) or the given state."""
-    from robots.registry import load_robot
+def alip_params_from_args(args: argparse.Namespace):
+    """``--planner alip``'s AlipParams: ``--params FILE`` (an ALIP TOML) or the preset of ``--robot`` (default g1).
+
+    Raises:
+        ParameterError: a DCM sequencer option (``--alpha1``, ``--preset``, ...; not --vx/--vy) was given.
+    """
     from sequencer.alip.params import AlipParams
-    from sequencer.alip.planner import AlipFootstepPlanner
-    from sequencer.planner import ReducedState, StanceState, VelocityCommand
     from wbmpc.errors import ParameterError
 
     given = sorted(f"--{f.name.replace('_', '-')}" for f in dataclasses.fields(SequencerParams)
@@ -150,8 +151,17 @@ def run_alip_plan(args: argparse.Namespace) -> int:
     if given or args.preset is not None:
         raise ParameterError(f"{given or ['--preset']} are DCM sequencer options; with --planner alip use --params FILE "
                              "(an ALIP TOML) or --robot NAME")
+    return AlipParams.from_toml(args.params) if args.params else AlipParams.preset(args.robot or "g1")
+
+
+def run_alip_plan(args: argparse.Namespace) -> int:
+    """``--planner alip``: the ALIP NMPC from the robot standing (left stance, CoM at rest) or the given state."""
+    from robots.registry import load_robot
+    from sequencer.alip.planner import AlipFootstepPlanner
+    from sequencer.planner import ReducedState, StanceState, VelocityCommand
+
+    params = alip_params_from_args(args)
     robot_name = args.robot or "g1"
-    params = AlipParams.from_toml(args.params) if args.params else AlipParams.preset(robot_name)
     robot = load_robot(robot_name)
     foot = args.stance_foot or "left"
     position = args.stance_position or tuple(robot.foot_positions_reference()[foot][:2])

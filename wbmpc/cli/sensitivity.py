@@ -1,7 +1,8 @@
 """``wbmpc sensitivity``: DCM sensitivity of the footstep QP (eqs. 9-12) by four routes, and Fig. 2
 (``--wrt step-qp``, the default); the whole-body OCP's sensitivity to the touchdown times by three
 routes (``--wrt contact-timing``); the end-to-end du0/dθ from a DCM disturbance to the first
-torques (``--wrt dcm``)."""
+torques (``--wrt dcm``). ``--planner alip``: the ALIP step-to-step NMPC's (ℓ*, T*, τ*) with respect to
+the measured ALIP state, t_curr and the command, by three routes (``sensitivity.alip_crosscheck``)."""
 
 from __future__ import annotations
 
@@ -12,9 +13,10 @@ import numpy as np
 from sensitivity.crosscheck import crosscheck
 from sensitivity.studies.fig2 import plot_fig2, run_monte_carlo
 from sequencer.step_qp import CONSTRAINT_NAMES, VARIABLE_NAMES, StepProblem
-from wbmpc.cli.arguments import COUNT, POSITIVE, SEED
+from wbmpc.cli.arguments import COUNT, FINITE, POSITIVE, SEED
 from wbmpc.cli.output import add_output_arguments, print_json
-from wbmpc.cli.plan import add_params_arguments, add_state_arguments, params_from_args, state_from_args
+from wbmpc.cli.plan import add_params_arguments, add_state_arguments, alip_params_from_args, params_from_args, state_from_args
+from wbmpc.errors import ParameterError
 
 
 def sensitivity_report(problem: StepProblem, samples: int, sigma: float, seed: int) -> dict:
@@ -145,7 +147,110 @@ def plot_timing(report: dict, path: str) -> None:
     plt.close(fig)
 
 
+ALIP_UNITS = {"T": "s", "tau": "N·m", "l": "m", "p_x": "m", "L_y": "kg·m²/s", "p_y": "m", "L_x": "kg·m²/s", "t_curr": "s",
+              "v_x": "m/s", "v_y": "m/s", "yaw_rate": "rad/s"}
+
+
+def alip_instance_from_args(args: argparse.Namespace, params):
+    """The ALIP NMPC instance of ``--planner alip``: ``--alip-state`` or the orbit of the command (--vx, --vy) at
+    ``--t`` (default 0.1 s) into a ``--stance-foot`` (default left) stance, plus the ``--push`` impulse."""
+    from sequencer.alip.instances import orbit_state
+    from sequencer.alip.nlp import AlipInstance
+
+    foot = args.stance_foot or "left"
+    t_curr = 0.1 if args.elapsed is None else float(args.elapsed)
+    v_x, v_y = args.param_v_x or 0.0, args.param_v_y or 0.0
+    params.check_velocity(v_x, v_y)
+    x0 = np.array(args.alip_state, dtype=float) if args.alip_state is not None else orbit_state(params, v_x, v_y, foot, t_curr)
+    if args.push is not None:
+        x0 = x0 + params.model.impulse_state_change(args.push, (x0[0], x0[2]))
+    return AlipInstance(x0, t_curr, foot, v_x, v_y, args.yaw_rate)
+
+
+def alip_report(params, instance, fd_step: float) -> dict:
+    """``--planner alip``: d(T, τ, ℓ)/dθ by route, disagreement, active bounds, active-set changes, cost."""
+    from sensitivity.alip_crosscheck import AlipSensitivityAnalysis
+
+    analysis = AlipSensitivityAnalysis(params, fd_step=fd_step)
+    check = analysis.crosscheck(instance)
+    K = analysis.nlp.K
+    names = analysis.nlp.names[:5 * K]
+    solution = check.solution
+    return {
+        "planner": "alip", "params": params.to_dict(),
+        "instance": {"x0": instance.x0, "t_curr": instance.t_curr, "stance_foot": instance.stance_foot,
+                     "v_x": instance.v_x, "v_y": instance.v_y, "yaw_rate": instance.yaw_rate},
+        "solution": {"periods": solution.periods, "torques": solution.torques, "steps": solution.steps,
+                     "cost": solution.cost},
+        "parameters": list(check.parameters), "outputs": list(names),
+        "units": {"rows": "T_k [s], tau_k [N·m], l_k [m] (heading frame of step k)",
+                  "columns": {name: ALIP_UNITS[name] for name in check.parameters}},
+        "routes": {name: sens.decision_jacobian for name, sens in check.routes.items()},
+        "disagreement": {name: dict(zip(check.parameters, d)) for name, d in check.disagreement.items()},
+        "max_relative_disagreement": check.max_relative_disagreement,
+        "active_bounds": list(check.active.names), "weakly_active": list(check.active.weakly_active),
+        "differentiable": check.active.differentiable,
+        "fd_step": fd_step, "fd_steps": dict(zip(check.parameters, check.fd_steps)),
+        "fd_active_set_changes": [
+            {"parameter": c.parameter, "step": c.step, "plus_entered": c.plus_entered, "plus_left": c.plus_left,
+             "minus_entered": c.minus_entered, "minus_left": c.minus_left, "forward": c.forward[:5 * K],
+             "backward": c.backward[:5 * K]} for c in check.fd_changes],
+        "cost_ms": {key.removesuffix("_s"): value * 1e3 for key, value in check.cost.items()},
+    }
+
+
+def format_alip(report: dict) -> str:
+    inst, sol = report["instance"], report["solution"]
+    params = report["parameters"]
+    lines = [f"ALIP NMPC ({report['params']['name']}): {inst['stance_foot']} stance, t_curr = {inst['t_curr']:.3f} s, "
+             f"x0 = " + ", ".join(f"{v:+.4g}" for v in inst["x0"]) + f", command ({inst['v_x']:+.3g}, {inst['v_y']:+.3g}, "
+             f"{inst['yaw_rate']:+.3g})",
+             "T* = " + ", ".join(f"{v:.4f}" for v in sol["periods"]) + " s; l*_0 = "
+             + ", ".join(f"{v:+.4f}" for v in sol["steps"][0]) + " m",
+             f"active bounds: {', '.join(report['active_bounds']) or 'none'}"
+             + (f"; weakly active (one-sided derivatives): {', '.join(report['weakly_active'])}"
+                if report["weakly_active"] else ""),
+             "d(first step)/dθ (route kkt):" + "".join(f"{p:>11}" for p in params)]
+    J = np.asarray(report["routes"]["kkt"])
+    outputs = report["outputs"]
+    for name in ("T_0", "tau_y_0", "tau_x_0", "l_x_0", "l_y_0"):
+        lines.append(f"  {name:>26} " + "".join(f"{v:>+11.4g}" for v in J[outputs.index(name)]))
+    lines.append(f"largest relative disagreement between routes: {report['max_relative_disagreement']:.2e} "
+                 "(CasADi's solver derivative, re-solved central differences, vs the KKT route)")
+    for change in report["fd_active_set_changes"]:
+        lines.append(f"  active set changes within the FD step of {change['parameter']} (+: entered "
+                     f"{change['plus_entered'] or '-'}, left {change['plus_left'] or '-'}; -: entered "
+                     f"{change['minus_entered'] or '-'}, left {change['minus_left'] or '-'}): no central difference")
+    lines.append("cost: " + ", ".join(f"{k} {v:.2f} ms" for k, v in report["cost_ms"].items()))
+    return "\n".join(lines)
+
+
+def run_alip_sensitivity(args: argparse.Namespace) -> int:
+    from sensitivity.alip_finite_differences import DEFAULT_FD_STEP
+
+    given = [flag for flag, value in (("--stance-position", args.stance_position), ("--dcm", args.dcm),
+                                      ("--plot", args.plot)) if value is not None]
+    if args.wrt != "step-qp":
+        given.append("--wrt")
+    if given:
+        raise ParameterError(f"{given} are options of --planner dcm; --planner alip takes the ALIP state (--alip-state, "
+                             "--push, --t, --stance-foot), the command (--vx, --vy, --yaw-rate), --fd-step, --params, --robot")
+    params = alip_params_from_args(args)
+    report = alip_report(params, alip_instance_from_args(args, params),
+                         DEFAULT_FD_STEP if args.fd_step is None else args.fd_step)
+    if args.json:
+        print_json(report)
+    else:
+        print(format_alip(report))
+    return 0
+
+
 def run_sensitivity(args: argparse.Namespace) -> int:
+    if args.planner == "alip":
+        return run_alip_sensitivity(args)
+    alip_only = [flag for flag, value in (("--alip-state", args.alip_state), ("--push", args.push)) if value is not None]
+    if alip_only or args.yaw_rate != 0.0:
+        raise ParameterError(f"{alip_only or ['--yaw-rate']} are options of --planner alip")
     if args.wrt != "step-qp":
         report = (timing_report if args.wrt == "contact-timing" else dcm_report)(args.nodes, args.fd_step)
         if args.plot and args.wrt == "contact-timing":
@@ -186,7 +291,17 @@ def register(subparsers) -> None:
                         "node-0 forces and terminal CoM to the touchdown times; dcm: the end-to-end du0/dtheta")
     parser.add_argument("--fd-step", type=POSITIVE, default=None,
                         help="central-difference step of the re-solved route: [s] for contact-timing (default 2e-5), "
-                        "[m] for dcm (default 1e-4)")
+                        "[m] for dcm (default 1e-4); for --planner alip relative to each parameter's unit (default 1e-6)")
+    parser.add_argument("--planner", choices=("dcm", "alip"), default="dcm",
+                        help="dcm: the footstep QP / whole-body OCP (--wrt, default); alip: the ALIP S2S NMPC's steps, "
+                        "periods and ankle torques to the measured ALIP state, t_curr and the command (preset "
+                        "sequencer/presets/alip/ROBOT.toml, --robot default g1)")
+    alip = parser.add_argument_group("--planner alip (default state: the command's orbit at --t, default 0.1 s)")
+    alip.add_argument("--alip-state", nargs=4, type=FINITE, metavar=("PX", "LY", "PY", "LX"), default=None,
+                      help="measured ALIP state about the stance contact, heading frame [m, kg·m²/s, m, kg·m²/s]")
+    alip.add_argument("--push", nargs=2, type=FINITE, metavar=("DPX", "DPY"), default=None,
+                      help="horizontal impulse on the CoM added to the state [N·s] (L_y += z DPX, L_x -= z DPY)")
+    alip.add_argument("--yaw-rate", type=FINITE, default=0.0, help="commanded turning rate [rad/s]")
     parser.add_argument("--nodes", type=COUNT, default=100, help="OCP horizon N for contact-timing and dcm (default 100)")
     add_output_arguments(parser, plot=True)
     parser.set_defaults(func=run_sensitivity)
