@@ -26,6 +26,7 @@ import math
 import numpy as np
 
 from sequencer.alip.ipopt_ import IpoptSolver
+from sequencer.alip.model import AlipModel
 from sequencer.alip.nlp import FEET, AlipInstance, AlipNlp, AlipSolution, desired_steps, orbit
 from sequencer.alip.params import AlipParams
 from sequencer.alip.s2s import B_D, heading_change_entries
@@ -89,13 +90,10 @@ class AlipFootstepPlanner:
 
     # ------------------------------------------------------------------ planning
     def measured_state(self, stance: StanceState, measured: ReducedState) -> np.ndarray:
-        """ALIP state (p_x, L_y, p_y, L_x) about the stance contact, stance heading frame, shape (4,)."""
-        p = rotate_xy(measured.com[:2] - stance.position, -stance.yaw)
-        if measured.angular_momentum is None:
-            v = np.concatenate([rotate_xy(measured.com_velocity[:2], -stance.yaw), measured.com_velocity[2:]])
-            return self.model.state_from_velocity(p, v)
-        L = rotate_xy(measured.angular_momentum[:2], -stance.yaw)  # (L_x, L_y)
-        return np.array([p[0], L[1], p[1], L[0]])
+        """ALIP state (p_x, L_y, p_y, L_x) about the stance contact, stance heading frame, shape (4,)
+        (:func:`alip_state_about_contact`; without a measured angular momentum at the model height)."""
+        return alip_state_about_contact(self.model, stance, measured.com, measured.com_velocity,
+                                        measured.angular_momentum)
 
     def instance(self, t: float, stance: StanceState, measured: ReducedState, command) -> AlipInstance:
         """The NMPC instance of a call (validated; ParameterError names the bad argument)."""
@@ -197,6 +195,27 @@ class AlipFootstepPlanner:
             stance_yaw=stance.yaw, double_support=params.double_support, feet=self.feet,
             stance_cop_offset=rotate_xy(model.cop_offset(solution.torques[0]), stance.yaw),
         )
+
+
+def alip_state_about_contact(model: AlipModel, stance: StanceState, com, com_velocity, angular_momentum=None,
+                             p_z: float | None = None) -> np.ndarray:
+    """ALIP state (p_x, L_y, p_y, L_x) about the stance contact point, in the stance's heading frame (world
+    rotated about z by stance.yaw), shape (4,).
+
+    Args:
+        com, com_velocity: CoM position [m] and velocity [m/s], world frame, shape (3,).
+        angular_momentum: angular momentum about the contact point [kg·m²/s], world frame, shape (3,)
+            (e.g. :func:`wbmpc.walking.alip_state.contact_angular_momentum`); None: the paper's approximation,
+            eqs. 14-15 without the centroidal I ω terms (:meth:`AlipModel.state_from_velocity`), with the CoM
+            height ``p_z`` [m] above the contact (None: the model's height, as the planner does).
+    """
+    p = rotate_xy(np.asarray(com, dtype=float)[:2] - stance.position, -stance.yaw)
+    if angular_momentum is None:
+        velocity = np.asarray(com_velocity, dtype=float)
+        v = np.concatenate([rotate_xy(velocity[:2], -stance.yaw), velocity[2:]])
+        return model.state_from_velocity(p, v, p_z)
+    L = rotate_xy(np.asarray(angular_momentum, dtype=float)[:2], -stance.yaw)  # (L_x, L_y)
+    return np.array([p[0], L[1], p[1], L[0]])
 
 
 def desired_orbit(params: AlipParams, command: VelocityCommand) -> dict[str, np.ndarray]:
