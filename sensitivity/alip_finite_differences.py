@@ -29,7 +29,7 @@ from sequencer.alip.ipopt_ import IpoptSolver
 from sequencer.alip.nlp import SENSITIVITY_PARAMETERS, AlipInstance, AlipSolution
 from wbmpc.errors import ParameterError
 
-DEFAULT_FD_STEP = 1e-5
+DEFAULT_FD_STEP = 1e-6
 
 
 @dataclass(frozen=True)

@@ -193,3 +193,22 @@ def test_cli_bad_input_is_one_line_naming_the_parameter(capsys, argv, needle):
     assert main(["sensitivity", *argv]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and needle in err, err
+
+
+def test_push_study_slope_is_the_derivative_of_the_re_solves(analysis):
+    from sensitivity.studies.alip_push import OUTPUTS, run_push_study
+
+    instance = orbit_instance(PARAMS, 0.3, 0.0, "left", 0.1)
+    h = 1e-3
+    for axis in ("x", "y"):
+        study = run_push_study(analysis, instance, axis, [-h, 0.0, h, 8.0 if axis == "x" else 12.0])
+        assert study.same_active_set.tolist() == [True, True, True, False]  # a large push changes the set
+        for name in OUTPUTS:
+            slope = (study.predicted[name][2] - study.predicted[name][0]) / (2 * h)
+            secant = (study.truth[name][2] - study.truth[name][0]) / (2 * h)
+            assert slope == pytest.approx(secant, rel=1e-5, abs=1e-9), (axis, name)
+            assert study.predicted[name][1] == pytest.approx(study.truth[name][1], abs=1e-12)
+    np.testing.assert_allclose(study.state_jump, [0.0, 0.0, 0.0, -PARAMS.com_height])  # y: ΔL_x = −z Δp_y
+    forward = run_push_study(analysis, instance, "x", [2.0])
+    assert forward.truth["l_x_0"][0] > forward.sensitivity.solution.steps[0, 0]  # pushed forward: a longer step
+    assert forward.truth["T_0"][0] < forward.sensitivity.solution.periods[0]  # ... taken sooner
