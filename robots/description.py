@@ -85,12 +85,12 @@ class RobotDescription:
             numbers (the same as ``torque_limit``, ``velocity_limit`` and ``armature``). Treat it
             as read-only (copy it with ``pin.Model(robot.pinocchio_model)`` to modify).
         foot_frames: {"left": frame name, "right": frame name}; Pinocchio frames at the contact
-            points (Bolt: centres of the foot spheres; G1: centres of the soles).
+            points (Bolt: centres of the foot spheres; G1, H1: centres of the soles).
         contact_type: "point3d" (3D force at a point) or "flat6d" (6D wrench at the sole).
-        foot_radius: radius of the foot collision sphere(s) [m] (Bolt 0.016; G1: the sole's
+        foot_radius: radius of the foot collision sphere(s) [m] (Bolt 0.016; G1, H1: the sole's
             corner spheres, 0.005).
         contact_frame_height: height of a foot frame above flat ground when the foot touches it
-            [m] (Bolt: ``foot_radius``, as the frame is the sphere's centre; G1: 0, the frame is
+            [m] (Bolt: ``foot_radius``, as the frame is the sphere's centre; G1, H1: 0, the frame is
             on the sole).
         q_reference: (nq,) reference configuration, both feet touching the floor z = 0
             (Pinocchio order, quaternion (x, y, z, w)); read-only array.
@@ -108,7 +108,7 @@ class RobotDescription:
         mujoco_contact: contact settings of the MuJoCo model.
         mujoco_foot_geoms: {"left": [(body name, position in body frame (3,) [m], radius [m]),
             ...], "right": [...]}: the collision spheres the MuJoCo model puts under each foot
-            (one for Bolt, four sole corners for G1).
+            (one for Bolt, four sole corners for G1 and H1).
         sources: {quantity: where its value comes from} (also in ``docs/robots.md``).
         sole_size: (length along the foot frame's x, width along its y) [m] of the support
             rectangle centred on each foot frame (flat feet: what the OCP's wrench cone allows the
