@@ -15,7 +15,7 @@ from robots import h1 as h1_module
 from robots import load_robot
 from robots.conventions import mujoco_to_pinocchio_state, pinocchio_to_mujoco_state
 from robots.mjcf_source import extra_package_file
-from robots.mujoco_model import compile_mujoco_model, foot_geom_name
+from robots.mujoco_model import compile_mujoco_model, foot_geom_name, mujoco_urdf_text
 from sim.falls import ContactSensor
 from wbmpc.cli import main
 from wbmpc.errors import MissingExtraError, ParameterError
@@ -51,6 +51,8 @@ def test_h1_joints_and_masses_are_the_mjcf_ones(h1, source_model):
     assert h1.model_format == "mjcf" and h1.contact_type == "flat6d"
     assert h1.actuated_joint_names == tuple(source_model.joint(j).name for j in range(1, source_model.njnt))
     assert h1.pinocchio_model.names[1] == "root_joint"
+    with pytest.raises(ParameterError, match="robot 'h1' is described by an MJCF, not a URDF"):
+        mujoco_urdf_text(h1)
     assert h1.mass == pytest.approx(float(np.sum(source_model.body_mass)), rel=1e-12)
     assert h1.mass == pytest.approx(51.437, abs=1e-9)
     # every Pinocchio joint carries the mass of the MuJoCo body it moves (one body per joint in h1.xml)
