@@ -1,4 +1,5 @@
-# Every target sets up .venv on its own: `make demo` and `make test` work on a fresh clone.
+# Every target sets up .venv on its own: `make demo` and `make test` work on a fresh clone
+# (with the h1 extra, so the Unitree H1 tests run in CI).
 PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
@@ -9,7 +10,7 @@ STAMP  := $(VENV)/.installed-stamp
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test,bench]'
+	$(PY) -m pip install --quiet -e '.[test,bench,h1]'
 	touch $(STAMP)
 
 setup: $(STAMP)

@@ -1,4 +1,4 @@
-"""Robot descriptions: Pinocchio and MuJoCo models of the same URDF, contacts, limits.
+"""Robot descriptions: Pinocchio and MuJoCo models of the same robot file (URDF or MJCF), contacts, limits.
 
     >>> from robots import load_robot
     >>> robot = load_robot("bolt")
@@ -11,6 +11,7 @@ package registers them all.
 
 from robots import bolt as _bolt  # noqa: F401  (registers "bolt")
 from robots import g1 as _g1  # noqa: F401  (registers "g1")
+from robots import h1 as _h1  # noqa: F401  (registers "h1"; loading it needs the extra wbmpc[h1])
 from robots.description import CONTACT_TYPES, MujocoContactSettings, RobotDescription
 from robots.registry import available_robots, load_robot, register_robot
 

@@ -56,7 +56,7 @@ def load_bolt() -> RobotDescription:
         velocity_limit=np.full(nu, JOINT_VELOCITY_LIMIT),
         armature=np.full(nu, JOINT_ARMATURE),
         actuated_joint_names=joint_names,
-        urdf_path=files.urdf_path,
+        model_path=files.urdf_path,
         package_dirs=files.package_dirs,
         mesh_dir=files.robot_dir / "meshes" / "stl",
         mujoco_contact=MujocoContactSettings(),

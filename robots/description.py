@@ -1,8 +1,8 @@
 """``RobotDescription``: everything the library needs to know about one robot.
 
 A description bundles the Pinocchio model (with the real actuator numbers written into it), the
-contact points and their type, a reference posture standing on the floor, and the source URDF
-from which the MuJoCo model is built (see :mod:`robots.mujoco_model`). Controllers, the
+contact points and their type, a reference posture standing on the floor, and the robot file
+(URDF or MJCF) from which the MuJoCo model is built (see :mod:`robots.mujoco_model`). Controllers, the
 sequencer and the simulator read robots only through this object, so adding a robot is one
 module that builds a description (see :mod:`robots.registry` and ``docs/robots.md``).
 
@@ -25,6 +25,9 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
+
+MODEL_FORMATS = {".urdf": "urdf", ".xml": "mjcf"}
+"""Robot file suffix -> ``RobotDescription.model_format``: a URDF or a MuJoCo MJCF."""
 
 CONTACT_TYPES = ("point3d", "flat6d")
 """Allowed ``RobotDescription.contact_type`` values: 3D point contacts (forces only) or 6D flat-foot
@@ -70,24 +73,24 @@ class MujocoContactSettings:
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class RobotDescription:
-    """One robot: Pinocchio model, contacts, reference posture, actuator limits, URDF source.
+    """One robot: Pinocchio model, contacts, reference posture, actuator limits, robot file.
 
     Build one with :func:`robots.load_robot` (``load_robot("bolt")``); every call returns a new
     description with its own Pinocchio model, so changing one never affects another.
 
     Attributes:
-        name: registry name ("bolt", "g1").
+        name: registry name ("bolt", "g1", "h1").
         pinocchio_model: ``pin.Model`` with a free-flyer root joint named "root_joint";
             ``effortLimit[6:]``, ``velocityLimit[6:]`` and ``armature[6:]`` hold the real actuator
             numbers (the same as ``torque_limit``, ``velocity_limit`` and ``armature``). Treat it
             as read-only (copy it with ``pin.Model(robot.pinocchio_model)`` to modify).
         foot_frames: {"left": frame name, "right": frame name}; Pinocchio frames at the contact
-            points (Bolt: centres of the foot spheres; G1: centres of the soles).
+            points (Bolt: centres of the foot spheres; G1, H1: centres of the soles).
         contact_type: "point3d" (3D force at a point) or "flat6d" (6D wrench at the sole).
-        foot_radius: radius of the foot collision sphere(s) [m] (Bolt 0.016; G1: the sole's
+        foot_radius: radius of the foot collision sphere(s) [m] (Bolt 0.016; G1, H1: the sole's
             corner spheres, 0.005).
         contact_frame_height: height of a foot frame above flat ground when the foot touches it
-            [m] (Bolt: ``foot_radius``, as the frame is the sphere's centre; G1: 0, the frame is
+            [m] (Bolt: ``foot_radius``, as the frame is the sphere's centre; G1, H1: 0, the frame is
             on the sole).
         q_reference: (nq,) reference configuration, both feet touching the floor z = 0
             (Pinocchio order, quaternion (x, y, z, w)); read-only array.
@@ -97,13 +100,15 @@ class RobotDescription:
         armature: (nu,) reflected rotor inertia added to the joint-space mass matrix diagonal
             [kg·m²].
         actuated_joint_names: (nu,) names of the actuated joints in Pinocchio (= torque) order.
-        urdf_path: the URDF file both engines are built from.
-        package_dirs: directories that resolve the URDF's ``package://`` mesh paths.
-        mesh_dir: directory holding the URDF's mesh files (MuJoCo ``meshdir``).
+        model_path: the robot file both engines are built from: a URDF (``.urdf``, Bolt, G1) or
+            a MuJoCo MJCF (``.xml``, H1); see ``model_format``.
+        package_dirs: directories that resolve a URDF's ``package://`` mesh paths (empty for an
+            MJCF, whose mesh paths are relative to ``mesh_dir``).
+        mesh_dir: directory holding the robot file's mesh files (MuJoCo ``meshdir``).
         mujoco_contact: contact settings of the MuJoCo model.
         mujoco_foot_geoms: {"left": [(body name, position in body frame (3,) [m], radius [m]),
             ...], "right": [...]}: the collision spheres the MuJoCo model puts under each foot
-            (one for Bolt, four sole corners for G1).
+            (one for Bolt, four sole corners for G1 and H1).
         sources: {quantity: where its value comes from} (also in ``docs/robots.md``).
         sole_size: (length along the foot frame's x, width along its y) [m] of the support
             rectangle centred on each foot frame (flat feet: what the OCP's wrench cone allows the
@@ -122,7 +127,7 @@ class RobotDescription:
     velocity_limit: np.ndarray
     armature: np.ndarray
     actuated_joint_names: tuple[str, ...]
-    urdf_path: Path
+    model_path: Path
     package_dirs: tuple[Path, ...]
     mesh_dir: Path
     mujoco_contact: MujocoContactSettings = dataclasses.field(default_factory=MujocoContactSettings)
@@ -164,7 +169,11 @@ class RobotDescription:
         set_(self, "torque_limit", _frozen_array(self.torque_limit, "torque_limit", (nu,)))
         set_(self, "velocity_limit", _frozen_array(self.velocity_limit, "velocity_limit", (nu,)))
         set_(self, "armature", _frozen_array(self.armature, "armature", (nu,)))
-        set_(self, "urdf_path", Path(self.urdf_path))
+        set_(self, "model_path", Path(self.model_path))
+        if self.model_path.suffix not in MODEL_FORMATS:
+            raise ParameterError(
+                f"model_path={str(self.model_path)!r} must be a URDF or an MJCF file (suffix one of {sorted(MODEL_FORMATS)})"
+            )
         set_(self, "package_dirs", tuple(Path(p) for p in self.package_dirs))
         set_(self, "mesh_dir", Path(self.mesh_dir))
         set_(self, "mujoco_foot_geoms", types.MappingProxyType(
@@ -207,6 +216,11 @@ class RobotDescription:
         return 2 * self.nv
 
     # ----------------------------------------------------------------------------- derived data
+    @property
+    def model_format(self) -> str:
+        """Format of ``model_path``: "urdf" or "mjcf" (from its suffix, ``MODEL_FORMATS``)."""
+        return MODEL_FORMATS[self.model_path.suffix]
+
     @property
     def mass(self) -> float:
         """Total mass [kg]."""
@@ -263,7 +277,8 @@ class RobotDescription:
             "torque_limit_Nm": self.torque_limit.tolist(),
             "velocity_limit_rad_s": self.velocity_limit.tolist(),
             "armature_kg_m2": self.armature.tolist(),
-            "urdf_path": str(self.urdf_path),
+            "model_path": str(self.model_path),
+            "model_format": self.model_format,
             "sources": dict(self.sources),
         }
 

@@ -11,10 +11,11 @@ gear ratios). Sources in ``docs/robots.md``.
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 
 from robots.description import MujocoContactSettings, RobotDescription
-from robots.posture import standing_on_floor
+from robots.feet import add_sole_frames, sole_sphere_geoms
+from robots.joint_tables import values_by_joint_suffix
+from robots.posture import both_sides, configuration_with_joint_angles, standing_on_floor
 from robots.registry import register_robot
 from robots.urdf_source import build_floating_base_model, example_robot_data_files
 from wbmpc.errors import ParameterError
@@ -56,33 +57,16 @@ SOLE_SIZE = (0.17, 0.05)
 
 # Standing posture (knees bent, arms slightly away from the body); ankle pitch keeps the soles flat.
 STANDING_JOINTS = {
-    "hip_pitch_joint": -0.312,
-    "knee_joint": 0.669,
-    "ankle_pitch_joint": -(0.669 - 0.312),
-    "elbow_joint": 0.6,
-    "shoulder_pitch_joint": 0.2,
+    **both_sides({
+        "hip_pitch_joint": -0.312,
+        "knee_joint": 0.669,
+        "ankle_pitch_joint": -(0.669 - 0.312),
+        "elbow_joint": 0.6,
+        "shoulder_pitch_joint": 0.2,
+    }),
+    "left_shoulder_roll_joint": 0.2,
+    "right_shoulder_roll_joint": -0.2,
 }
-STANDING_SHOULDER_ROLL = {"left": 0.2, "right": -0.2}
-
-
-def _armature(joint_name: str) -> float:
-    for suffix, value in ARMATURE_BY_JOINT.items():
-        if joint_name.endswith(suffix):
-            return value
-    raise ParameterError(f"G1 joint {joint_name!r} has no motor class (known suffixes: {sorted(ARMATURE_BY_JOINT)})")
-
-
-def _standing_configuration(model: pin.Model) -> np.ndarray:
-    q = pin.neutral(model)
-    for joint_id in range(2, model.njoints):
-        name = model.names[joint_id]
-        index = model.joints[joint_id].idx_q
-        for suffix, angle in STANDING_JOINTS.items():
-            if name.endswith(suffix):
-                q[index] = angle
-        if name.endswith("shoulder_roll_joint"):
-            q[index] = STANDING_SHOULDER_ROLL["left" if name.startswith("left") else "right"]
-    return q
 
 
 @register_robot("g1")
@@ -90,16 +74,12 @@ def load_g1() -> RobotDescription:
     """Unitree G1, 29 actuated joints (example-robot-data), flat feet with 6D sole contacts."""
     files = example_robot_data_files("g1_description", "urdf/g1_29dof_rev_1_0.urdf")
     model = build_floating_base_model(files)
-    for side, frame_name in FOOT_FRAMES.items():
-        ankle_id = model.getFrameId(ANKLE_LINKS[side])
-        ankle = model.frames[ankle_id]
-        placement = ankle.placement * pin.SE3(np.eye(3), SOLE_CENTER_IN_ANKLE)  # relative to the ankle joint
-        model.addFrame(pin.Frame(frame_name, ankle.parentJoint, ankle_id, placement, pin.FrameType.OP_FRAME))
+    add_sole_frames(model, FOOT_FRAMES, ANKLE_LINKS, SOLE_CENTER_IN_ANKLE)
     joint_names = tuple(model.names[2:])
     nu = model.nv - 6
     if len(joint_names) != nu or any(model.joints[j].nv != 1 for j in range(2, model.njoints)):
         raise ParameterError(f"G1 model must have {nu} one-dof actuated joints, got {joint_names}")
-    q_reference = standing_on_floor(model, _standing_configuration(model), FOOT_FRAMES, 0.0)
+    q_reference = standing_on_floor(model, configuration_with_joint_angles(model, STANDING_JOINTS), FOOT_FRAMES, 0.0)
     return RobotDescription(
         name="g1",
         pinocchio_model=model,
@@ -111,16 +91,13 @@ def load_g1() -> RobotDescription:
         v_reference=np.zeros(model.nv),
         torque_limit=np.array(model.effortLimit[6:]),
         velocity_limit=np.array(model.velocityLimit[6:]),
-        armature=np.array([_armature(name) for name in joint_names]),
+        armature=values_by_joint_suffix(joint_names, ARMATURE_BY_JOINT, "G1 motor class armature [kg·m²]"),
         actuated_joint_names=joint_names,
-        urdf_path=files.urdf_path,
+        model_path=files.urdf_path,
         package_dirs=files.package_dirs,
         mesh_dir=files.robot_dir / "meshes",
         mujoco_contact=MujocoContactSettings(),
-        mujoco_foot_geoms={
-            side: tuple((ANKLE_LINKS[side], center, SOLE_SPHERE_RADIUS) for center in SOLE_SPHERES_IN_ANKLE)
-            for side in FOOT_FRAMES
-        },
+        mujoco_foot_geoms=sole_sphere_geoms(ANKLE_LINKS, SOLE_SPHERES_IN_ANKLE, SOLE_SPHERE_RADIUS),
         sole_size=SOLE_SIZE,
         sources={
             "kinematics, inertias, torque_limit, velocity_limit": "example-robot-data g1_description/urdf/g1_29dof_rev_1_0.urdf",

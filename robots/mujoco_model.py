@@ -1,16 +1,21 @@
-"""MuJoCo model of a robot, built with MjSpec from the SAME URDF as the Pinocchio model.
+"""MuJoCo model of a robot, built with MjSpec from the SAME robot file as the Pinocchio model.
 
 Pipeline (:func:`build_mujoco_spec`):
-    1. read the URDF text; resolve its ``package://`` mesh paths to files on disk;
-    2. inject ``<mujoco><compiler meshdir=... fusestatic="false" discardvisual="false"
-       balanceinertia="false"/></mujoco>`` so that every URDF link stays a MuJoCo body (the foot
-       frames exist as bodies) and inertias are taken as written;
-    3. parse with ``mujoco.MjSpec.from_string``, add a free joint "root_joint" on the root link;
-    4. remove the URDF's collision meshes (they are copies of the visual meshes; see
+    1. read the robot file (:func:`robot_file_spec`):
+       * a URDF (Bolt, G1): resolve its ``package://`` mesh paths to files on disk, inject
+         ``<mujoco><compiler meshdir=... fusestatic="false" discardvisual="false"
+         balanceinertia="false"/></mujoco>`` so that every URDF link stays a MuJoCo body (the foot
+         frames exist as bodies) and inertias are taken as written, parse with
+         ``mujoco.MjSpec.from_string`` and add a free joint "root_joint" on the root link;
+       * an MJCF (H1): parse with ``mujoco.MjSpec.from_file``, name the root body's free joint
+         "root_joint" (add one if it has none), and drop the file's actuators and lights (this
+         pipeline adds its own);
+    2. remove the source's collision geoms (URDF: copies of the visual meshes; see
        ``docs/robots.md``) and add collision spheres under the feet, plus a site per foot frame;
-    5. set the armature on the actuated joints, add one torque motor per actuated joint with
-       ``ctrlrange = ±torque_limit`` (Pinocchio joint order), a floor, a light, a tracking camera,
-       and the contact/solver options.
+    3. set the armature on the actuated joints (joint damping and friction loss 0, as in the
+       Pinocchio model), add one torque motor per actuated joint with ``ctrlrange =
+       ±torque_limit`` (Pinocchio joint order), a floor, a light, a tracking camera, and the
+       contact/solver options.
 
 The returned MjSpec can be modified before ``spec.compile()`` (terrain boxes, low-friction
 patches: see :func:`add_box_geom`). The robot's joints come first in qpos/qvel, in the same
@@ -73,7 +78,9 @@ def mujoco_urdf_text(robot: "RobotDescription") -> str:
     Only two edits: ``package://`` mesh paths become paths relative to ``robot.mesh_dir`` (or
     absolute when outside it) and the compiler block is inserted after ``<robot ...>``.
     """
-    text = Path(robot.urdf_path).read_text()
+    if robot.model_format != "urdf":
+        raise ParameterError(f"robot '{robot.name}' is described by an {robot.model_format.upper()}, not a URDF")
+    text = Path(robot.model_path).read_text()
     mesh_dir = Path(robot.mesh_dir).resolve()
 
     def replace(match: re.Match) -> str:
@@ -91,8 +98,36 @@ def mujoco_urdf_text(robot: "RobotDescription") -> str:
     )
     text, count = re.subn(r"(<robot\b[^>]*>)", lambda m: m.group(1) + block, text, count=1)
     if count != 1:
-        raise ParameterError(f"{robot.urdf_path} has no <robot> element")
+        raise ParameterError(f"{robot.model_path} has no <robot> element")
     return text
+
+
+def robot_file_spec(robot: "RobotDescription") -> mujoco.MjSpec:
+    """MjSpec of ``robot.model_path`` as read, with a free joint "root_joint" on the root body.
+
+    A URDF is read through :func:`mujoco_urdf_text`. An MJCF is read as it is, its mesh
+    directory set to ``robot.mesh_dir``; its actuators and lights are removed, since
+    :func:`build_mujoco_spec` adds one torque motor per actuated joint and its own light.
+
+    Returns:
+        The MjSpec (not compiled), no actuator; its collision geoms are still the file's.
+    """
+    if robot.model_format == "urdf":
+        spec = mujoco.MjSpec.from_string(mujoco_urdf_text(robot))
+    else:
+        spec = mujoco.MjSpec.from_file(str(robot.model_path))
+        spec.meshdir = str(Path(robot.mesh_dir).resolve())
+        for element in [*spec.actuators, *spec.lights]:
+            spec.delete(element)
+    root = spec.worldbody.first_body()
+    if root is None:
+        raise ParameterError(f"{robot.model_path} defines no body")
+    free_joints = [joint for joint in root.joints if joint.type == mujoco.mjtJoint.mjJNT_FREE]
+    if free_joints:
+        free_joints[0].name = FREE_JOINT_NAME
+    else:
+        root.add_freejoint(name=FREE_JOINT_NAME)
+    return spec
 
 
 def build_mujoco_spec(
@@ -106,12 +141,12 @@ def build_mujoco_spec(
     """Build the MjSpec of ``robot`` (not compiled; modify it, then call ``spec.compile()``).
 
     Args:
-        robot: the description (URDF, foot geoms, actuator limits, contact settings).
+        robot: the description (robot file, foot geoms, actuator limits, contact settings).
         timestep: simulation step [s] (default 1 kHz).
         floor: add an infinite floor plane at z = 0 named "floor".
         integrator: "implicitfast" (default), "euler", "implicit" or "rk4".
-        link_collisions: keep the URDF collision meshes of the links other than the lower legs
-            and feet (base, shoulders, upper legs) so that a falling robot lands on its body
+        link_collisions: keep the robot file's collision geoms of the links other than the lower
+            legs and feet (base, shoulders, upper legs) so that a falling robot lands on its body
             instead of passing through the floor; off by default (see ``docs/robots.md``).
         foot_friction: override ``robot.mujoco_contact.friction`` for the feet and floor [-].
 
@@ -130,16 +165,11 @@ def build_mujoco_spec(
     if contact.cone not in CONES:
         raise ParameterError(f"mujoco_contact.cone={contact.cone!r} must be one of {sorted(CONES)}")
 
-    spec = mujoco.MjSpec.from_string(mujoco_urdf_text(robot))
+    spec = robot_file_spec(robot)
     spec.modelname = robot.name
-
-    # --- floating base
     root = spec.worldbody.first_body()
-    if root is None:
-        raise ParameterError(f"{robot.urdf_path} defines no link")
-    root.add_freejoint(name=FREE_JOINT_NAME)
 
-    # --- geoms: URDF visuals stay (group 1, no collision); URDF collision meshes are removed
+    # --- geoms: the file's visuals stay (group 1, no collision); its collision geoms are removed
     # (or kept for the upper links when link_collisions); feet get spheres.
     foot_bodies = {body for geoms in robot.mujoco_foot_geoms.values() for body, _, _ in geoms}
     lower_links = set(foot_bodies)
@@ -148,7 +178,7 @@ def build_mujoco_spec(
         if parent is not None:
             lower_links.add(parent.name)
     for geom in list(spec.geoms):
-        if geom.contype == 0 and geom.conaffinity == 0:  # URDF <visual>
+        if geom.contype == 0 and geom.conaffinity == 0:  # visual geom (URDF <visual>, MJCF visual class)
             geom.group = 1
             continue
         body_name = geom.parent.name
@@ -164,7 +194,7 @@ def build_mujoco_spec(
         for index, (body_name, position, radius) in enumerate(geoms):
             body = spec.body(body_name)
             if body is None:
-                raise ParameterError(f"mujoco_foot_geoms['{side}'] names body {body_name!r}, not in the URDF")
+                raise ParameterError(f"mujoco_foot_geoms['{side}'] names body {body_name!r}, not in {robot.model_path.name}")
             body.add_geom(
                 name=foot_geom_name(side, index),
                 type=mujoco.mjtGeom.mjGEOM_SPHERE,
@@ -187,12 +217,16 @@ def build_mujoco_spec(
         placement = frame.placement if parent_body.name != frame_name else None
         _add_site(parent_body, foot_site_name(side), placement)
 
-    # --- actuated joints: armature; torque motors in Pinocchio order
+    # --- actuated joints: armature, no damping or friction loss (the Pinocchio model has none:
+    # the URDFs' are 0, the H1 MJCF's damping 1 is Menagerie's default class); torque motors in
+    # Pinocchio order
     for joint_name, armature, torque_limit in zip(robot.actuated_joint_names, robot.armature, robot.torque_limit):
         joint = spec.joint(joint_name)
         if joint is None:
             raise ParameterError(f"actuated joint {joint_name!r} is not a joint of the MuJoCo model")
-        joint.armature = float(armature)  # damping and friction loss: the URDF's (0 for Bolt)
+        joint.armature = float(armature)
+        joint.damping = 0.0 * joint.damping  # a float in MuJoCo 3, a (3,) array in MuJoCo 4
+        joint.frictionloss = 0.0
         actuator = spec.add_actuator(name=joint_name, target=joint_name)
         actuator.trntype = mujoco.mjtTrn.mjTRN_JOINT
         actuator.set_to_motor()
@@ -240,7 +274,7 @@ def _look_at_quaternion(eye: np.ndarray, target: np.ndarray) -> np.ndarray:
 
 
 def _body_of_frame(spec: mujoco.MjSpec, model, frame):
-    """MuJoCo body holding a Pinocchio frame (the URDF link of the same name, else the joint's child)."""
+    """MuJoCo body holding a Pinocchio frame (the body of the same name, else the joint's child)."""
     body = spec.body(frame.name)
     if body is not None:
         return body

@@ -35,7 +35,7 @@ def test_backend_errors_name_the_problem(monkeypatch):
 
 
 def test_ray_on_this_machine_matches_in_process_runs(tmp_path):
-    pytest.importorskip("ray", reason="ray is an optional extra (pip install ray); CI installs only .[test,bench]")
+    pytest.importorskip("ray", reason="ray is an optional extra (pip install ray); CI installs .[test,bench,h1]")
     inline = run_campaign(tiny_push_map(), tmp_path / "inline", backend="inline", progress=False)
     on_ray = run_campaign(tiny_push_map(), tmp_path / "ray", backend="ray", workers=2, progress=False)
     assert (inline.n_run, on_ray.n_run, on_ray.backend, on_ray.workers) == (4, 4, "ray", 2)

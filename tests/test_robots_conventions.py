@@ -1,14 +1,16 @@
 """Pinocchio <-> MuJoCo conventions, checked by comparing both engines on random states.
 
-Both models come from the same URDF; at the same physical state they must give the same foot
-positions and velocities, the same mass matrix (armature included) and the same free-fall
-forward dynamics, up to rounding.
+Both models come from the same robot file (Bolt and G1: URDF, H1: MJCF); at the same physical
+state they must give the same mass and centre of mass, the same foot placements, velocities and
+contact Jacobians, the same mass matrix (armature included) and the same free-fall forward
+dynamics, up to rounding.
 """
 
 import mujoco
 import numpy as np
 import pinocchio as pin
 import pytest
+from robot_extras import ALL_ROBOTS
 
 from robots import load_robot
 from robots.conventions import (
@@ -29,9 +31,9 @@ from wbmpc.errors import ParameterError
 N_STATES = 25
 
 
-@pytest.fixture(scope="module", params=["bolt", "g1"])
+@pytest.fixture(scope="module", params=ALL_ROBOTS)
 def robot(request):
-    """Each engine-comparison test runs on Bolt and on G1."""
+    """Each engine-comparison test runs on Bolt, G1 and H1."""
     return load_robot(request.param)
 
 
@@ -106,6 +108,39 @@ def test_foot_positions_and_velocities_agree(robot, mj_model):
             expected = pin.getFrameVelocity(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED)
             np.testing.assert_allclose(velocity[3:], expected.linear, rtol=0, atol=1e-11)
             np.testing.assert_allclose(velocity[:3], expected.angular, rtol=0, atol=1e-11)
+
+
+def test_mass_and_centre_of_mass_agree(robot, mj_model):
+    model, data = robot.pinocchio_model, robot.create_pinocchio_data()
+    mj_data = mujoco.MjData(mj_model)
+    assert float(np.sum(mj_model.body_mass)) == pytest.approx(robot.mass, rel=1e-12)
+    for q, v in random_states(robot, seed=9):
+        mj_data.qpos[:], mj_data.qvel[:] = pinocchio_to_mujoco_state(robot, q, v)
+        mujoco.mj_forward(mj_model, mj_data)
+        # subtree_com of the world body: the whole model's centre of mass, world frame
+        np.testing.assert_allclose(mj_data.subtree_com[0], pin.centerOfMass(model, data, q), rtol=0, atol=1e-12)
+
+
+def test_foot_placements_and_contact_jacobians_agree(robot, mj_model):
+    """Foot frame orientation (site frame) and the 6D contact Jacobian, world-aligned at the frame:
+    J_pinocchio = J_mujoco T (T maps Pinocchio's v to MuJoCo's qvel)."""
+    model, data = robot.pinocchio_model, robot.create_pinocchio_data()
+    mj_data = mujoco.MjData(mj_model)
+    sites = {side: mj_model.site(foot_site_name(side)).id for side in robot.foot_frames}
+    jac_position, jac_rotation = np.zeros((3, robot.nv)), np.zeros((3, robot.nv))
+    for q, v in random_states(robot, seed=10):
+        mj_data.qpos[:], mj_data.qvel[:] = pinocchio_to_mujoco_state(robot, q, v)
+        mujoco.mj_forward(mj_model, mj_data)
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        T = velocity_transform(robot, q)
+        for side, frame_id in robot.foot_frame_ids.items():
+            site = sites[side]
+            np.testing.assert_allclose(mj_data.site_xmat[site].reshape(3, 3), data.oMf[frame_id].rotation, rtol=0, atol=1e-12)
+            mujoco.mj_jacSite(mj_model, mj_data, jac_position, jac_rotation, site)
+            expected = pin.getFrameJacobian(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED)
+            np.testing.assert_allclose(jac_position @ T, expected[:3], rtol=0, atol=1e-12)
+            np.testing.assert_allclose(jac_rotation @ T, expected[3:], rtol=0, atol=1e-12)
 
 
 def test_mass_matrices_agree_including_armature(robot, mj_model):

@@ -77,7 +77,7 @@ def test_bad_description_fields_are_rejected(bolt):
         contact_type="point3d", foot_radius=0.016, contact_frame_height=0.016,
         q_reference=bolt.q_reference, v_reference=bolt.v_reference, torque_limit=bolt.torque_limit,
         velocity_limit=bolt.velocity_limit, armature=bolt.armature,
-        actuated_joint_names=bolt.actuated_joint_names, urdf_path=bolt.urdf_path,
+        actuated_joint_names=bolt.actuated_joint_names, model_path=bolt.model_path,
         package_dirs=bolt.package_dirs, mesh_dir=bolt.mesh_dir,
     )
     with pytest.raises(ParameterError, match="contact_type='line' must be one of"):

@@ -95,7 +95,7 @@ def test_urdf_text_only_gains_the_compiler_block_and_explicit_mesh_paths(bolt):
     text = mujoco_urdf_text(bolt)
     assert "package://" not in text
     assert 'fusestatic="false"' in text and 'discardvisual="false"' in text
-    original = bolt.urdf_path.read_text()
+    original = bolt.model_path.read_text()
     assert text.count("<joint ") == original.count("<joint ") and text.count("<link ") == original.count("<link ")
 
 

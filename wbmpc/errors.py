@@ -13,6 +13,11 @@ class ParameterError(WbmpcError, ValueError):
     """A user-supplied parameter is out of its allowed range or of the wrong shape."""
 
 
+class MissingExtraError(WbmpcError, ImportError):
+    """A feature needs an optional extra that is not installed (the message gives the
+    ``pip install 'wbmpc[NAME]'`` line)."""
+
+
 class SolverError(WbmpcError):
     """A numerical solver failed (infeasible problem, divergence, maximum iterations)."""
 
