@@ -78,12 +78,18 @@ def test_set_with_a_word_for_a_number_is_one_line(capsys):
 
 def test_unknown_robot_is_one_line_on_every_subcommand_that_takes_one(capsys):
     for argv in (["walk", "--robot", "robby", "--duration", "0.05"], ["run", "push", "--robot", "robby"],
-                 ["plan", "--robot", "robby"], ["ocp", "--robot", "robby"],
+                 ["plan", "--robot", "robby"], ["ocp", "--robot", "robby"], ["demo", "--robot", "robby"],
                  ["campaign", "push-map", "--robot", "robby", "--backend", "inline"],
                  ["bench", "loop", "--robot", "robby", "--baseline", "none"]):
         assert main(argv) == 2, argv
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "robot='robby' is not known; available robots: bolt" in err, err
+
+
+def test_demo_refuses_a_speed_outside_the_robots_command_range_before_running(capsys, tmp_path):
+    assert main(["demo", "--robot", "g1", "--speed", "1.0", "--out", str(tmp_path / "run")]) == 2
+    err = capsys.readouterr().err
+    assert err == "wbmpc demo: error: velocity command v_x=1.0 m/s for robot 'g1' must be in [-0.2, 0.5] m/s\n"
 
 
 def test_library_errors_reach_the_user_as_one_line_with_exit_code_2(capsys, monkeypatch):
