@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from wbmpc_fixtures import alternating_schedule, random_state, standing_state
 
@@ -263,3 +264,34 @@ def test_a_second_batched_problem_over_the_same_models_detaches_the_first(bolt):
     second.calc(xs, us)
     with pytest.raises(ParameterError, match="bound by a newer BatchedShootingProblem"):
         first.calc(xs, us)
+
+
+def test_the_base_yaw_reference_follows_the_planned_footholds(bolt):
+    """base_yaw_reference="footholds": each node's state reference turns the base by the mean
+    yaw of the feet's footholds (both evaluations see it); "fixed" keeps the reference posture's."""
+    from wbmpc.walking.ocp import foothold_heading
+
+    schedule = alternating_schedule(0.0, 0.01, 40)
+    contact = np.asarray(schedule.in_contact)
+    turning = dataclasses.replace(  # the left foothold at 0.2 rad, the right one at 0.4, landings at 0.6
+        schedule, contact_yaw=np.where(contact, np.array([0.2, 0.4]), np.nan),
+        touchdown_yaw=np.where(contact, np.nan, 0.6))
+    heading = foothold_heading(contact, turning.contact_yaw, turning.touchdown_yaw)
+    assert set(np.round(heading, 12)) == {0.4, 0.5}  # left swinging: (0.6 + 0.4) / 2; right swinging: (0.2 + 0.6) / 2
+    xs, us = _random_trajectory(bolt, 40, 6, seed=3)
+    costs = {}
+    for reference in ("fixed", "footholds"):
+        ocp = WalkingOCP(bolt, WalkingOCPConfig(base_yaw_reference=reference), n_nodes=40, dt=0.01)
+        ocp.update(standing_state(bolt), turning, np.array([0.1, 0.0, 0.3]))
+        nodes, batched = _twin_problems(ocp)
+        costs[reference] = batched.calc(xs, us)
+        assert costs[reference] == pytest.approx(nodes.calc(xs, us), rel=1e-13)
+        models = [*ocp.problem.running_models, ocp.problem.terminal_model]
+        yaws = [pin.rpy.matrixToRpy(pin.Quaternion(m.differential.costs.costs["state_regularization"]
+                                                   .cost.residual.reference[3:7]).toRotationMatrix())[2] for m in models]
+        np.testing.assert_allclose(yaws, heading if reference == "footholds" else 0.0, atol=1e-12)
+    assert costs["footholds"] != pytest.approx(costs["fixed"], rel=1e-6)
+    with pytest.raises(ParameterError, match="base_yaw_reference='heading' must be one of"):
+        WalkingOCPConfig(base_yaw_reference="heading")
+    with pytest.raises(ParameterError, match="a node has no foot with a planned yaw"):
+        foothold_heading(contact[:2], np.full((2, 2), np.nan), np.full((2, 2), np.nan))

@@ -143,6 +143,14 @@ class WalkingOCPConfig:
             centre of pressure use, (0, 1] (a margin against the sole's edges).
         swing_orientation_weight: flat feet: orientation of the swing foot towards flat with
             the planned touchdown yaw, log3(R_ref^T R) [rad], at every swing node; 0 = off.
+        base_yaw_reference: the world yaw of the base in the state regularisation's reference:
+            "fixed" (the reference posture's, the paper's choice; Bolt cannot turn) or
+            "footholds" (at each node the mean of the feet's planned yaws: the foothold each
+            stance foot stands on, the touchdown yaw of a swinging foot; see
+            :func:`foothold_heading`), so the pelvis turns with the feet when the plan turns. With
+            "fixed" the G1 turning in place at 0.3 rad/s put its feet within 3 deg of the plan
+            while the pelvis lagged by a third of the planned heading (49 deg after 10 s), the
+            hips twisting until the fall (docs/closed_loop.md).
         baumgarte_gains: (Kp [1/s²], Kd [1/s]) of the contact constraints.
         dynamics_backend: "pinocchio" (constraintDynamics and its derivatives, fast) or "kkt"
             (Crocoddyl's formulas written out); same results (see :mod:`wbmpc.ocp.dynamics`).
@@ -173,6 +181,7 @@ class WalkingOCPConfig:
     wrench_cone_weight: float = 0.0
     cop_sole_fraction: float = 1.0
     swing_orientation_weight: float = 0.0
+    base_yaw_reference: str = "fixed"
     baumgarte_gains: tuple[float, float] = (0.0, 50.0)
     dynamics_backend: str = "pinocchio"
     evaluation: str = "auto"
@@ -205,8 +214,31 @@ class WalkingOCPConfig:
             raise ParameterError(f"dynamics_backend={self.dynamics_backend!r} must be 'pinocchio' or 'kkt'")
         if self.evaluation not in ("auto", "batched", "nodes"):
             raise ParameterError(f"evaluation={self.evaluation!r} must be 'auto', 'batched' or 'nodes'")
+        if self.base_yaw_reference not in BASE_YAW_REFERENCES:
+            raise ParameterError(f"base_yaw_reference={self.base_yaw_reference!r} must be one of {BASE_YAW_REFERENCES}")
         if not (0 < self.reg_min <= self.reg_max):
             raise ParameterError(f"need 0 < reg_min={self.reg_min} <= reg_max={self.reg_max}")
+
+
+BASE_YAW_REFERENCES = ("fixed", "footholds")
+
+
+def foothold_heading(in_contact: np.ndarray, contact_yaw: np.ndarray, touchdown_yaw: np.ndarray) -> np.ndarray:
+    """Planned heading of the base at each node [rad], shape (n,): the mean of the feet's yaws.
+
+    A foot in contact counts with the yaw of the foothold it stands on, a swinging foot with its
+    touchdown yaw; a yaw the plan does not know (NaN: a foot that landed before the plan) is left
+    out. Yaws are the plan's, not wrapped, so the mean of two footholds either side of ±π is right.
+
+    Args:
+        in_contact: (n, n_feet) bool; contact_yaw, touchdown_yaw: (n, n_feet) [rad], NaN where
+            undefined (a ``sequencer.schedule.ContactSchedule``'s arrays).
+    """
+    yaws = np.where(np.asarray(in_contact, dtype=bool), contact_yaw, touchdown_yaw)
+    known = np.isfinite(yaws)
+    if not np.all(known.any(axis=1)):
+        raise ParameterError("foothold_heading: a node has no foot with a planned yaw")
+    return np.where(known, yaws, 0.0).sum(axis=1) / known.sum(axis=1)
 
 
 def swing_height_reference(phase, apex_height: float):
@@ -270,6 +302,10 @@ class WalkingOCP:
         # foothold, contact force, friction cone, wrench cone, orientation) cost items, None where
         # the term is absent)
         self._node_terms = []
+        self._state_residuals = [model.differential.costs.costs["state_regularization"].cost.residual
+                                 for model in running + [terminal]]
+        # the reference posture's base orientation (Pinocchio's q[3:7] = (x, y, z, w)), turned by the heading
+        self._base_rotation_reference = pin.Quaternion(self.x_reference[3:7]).toRotationMatrix()
         for model in running + [terminal]:
             items = model.differential.costs.costs
             self._node_terms.append((model.differential, [
@@ -453,6 +489,11 @@ class WalkingOCP:
                     orientation.active = swing
                     if swing:
                         orientation.cost.residual.reference[:] = yaw_rotation(touchdown_yaw[k, j])
+        if cfg.base_yaw_reference == "footholds":
+            heading = foothold_heading(in_contact, np.asarray(schedule.contact_yaw, dtype=float)[:, columns],
+                                       np.asarray(schedule.touchdown_yaw, dtype=float)[:, columns])
+            for residual, yaw in zip(self._state_residuals, heading.tolist()):  # (a batched problem's rows)
+                residual.reference[3:7] = pin.Quaternion(yaw_rotation(yaw) @ self._base_rotation_reference).coeffs()
         self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
         if self.evaluation == "batched":  # contact sets (references, weights and activity are shared)
             self.problem.sync()
