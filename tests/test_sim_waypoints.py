@@ -178,7 +178,10 @@ def test_heading_error_leaves_out_the_corners_but_not_the_sides():
 
 # ---------------------------------------------------------------------- closed loop
 @pytest.mark.filterwarnings("ignore::UserWarning")
-def test_bolt_starts_along_the_circle_in_closed_loop():
+def test_bolt_starts_along_the_circle_in_closed_loop(tmp_path):
+    from matplotlib.image import imread
+
+    from sim.plots import plot_path, save_figures
     from sim.runner import run_scenario
 
     log = run_scenario("waypoints", robot="bolt", path="circle", duration=3.0, ramp_time=1.0, progress=False)
@@ -189,3 +192,7 @@ def test_bolt_starts_along_the_circle_in_closed_loop():
     command = log.ticks["velocity_command"]
     assert np.all(np.abs(command[:, 1]) <= 0.1 + 1e-9) and np.all(command[:, 2] == 0.0)  # Bolt's range
     assert command[-1, 1] > 0.0  # steering left, round the circle
+    # the figure gets the path panel: the path, the footholds, the CoM
+    ax = plot_path(log)
+    assert {"path (circle)", "CoM", "left foot (contact)", "right foot (contact)"} <= set(ax.get_legend_handles_labels()[1])
+    assert imread(save_figures(log, tmp_path / "waypoints.png")).shape[0] > 1.5 * 11 * 120  # taller than a walk's
