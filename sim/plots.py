@@ -179,7 +179,7 @@ def plot_path(log, ax=None):
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    ax.legend(loc="upper right", fontsize=7)
+    ax.legend(loc="center", fontsize=7)  # inside the closed path, away from the traces
     return ax
 
 
