@@ -5,6 +5,7 @@ closed loop on Bolt."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -192,6 +193,11 @@ def test_bolt_starts_along_the_circle_in_closed_loop(tmp_path):
     command = log.ticks["velocity_command"]
     assert np.all(np.abs(command[:, 1]) <= 0.1 + 1e-9) and np.all(command[:, 2] == 0.0)  # Bolt's range
     assert command[-1, 1] > 0.0  # steering left, round the circle
+    from wbmpc.cli.walk import format_metrics
+
+    table = format_metrics({**log.summary(), "paper": {}})
+    assert re.search(rf"\n  path deviation max +{m['path_deviation_max']:.3f} m\n", table), table
+    assert re.search(rf"\n  path completion +{100 * m['path_completion']:.1f} %\n", table), table
     # the figure gets the path panel: the path, the footholds, the CoM
     ax = plot_path(log)
     assert {"path (circle)", "CoM", "left foot (contact)", "right foot (contact)"} <= set(ax.get_legend_handles_labels()[1])

@@ -253,6 +253,11 @@ def format_metrics(summary: dict) -> str:
     if "push_recovered" in m:
         lines.append(f"  {'push recovered':<28} {m['push_recovered']}")
         row("push recovery time", m.get("push_recovery_time"), "s", fmt=".2f")
+    if "path_deviation_max" in m:
+        row("path deviation max", m["path_deviation_max"], "m")
+        row("path deviation mean", m["path_deviation_mean"], "m")
+        row("heading error max", m.get("heading_error_max"), "rad")  # away from corners (sim.metrics)
+        row("path completion", m["path_completion"], "%", 100.0, ".1f")
     row("max |tau| / limit", m.get("max_torque_ratio"), fmt=".2f")
     row("saturated ticks", m.get("saturated_fraction"), "%", 100.0, ".1f")
     if "mpc_updates" in m:
