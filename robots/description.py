@@ -227,6 +227,21 @@ class RobotDescription:
         return float(pin.computeTotalMass(self.pinocchio_model))
 
     @property
+    def base_body(self) -> str:
+        """Name of the link the free flyer carries (the URDF's root link; Bolt "base_link", G1
+        "pelvis"): the base body of the MuJoCo model too, which is built from the same URDF."""
+        model = self.pinocchio_model
+        root_joint_frame = model.getFrameId("root_joint", pin.FrameType.JOINT)
+        return next(frame.name for frame in model.frames
+                    if frame.type == pin.FrameType.BODY and frame.parentFrame == root_joint_frame)
+
+    @property
+    def base_height_reference(self) -> float:
+        """Height of the base above the floor at ``q_reference`` [m] (Bolt 0.34, G1 0.76): the
+        robot's size, by which scenarios scale their obstacles."""
+        return float(self.q_reference[2])
+
+    @property
     def com_position_reference(self) -> np.ndarray:
         """Centre of mass at ``q_reference``, world frame, shape (3,) [m]."""
         data = self.pinocchio_model.createData()
@@ -270,7 +285,7 @@ class RobotDescription:
             "contact_type": self.contact_type,
             "foot_frames": dict(self.foot_frames),
             "foot_radius_m": self.foot_radius,
-            "base_height_reference_m": float(self.q_reference[2]),
+            "base_height_reference_m": self.base_height_reference,
             "com_height_reference_m": self.com_height_reference,
             "foot_positions_reference_world_m": {side: p.tolist() for side, p in feet.items()},
             "actuated_joint_names": list(self.actuated_joint_names),

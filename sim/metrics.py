@@ -14,6 +14,14 @@ Definitions (all times in s, velocities in m/s, world frame):
   (paper, transition 0 -> 0.3 m/s: 4.35 s).
 - ``push_recovery_time``: time from the end of the push until the running average of the base y
   velocity is back within ``RECOVERY_BAND`` of its value before the push, and stays there.
+- path following (scenarios whose parameters name a path, ``waypoints``; :func:`path_metrics`):
+  ``path_deviation_max``, ``path_deviation_mean`` [m]: distance from the base's ground projection
+  to the path over the run; ``heading_error_max``, ``heading_error_mean`` [rad]: |base yaw - the
+  path's tangent heading at the closest point|, over the ticks whose closest point is more than
+  ``HEADING_CORNER_MARGIN`` of arc length from every corner (the heading jumps by 90° at a
+  corner of the square: the error there says how the turn is shared, not how well the robot
+  follows); ``path_progress`` [m]: arc length of the closest point at the end of the run;
+  ``path_completion``: ``path_progress`` / (laps x path length) (1 = back at the end point).
 - ``max_stance_slide``: largest distance between the stance foot and its touchdown point (slips).
 - ``max_torque_ratio``: max |tau_command| / torque limit (> 1 means the limits clipped the command);
   ``saturated_fraction``: fraction of ticks with at least one clipped joint.
@@ -31,7 +39,9 @@ from typing import Any
 import numpy as np
 
 from robots.conventions import base_yaw
+from sim.paths import PlanarPath, path_from_parameters, wrap_angle
 
+HEADING_CORNER_MARGIN = 0.5  # [m] of arc length on each side of a path's corner, left out of the heading error
 AVERAGE_WINDOW = 1.0  # [s], running average of the base velocity (about two steps)
 RECOVERY_BAND = 0.03  # [m/s]
 PAPER_FIGURES = {
@@ -71,6 +81,29 @@ def max_stance_slide(t: np.ndarray, feet: np.ndarray, replans: dict) -> float:
     measured = feet[index, foot, :2]
     recorded = np.column_stack([replans["stance_x"], replans["stance_y"]])
     return float(np.max(np.linalg.norm(measured - recorded, axis=1)))
+
+
+def path_metrics(path: PlanarPath, position: np.ndarray, yaw: np.ndarray, laps: float = 1.0) -> dict[str, float]:
+    """How closely a walk followed ``path`` (definitions in the module docstring).
+
+    Args:
+        path: the path.
+        position: (n, 2) base ground projection, world frame [m], in time order.
+        yaw: (n,) base yaw [rad].
+        laps: times round the path the walk was meant to go (the completion's denominator).
+    """
+    s, distance = path.project(position)
+    progress = np.unwrap(s, period=path.length)  # continuous arc length, across the start of a lap
+    progress -= path.length * np.round(progress[0] / path.length)  # from the start: within ±length/2 of 0
+    metrics = {"path_deviation_max": float(np.max(distance)), "path_deviation_mean": float(np.mean(distance)),
+               "path_progress": float(progress[-1]), "path_completion": float(progress[-1] / (laps * path.length))}
+    half = 0.5 * path.length
+    to_corners = np.abs((s[:, None] - path.corners[None, :] + half) % path.length - half)  # (n, k) [m], along the path
+    away = np.all(to_corners > HEADING_CORNER_MARGIN, axis=1)
+    error = np.abs(wrap_angle(np.asarray(yaw, dtype=float) - path.heading_at(s)))[away]
+    metrics["heading_error_max"] = float(np.max(error)) if error.size else None
+    metrics["heading_error_mean"] = float(np.mean(error)) if error.size else None
+    return metrics
 
 
 def compute_metrics(log) -> dict[str, Any]:
@@ -143,6 +176,12 @@ def compute_metrics(log) -> dict[str, Any]:
             metrics["push_max_dcm_deviation_y"] = float(
                 np.max(np.abs(ticks["dcm"][after, 1] - ticks["dcm"][before][-1, 1]))
             )
+
+    # Path following (waypoints).
+    scenario = log.params.get("scenario", {})
+    path = path_from_parameters(scenario)
+    if path is not None:
+        metrics.update(path_metrics(path, ticks["x"][:, :2], base_yaw(ticks["x"][:, 3:7]), scenario.get("laps", 1.0)))
 
     # Foot slip: stance foot away from where it touched down.
     if "feet" in ticks:

@@ -5,7 +5,10 @@
 - :func:`plot_velocity`: base velocity along x and y (blue), its running average (green) and the
   command (red) over time (Figs. 6 and 8);
 - :func:`plot_plane`: foot contacts and DCM in the ground plane (as Fig. 3, for the executed walk);
-- :func:`save_figures`: all three into one PNG (``--plot FILE``).
+- :func:`plot_path` (runs that follow a path, ``waypoints``): the path (grey, corners as
+  squares), the footholds (foot positions in contact) and the CoM trace in the ground plane,
+  equal scales, with the path metrics in the title;
+- :func:`save_figures`: all of them into one PNG (``--plot FILE``, and ``figures.png`` in ``--out``).
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ import os
 import numpy as np
 
 from sim.metrics import running_average
+from sim.paths import path_from_parameters
 
 COLORS = {"com": "tab:purple", "dcm": "tab:green", "left": "tab:red", "right": "tab:blue", "command": "tab:red"}
 
@@ -143,15 +147,56 @@ def plot_plane(log, ax=None):
     return ax
 
 
-def save_figures(log, path: str | os.PathLike) -> str:
-    """Draw the three figures of ``log`` into one PNG at ``path``; returns the path."""
+def plot_path(log, ax=None):
+    """The followed path, the footholds and the CoM trace in the ground plane, x-y [m], equal scales.
+
+    Returns None (nothing drawn) when the run's scenario parameters name no path.
+    """
+    path = path_from_parameters(log.params.get("scenario", {}))
+    if path is None:
+        return None
     plt = _pyplot()
-    fig = plt.figure(figsize=(10, 11))
-    grid = fig.add_gridspec(4, 1, height_ratios=[1.2, 0.8, 0.8, 1.2])
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 6))
+    ticks = log.ticks
+    closed = np.vstack([path.vertices, path.vertices[:1]])
+    ax.plot(closed[:, 0], closed[:, 1], color="0.6", lw=3.0, alpha=0.6, label=f"path ({path.name})")
+    corners = path.point_at(path.corners)
+    if len(corners):
+        ax.scatter(corners[:, 0], corners[:, 1], marker="s", s=25, color="0.4", label="corners")
+    for j, foot in enumerate(("left", "right")[: ticks["feet"].shape[1]]):
+        contact = ticks["foot_contact"][:, j]
+        ax.scatter(ticks["feet"][contact, j, 0], ticks["feet"][contact, j, 1], s=2, color=COLORS[foot],
+                   label=f"{foot} foot (contact)")
+    ax.plot(ticks["com"][:, 0], ticks["com"][:, 1], color=COLORS["com"], lw=1.0, label="CoM")
+    ax.scatter(*ticks["com"][0, :2], marker="o", s=30, color="k", zorder=3, label="start")
+    m = log.metrics
+    if m.get("path_deviation_max") is not None:
+        heading = m.get("heading_error_max")
+        ax.set_title(f"deviation max {m['path_deviation_max']:.3f} m, mean {m['path_deviation_mean']:.3f} m; "
+                     f"heading error max {'n/a' if heading is None else f'{heading:.2f} rad'}; "
+                     f"completion {100 * m['path_completion']:.0f} %", fontsize=9)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.legend(loc="center", fontsize=7)  # inside the closed path, away from the traces
+    return ax
+
+
+def save_figures(log, path: str | os.PathLike) -> str:
+    """Draw the figures of ``log`` into one PNG at ``path`` (with :func:`plot_path` below the others
+    when the run followed a path); returns the path."""
+    plt = _pyplot()
+    follows_path = path_from_parameters(log.params.get("scenario", {})) is not None
+    ratios = [1.2, 0.8, 0.8, 1.2] + ([3.0] if follows_path else [])
+    fig = plt.figure(figsize=(10, 11 + (6 if follows_path else 0)))
+    grid = fig.add_gridspec(len(ratios), 1, height_ratios=ratios)
     plot_lateral(log, fig.add_subplot(grid[0]))
     ax_x = fig.add_subplot(grid[1])
     plot_velocity(log, [ax_x, fig.add_subplot(grid[2], sharex=ax_x)])
     plot_plane(log, fig.add_subplot(grid[3]))
+    if follows_path:
+        plot_path(log, fig.add_subplot(grid[4]))
     title = f"{log.scenario} (seed {log.seed}): {log.status}"
     if log.fall_reason:
         title += f" at t = {log.fall_time:.2f} s ({log.fall_reason})"

@@ -8,7 +8,8 @@ Each tick (``model.opt.timestep``, 1 ms):
 
 1. read MuJoCo's state and convert it to Pinocchio's convention (``robots.conventions``);
 2. compute CoM, DCM and feet (logged for every controller), classify ground contacts, detect a fall;
-3. build the measurement (optionally with Gaussian noise in the tangent space);
+3. build the measurement (optionally with Gaussian noise in the tangent space) and ask the scenario
+   for its velocity command, given the measured base pose (x, y, yaw);
 4. every ``controller.replan_period``: pass the scenario's velocity command, call ``replan``;
 5. ``tau = controller.compute(...)``, clipped to the robot's torque limits, written to ``data.ctrl``;
 6. the scenario acts (pushes), then ``mj_step``.
@@ -32,6 +33,7 @@ from typing import Any, Callable
 import numpy as np
 import pinocchio as pin
 
+from robots.conventions import base_yaw
 from sequencer.planner import VelocityCommand
 from sim.falls import ContactSensor, FallCriteria, detect_fall
 from sim.log import RunLog
@@ -82,7 +84,7 @@ class RunnerOptions:
         if preset is not None:
             height = preset.fall.min_base_height if height is None else height
             tilt = preset.fall.max_tilt_deg if tilt is None else tilt
-        height = 0.5 * float(robot.q_reference[2]) if height is None else height
+        height = 0.5 * robot.base_height_reference if height is None else height
         tilt = 50.0 if tilt is None else tilt
         return FallCriteria(min_base_height=height, max_tilt=np.deg2rad(tilt))
 
@@ -200,6 +202,17 @@ def run_scenario(
     return _ClosedLoop(scenario, ctrl, options, robot, duration, int(seed), log, out, preset, on_tick).run()
 
 
+def controller_command_range(controller: Controller) -> dict[str, tuple[float, float]] | None:
+    """The velocity commands ``controller`` accepts, heading frame: {"v_x": (min, max) [m/s], "v_y": (min,
+    max) [m/s], "yaw_rate": (min, max) [rad/s]}, what :meth:`WalkingController.check_command` lets
+    through (the preset's ``[command]`` range within the planner's bounds); None for other controllers."""
+    if not isinstance(controller, WalkingController):
+        return None
+    preset, planner = controller.preset.command, controller.planner.command_range()
+    return {name: (max(getattr(preset, name)[0], planner[name][0]), min(getattr(preset, name)[1], planner[name][1]))
+            for name in ("v_x", "v_y", "yaw_rate")}
+
+
 def _jsonable_param(value: Any) -> Any:
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return dataclasses.asdict(value)
@@ -225,6 +238,7 @@ class _ClosedLoop:
         self.to_pinocchio = mujoco_to_pinocchio_state
         self.rng = np.random.default_rng(self.seed)
         self.robot = robot = load_robot(self.robot_name)
+        self.scenario.setup(robot, controller_command_range(self.controller))
         spec = build_mujoco_spec(robot, link_collisions=True)
         self.scenario.modify_spec(spec, self.rng)
         self.mj_model = spec.compile()
@@ -320,7 +334,9 @@ class _ClosedLoop:
                 pin.updateFramePlacements(self.model, self.data)
                 feet = np.array([self.data.oMf[f].translation for f in self.frame_ids])
                 foot_contact, other_contact = self.contacts.classify(data)
-                command = self.scenario.velocity_command(t)
+                measurement = Measurement(t, self._measure_noise(q, v), foot_contact)
+                pose = (measurement.x[0], measurement.x[1], float(base_yaw(measurement.x[3:7])))
+                command = self.scenario.velocity_command(t, pose)
                 ticks["t"][r] = t
                 ticks["qpos"][r] = data.qpos
                 ticks["qvel"][r] = data.qvel
@@ -341,7 +357,6 @@ class _ClosedLoop:
                     if self.options.stop_on_fall:
                         break
 
-                measurement = Measurement(t, self._measure_noise(q, v), foot_contact)
                 if x0 is None:
                     x0 = measurement.x.copy()
                     tic = time.perf_counter()

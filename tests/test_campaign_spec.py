@@ -71,7 +71,7 @@ def test_trial_arguments_translate_force_components_phase_and_step_timing():
         ({"push_after": 1.0}, "push_after needs a phase"),
         ({"step_timing": "sometimes"}, "step_timing='sometimes' must be one of"),
         ({"push_time": 5.95}, r"the push ends at t = 6.050 s, not before the end of the trial \(duration=6.0 s\)"),
-        ({"force": 500.0}, r"force=500.0 N must be in"),
+        ({"force": 1500.0}, r"force=1500.0 N must be in \[0.0, 1000.0\] N"),
     ],
 )
 def test_invalid_trial_parameters_are_named(params, message):

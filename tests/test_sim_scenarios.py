@@ -79,6 +79,38 @@ def test_slip_patch_lies_on_the_chosen_track(side, track_y):
         make_scenario("slip", track_y=float("nan"))
 
 
+def test_push_terrain_and_slip_take_the_robots_base_and_size_from_its_description():
+    g1, bolt = load_robot("g1"), load_robot("bolt")
+    model = build_mujoco_spec(g1).compile()
+    push = make_scenario("push", force=721.0)  # the corner of the G1's push map, (600, 400) N
+    push.setup(g1, None)
+    push.initialize_episode(model, mujoco.MjData(model), np.random.default_rng(0))
+    assert model.body(push._body_id).name == "pelvis" == g1.base_body
+    with pytest.raises(ParameterError, match=r"^force=1500.0 N must be in \[0.0, 1000.0\] N$"):
+        make_scenario("push", force=1500.0)
+
+    scale = g1.base_height_reference / bolt.base_height_reference
+    assert 2.0 < scale < 2.5
+    terrain = make_scenario("terrain", length=20.0, width=1.0)
+    terrain.setup(g1, None)
+    assert terrain.size_scale == pytest.approx(scale)
+    boxes = terrain.sample_boxes(np.random.default_rng(0))
+    assert np.all((boxes[:, 5] >= 0.005 * scale) & (boxes[:, 5] <= 0.008 * scale))
+    assert np.all((boxes[:, 3:5] >= 0.01 * scale) & (boxes[:, 3:5] <= 0.05 * scale))
+    assert np.abs(boxes[:, 1]).max() <= 0.5 * scale and np.abs(boxes[:, 1]).max() > 0.5  # the strip widened
+    terrain.setup(bolt, None)
+    assert terrain.size_scale == pytest.approx(1.0)
+    paper_sizes = make_scenario("terrain", scale=1.0)
+    paper_sizes.setup(g1, None)
+    assert paper_sizes.size_scale == 1.0
+
+    slip = make_scenario("slip", side="right")
+    slip.setup(g1, None)  # no measured tracks: under the standing foot
+    assert slip.tracks["right"] == pytest.approx(g1.foot_positions_reference()["right"][1])
+    slip.setup(bolt, None)
+    assert slip.tracks == slip.MEASURED_TRACKS["bolt"]
+
+
 def test_transition_command_changes_at_the_switch_and_walk_ramps():
     scenario = make_scenario("transition")
     assert scenario.velocity_command(4.99) == (0.0, 0.0, 0.0)

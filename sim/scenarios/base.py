@@ -2,12 +2,16 @@
 
 A scenario is a dataclass of parameters (with units) that shapes one experiment of the paper:
 
+- ``setup(robot, command_range)``: read what the scenario needs of the robot (the body to push,
+  its size) and the velocity commands the controller accepts, before anything is built;
 - ``modify_spec(spec, rng)``: edit the MuJoCo ``MjSpec`` before it is compiled (terrain, patches);
 - ``initialize_episode(model, data, rng)``: set the initial state (default: reference posture
   lowered until the feet touch the ground, both feet on the ground as in the paper);
 - ``before_step(t, model, data)``: act on the simulation before each step (pushes);
-- ``velocity_command(t)``: the walking command (v_x [m/s], v_y [m/s], yaw_rate [rad/s]) at time t,
-  in the robot's heading frame.
+- ``velocity_command(t, pose)``: the walking command (v_x [m/s], v_y [m/s], yaw_rate [rad/s]) at
+  time t, in the robot's heading frame; ``pose`` is the measured planar pose of the base
+  (x [m], y [m], yaw [rad], world frame), which scenarios that steer the robot (``waypoints``) use
+  and the others ignore.
 
 All randomness comes from the ``rng`` the runner derives from the run's seed.
 """
@@ -16,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Mapping, Sequence
 
 import numpy as np
 
@@ -84,6 +88,15 @@ class Scenario:
         _check_range("yaw_rate", self.yaw_rate, -3.0, 3.0, "rad/s")
         _check_range("ramp_time", self.ramp_time, 0.0, 100.0, "s")
 
+    def setup(self, robot: Any, command_range: Mapping[str, tuple[float, float]] | None) -> None:
+        """Read what the scenario needs before the run (default: nothing).
+
+        Args:
+            robot: the :class:`robots.description.RobotDescription` of the run.
+            command_range: {"v_x": (min, max) [m/s], "v_y": (min, max) [m/s], "yaw_rate": (min, max)
+                [rad/s]}, heading frame: the commands the controller accepts (None: no limits known).
+        """
+
     def modify_spec(self, spec: Any, rng: np.random.Generator) -> None:
         """Edit the MuJoCo model specification before compilation (default: nothing)."""
 
@@ -93,8 +106,9 @@ class Scenario:
     def before_step(self, t: float, model: Any, data: Any) -> None:
         """Act on the simulation before the step at time ``t`` [s] (default: nothing)."""
 
-    def velocity_command(self, t: float) -> tuple[float, float, float]:
-        """Walking command (v_x [m/s], v_y [m/s], yaw_rate [rad/s]), heading frame, at time ``t`` [s]."""
+    def velocity_command(self, t: float, pose: Sequence[float] | None = None) -> tuple[float, float, float]:
+        """Walking command (v_x [m/s], v_y [m/s], yaw_rate [rad/s]), heading frame, at time ``t`` [s];
+        ``pose``: measured base (x [m], y [m], yaw [rad]), world frame (unused here)."""
         command = (self.speed, self.lateral_speed, self.yaw_rate)
         if self.ramp_time > 0.0 and t < self.ramp_time:
             return tuple(value * t / self.ramp_time for value in command)

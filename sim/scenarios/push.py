@@ -2,7 +2,10 @@
 
 The paper applies 6.3 N along y at the base for 0.1 s (0.63 N·s) at t = 5 s while walking at
 0.33 m/s. The force is applied at the base body's centre of mass, in the world frame, through
-MuJoCo's ``xfrc_applied``.
+MuJoCo's ``xfrc_applied``. The base body is the robot description's
+(:attr:`robots.description.RobotDescription.base_body`: Bolt's ``base_link``, the G1's ``pelvis``)
+unless ``base_body`` names another. The force may reach ``MAX_FORCE``, which covers the G1's push
+maps (F_x -600..600 N, F_y 0..400 N: up to 721 N) as well as Bolt's (a few newtons).
 """
 
 from __future__ import annotations
@@ -12,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim.scenarios.base import Scenario, _check_range, register
+
+MAX_FORCE = 1000.0  # [N], largest push magnitude accepted
 
 
 @register("push")
@@ -26,11 +31,11 @@ class Push(Scenario):
     direction: float = 90.0  # [deg], in the ground plane from +x (90 = +y, the paper's push)
     push_time: float = 5.0  # [s], start of the push
     push_duration: float = 0.1  # [s]
-    base_body: str = "base_link"  # MuJoCo body that receives the force
+    base_body: str | None = None  # MuJoCo body that receives the force; None: the robot's base (RobotDescription.base_body)
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        _check_range("force", self.force, 0.0, 200.0, "N")
+        _check_range("force", self.force, 0.0, MAX_FORCE, "N")
         _check_range("push_time", self.push_time, 0.0, 1e4, "s")
         _check_range("push_duration", self.push_duration, 1e-3, 10.0, "s")
         _check_range("direction", self.direction, -360.0, 360.0, "deg")
@@ -41,13 +46,17 @@ class Push(Scenario):
         angle = np.deg2rad(self.direction)
         return self.force * np.array([np.cos(angle), np.sin(angle), 0.0])
 
+    def setup(self, robot, command_range) -> None:
+        object.__setattr__(self, "_body_name", robot.base_body if self.base_body is None else self.base_body)
+
     def initialize_episode(self, model, data, rng) -> None:
         import mujoco
 
-        body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, self.base_body)
+        name = getattr(self, "_body_name", self.base_body)
+        body = -1 if name is None else mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
         if body < 0:
             names = [model.body(i).name for i in range(model.nbody)]
-            raise ValueError(f"base_body={self.base_body!r} is not a body of the model (bodies: {names})")
+            raise ValueError(f"base_body={name!r} is not a body of the model (bodies: {names})")
         object.__setattr__(self, "_body_id", body)
 
     def before_step(self, t: float, model, data) -> None:

@@ -23,7 +23,7 @@ class Transition(Scenario):
         _check_range("speed_before", self.speed_before, -2.0, 2.0, "m/s")
         _check_range("switch_time", self.switch_time, 0.0, 1e4, "s")
 
-    def velocity_command(self, t: float) -> tuple[float, float, float]:
+    def velocity_command(self, t: float, pose=None) -> tuple[float, float, float]:
         return (self.speed_before if t < self.switch_time else self.speed, self.lateral_speed, self.yaw_rate)
 
     def commands(self) -> list[tuple[float, float, float]]:

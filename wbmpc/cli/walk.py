@@ -3,6 +3,8 @@
     wbmpc walk --robot bolt --vx 0.3 --yaw-rate 0.2 --duration 20 --out runs/walk --json
     wbmpc run push --force 6.3 --direction 90 --plot runs/push.png
     wbmpc run terrain --seed 3 --set density=15
+    wbmpc run push --robot g1 --force 300 --direction 90 --push-time 5
+    wbmpc run waypoints --robot g1 --path square --set speed=0.2 --out runs/g1_square
     wbmpc walk --viewer                       # MuJoCo's viewer, live (needs a display)
 
 Scenario parameters have their own options where common (``--force``...); any other parameter of
@@ -97,6 +99,8 @@ def register(subparsers) -> None:
     run.add_argument("scenario", choices=available_scenarios())
     run.add_argument("--force", type=FINITE, default=None, help="push: force magnitude [N]")
     run.add_argument("--direction", type=FINITE, default=None, help="push: direction in the plane from +x [deg]")
+    run.add_argument("--push-time", type=NON_NEGATIVE, default=None, metavar="T", help="push: start of the push [s]")
+    run.add_argument("--path", default=None, metavar="NAME", help="waypoints: the path to follow (circle, square)")
     add_run_arguments(run)
     run.set_defaults(func=_run)
 
@@ -122,6 +126,7 @@ def params_from_args(args: argparse.Namespace) -> dict:
     for option, name in (
         ("delay_nodes", "delay_nodes"), ("noise_q", "noise_q"), ("noise_v", "noise_v"),
         ("computation_delay", "computation_delay"), ("force", "force"), ("direction", "direction"),
+        ("push_time", "push_time"), ("path", "path"),
     ):
         value = getattr(args, option, None)
         if value is not None:
@@ -248,6 +253,11 @@ def format_metrics(summary: dict) -> str:
     if "push_recovered" in m:
         lines.append(f"  {'push recovered':<28} {m['push_recovered']}")
         row("push recovery time", m.get("push_recovery_time"), "s", fmt=".2f")
+    if "path_deviation_max" in m:
+        row("path deviation max", m["path_deviation_max"], "m")
+        row("path deviation mean", m["path_deviation_mean"], "m")
+        row("heading error max", m.get("heading_error_max"), "rad")  # away from corners (sim.metrics)
+        row("path completion", m["path_completion"], "%", 100.0, ".1f")
     row("max |tau| / limit", m.get("max_torque_ratio"), fmt=".2f")
     row("saturated ticks", m.get("saturated_fraction"), "%", 100.0, ".1f")
     if "mpc_updates" in m:
