@@ -51,8 +51,9 @@ class ContactTimingOCP:
 
     Args:
         ocp: the walking OCP (``evaluation="nodes"``: the batched problem fixes its node spacings).
-        plan: the ``sequencer.horizon.FootstepPlan`` (double_support = 0); its touchdowns inside
-            the horizon are the parameters, their nominal values the plan's.
+        plan: the ``sequencer.horizon.FootstepPlan``; its touchdowns inside the horizon are the
+            parameters, their nominal values the plan's; with double support (the G1's) each lift-off
+            stays ``plan.double_support`` after its touchdown (:func:`sequencer.timed_contact_schedule`).
         t0: time of node 0 [s].
         x0: initial state (nx,).
         com_terminal_reference: terminal CoM reference (3,) [m], world.
