@@ -44,6 +44,11 @@ def report(solved):
     return contact_timing_sensitivity(timed, solver, fd_step=2e-5)  # KKT: dense LU on Bolt, sparse on the G1
 
 
+@pytest.fixture(scope="module")
+def bolt():
+    return standing_start_timing_ocp("bolt", n_nodes=N_NODES)
+
+
 def on_grid(plan, dt):
     """The plan with its touchdowns moved to multiples of dt (phase durations multiples of dt when the
     double support is one too)."""
@@ -81,9 +86,18 @@ def test_timed_ocp_on_the_grid_has_the_solution_of_the_fixed_spacing_ocp(solved)
         solver = SolverFDDP(problem)
         solver.solve([x0] * (n_nodes + 1), guess_u, maxiter=15)
         solutions.append((solver.xs.copy(), solver.us.copy(), solver.cost))
-    np.testing.assert_allclose(solutions[1][0], solutions[0][0], atol=1e-10)
-    np.testing.assert_allclose(solutions[1][1], solutions[0][1], atol=1e-9 * max(1.0, np.abs(solutions[0][1]).max()))
-    assert abs(solutions[1][2] - solutions[0][2]) < 1e-10
+    # the same nodes: at one trajectory the same transitions, costs and derivatives ...
+    xs, us = solutions[0][0], solutions[0][1]
+    evaluated = []
+    for problem in (fixed.problem, scaled.problem):
+        cost = problem.calc_and_diff(xs, us)
+        evaluated.append([cost] + [getattr(problem, name).copy() for name in ("xnext", "Fx", "Fu", "Lx", "Lu", "Luu")])
+    for a, b in zip(*evaluated):
+        np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(a).max()))
+    # ... so the same FDDP iterates (up to the spacings' rounding, 1e-17 s, grown by 15 iterations)
+    np.testing.assert_allclose(solutions[1][0], solutions[0][0], atol=1e-7)
+    np.testing.assert_allclose(solutions[1][1], solutions[0][1], atol=1e-7 * max(1.0, np.abs(solutions[0][1]).max()))
+    assert abs(solutions[1][2] - solutions[0][2]) < 1e-9
 
 
 def test_double_support_moves_with_its_touchdown():
@@ -170,6 +184,71 @@ def test_riccati_sweep_agrees_with_re_solved_finite_differences(solved, report):
     assert report.routes["riccati"]["forces0"].shape[0] == (3 if solved[0].ocp.contact_type == "point3d" else 12)
 
 
+def test_gains_derivative_agrees_with_re_solved_gains(solved, report):
+    """dK/dτ of the solver's gains (the backward pass's recursion differentiated along the solution's
+    derivative) against central differences of the gains of re-solved OCPs."""
+    timed, solver = solved
+    gaps = report.disagreement["finite_differences vs riccati"]
+    assert gaps["K0"] < 1e-4 and gaps["K"] < 1e-4, gaps
+    dK = report.dK_dtouchdown
+    assert dK.shape == (timed.ocp.nu, timed.problem.ndx, timed.touchdown_times.size)
+    assert np.abs(dK).max() > 1.0  # [N·m/(state unit)/s], not trivially zero
+    assert report.gains["solver_K0_gap"] < 1e-6  # K0 is the solver's own first gains
+    np.testing.assert_allclose(report.gains["K0"], solver.K[0], atol=1e-6 * np.abs(solver.K[0]).max())
+    with pytest.raises(ParameterError, match="gains=False"):
+        _ = dataclasses.replace(report, gains=None).dK_dtouchdown
+
+
+def test_gain_recursion_derivative_matches_differences_of_the_factorisation():
+    """The differentiated backward pass against central differences of the factorisation itself, on a
+    random LQ problem (blocks moving along random directions, regularisation 1e-3)."""
+    from sensitivity.ocp_gains import BlockDerivatives, gain_derivatives
+    from sensitivity.ocp_parametric import LinearQuadratic
+    from sensitivity.ocp_riccati import factorise
+
+    rng = np.random.default_rng(0)
+    N, ndx, nu, m, rho = 6, 5, 3, 2, 1e-3
+
+    def blocks():
+        A = rng.standard_normal((N + 1, ndx + nu, ndx + nu))
+        H = np.einsum("kij,klj->kil", A, A)
+        return (np.eye(ndx) + 0.1 * rng.standard_normal((N, ndx, ndx)), rng.standard_normal((N, ndx, nu)),
+                H[:, :ndx, :ndx], H[:N, :ndx, ndx:], H[:N, ndx:, ndx:])
+
+    def lq(b):
+        return LinearQuadratic(*b, np.zeros((N + 1, ndx, 0)), np.zeros((N, nu, 0)), np.zeros((N, ndx, 0)), "gauss-newton")
+
+    base = blocks()
+    directions = [np.stack([d, 0.5 * d], axis=-1) for d in blocks()]
+    sens = gain_derivatives(lq(base), BlockDerivatives(*directions, np.ones(m)), rho)
+    np.testing.assert_allclose(sens.K, -factorise(lq(base), rho).K)  # the library's sign
+    h = 1e-6
+    for j in range(m):
+        plus = -factorise(lq(tuple(b + h * d[..., j] for b, d in zip(base, directions))), rho).K
+        minus = -factorise(lq(tuple(b - h * d[..., j] for b, d in zip(base, directions))), rho).K
+        np.testing.assert_allclose(sens.dK[..., j], (plus - minus) / (2 * h), atol=1e-7 * np.abs(sens.dK).max())
+    with pytest.raises(ParameterError, match="regularization"):
+        factorise(lq(base), -1.0)
+    with pytest.raises(ParameterError, match="hessian"):
+        gain_derivatives(dataclasses.replace(lq(base), hessian="exact"), BlockDerivatives(*directions, np.ones(m)), rho)
+
+
+def test_gain_block_step_is_cut_before_a_dead_zone_kink_and_checked(bolt):
+    from types import SimpleNamespace
+
+    from sensitivity.ocp_gains import block_derivatives
+    from sensitivity.ocp_parametric import dead_zone_step
+
+    rows = SimpleNamespace(lb=np.array([0.0, -1.0, -1.0]), ub=np.array([0.0, 1.0, 1.0]), term_scale=np.array([1.0, 1.0]),
+                           row_term=np.array([0, 1, 1]), r=np.array([5.0, 1.001, 0.5]),
+                           R=np.array([[1.0, 0.0], [2.0, 0.0], [0.0, 1.0]]))
+    # the quadratic row (lb = ub) has no kink; the saturated row is 1e-3 past its bound, moving at 2 per unit
+    assert dead_zone_step(rows, np.array([1.0, 0.0])) == pytest.approx(5e-4)
+    assert dead_zone_step(rows, np.array([0.0, 1.0])) == pytest.approx(0.5)
+    with pytest.raises(ParameterError, match="step=0"):
+        block_derivatives(bolt.problem, bolt.set_parameters, bolt.touchdown_times, None, None, None, None, step=0.0)
+
+
 def test_gauss_newton_hessian_misses_the_true_derivative(report):
     """FDDP's Gauss-Newton factorisation gives a derivative, but not the derivative of the solution map."""
     gap = report.gauss_newton["gap_to_finite_differences"]
@@ -191,11 +270,6 @@ def test_dcm_end_to_end_matches_finite_differences_of_the_whole_chain():
     result = dcm_sensitivity("bolt", n_nodes=N_NODES, fd_step=1e-4)
     assert result["max_relative_disagreement"] < 1e-3, result["disagreement"]
     assert np.abs(result["du0_dtheta"]).max() > 0.1
-
-
-@pytest.fixture(scope="module")
-def bolt():
-    return standing_start_timing_ocp("bolt", n_nodes=N_NODES)
 
 
 @pytest.mark.parametrize("times, match", [
@@ -237,9 +311,25 @@ def test_cli_contact_timing_prints_every_route_and_their_disagreement(capsys, tm
     assert np.asarray(report["routes"]["riccati"]["du0_dtau"]).shape == (6, 2)
     assert np.asarray(report["routes"]["kkt"]["dforces0_dtau"]).shape == (3, 2)
     assert np.asarray(report["routes"]["finite_differences"]["dcom_terminal_dtau"]).shape == (3, 2)
+    assert np.asarray(report["routes"]["riccati"]["dK0_dtau"]).shape == (6, 24, 2)
+    assert np.asarray(report["routes"]["finite_differences"]["dK0_dtau"]).shape == (6, 24, 2)
+    assert "dK0_dtau" not in report["routes"]["kkt"]
+    assert report["disagreement"]["finite_differences vs riccati"]["K0"] < 1e-4
+    assert len(report["state_tangent"]) == 24 and report["gains"]["by_joint"][0]["joint"] in report["joints"]
     assert report["max_relative_disagreement"] < 1e-4
     assert report["cost"]["sweep_over_riccati"] > 0
     assert plot.stat().st_size > 0
+
+
+def test_cli_contact_timing_on_the_g1(capsys):
+    from wbmpc.cli import main
+
+    assert main(["sensitivity", "--wrt", "contact-timing", "--robot", "g1", "--nodes", "25", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["robot"] == "g1" and report["dt_s"] == 0.02 and report["double_support_s"] == 0.1
+    assert np.asarray(report["routes"]["riccati"]["dK0_dtau"]).shape == (29, 70, 1)
+    assert np.asarray(report["routes"]["kkt"]["dforces0_dtau"]).shape == (12, 1)  # two 6D soles at node 0
+    assert report["max_relative_disagreement"] < 1e-4
 
 
 def test_cli_dcm_prints_the_end_to_end_derivative(capsys):
@@ -249,6 +339,14 @@ def test_cli_dcm_prints_the_end_to_end_derivative(capsys):
     report = json.loads(capsys.readouterr().out)
     assert np.asarray(report["du0_dtheta"]).shape == (6, 2)
     assert report["max_relative_disagreement"] < 1e-3
+
+
+def test_cli_dcm_refuses_another_robot(capsys):
+    from wbmpc.cli import main
+
+    assert main(["sensitivity", "--wrt", "dcm", "--robot", "g1"]) == 2
+    err = capsys.readouterr().err
+    assert "--robot g1" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
 @pytest.mark.parametrize("value", ["0", "-1e-4", "nan", "inf"])
