@@ -285,6 +285,21 @@ def test_bad_touchdown_times_are_refused(bolt, times, match):
         timed_contact_schedule(timed.plan, 0.0, 0.01, N_NODES, times)
 
 
+def test_costates_are_the_value_gradient_at_the_solution(solved):
+    """The multipliers from the Riccati pass satisfy stationarity to the solver's |Qu|, the open-loop
+    recursion's agree with them at a well-converged solution; an unknown method is refused."""
+    from sensitivity.ocp_parametric import costates, stationarity_residual
+
+    timed, solver = solved
+    timed.set_parameters()
+    timed.problem.calc_and_diff(solver.xs, solver.us)
+    lam = costates(timed.problem)
+    assert stationarity_residual(timed.problem, lam) < 1e-8
+    np.testing.assert_allclose(costates(timed.problem, "open-loop"), lam, atol=1e-5 * np.abs(lam).max())
+    with pytest.raises(ParameterError, match="method='adjoint'"):
+        costates(timed.problem, "adjoint")
+
+
 def test_non_converged_base_solution_is_refused(solved):
     timed, _ = solved
     timed.set_parameters()

@@ -1,12 +1,13 @@
 """The walking OCP with continuous contact timings, and the sensitivity of its solution to them.
 
-The touchdown times τ (m,) inside the horizon are parameters of the OCP: every contact phase keeps
-its number of nodes and the node spacing is the phase's duration over that number
-(:func:`sequencer.schedule.timed_contact_schedule`). A running node k of phase i then depends on τ
-through its spacing h_k = (τ_{i+1} − τ_i)/n_i only (the dynamics x⁺ = x ⊕ f(x, u; h) and the cost
-h · l_c(x, u)) and, for the swing in progress at t0 and the swing still running at t_end, through
-the swing phase s_k(τ) of the height reference z*(s) (eq. 19); inside the horizon s = j/n_i does
-not depend on τ. So
+The touchdown times τ (m,) inside the horizon are parameters of the OCP: every contact phase
+(single support, the double support after each touchdown, which keeps its duration d, so its
+lift-off τ_i + d moves with τ_i) keeps its number of nodes and the node spacing is the phase's
+duration over that number (:func:`sequencer.schedule.timed_contact_schedule`). A running node k of
+phase i then depends on τ through its spacing h_k = (b_{i+1} − b_i)/n_i only (b the phase's ends:
+τ_i, τ_i + d or fixed; the dynamics x⁺ = x ⊕ f(x, u; h) and the cost h · l_c(x, u)) and, for the
+swing in progress at t0 and the swing still running at t_end, through the swing phase s_k(τ) of
+the height reference z*(s) (eq. 19); inside the horizon s = j/n_i does not depend on τ. So
 
     ∂x⁺/∂τ = ∂x⁺/∂h ∂h/∂τ,   ∂Lx/∂τ = ∂l_c/∂x ∂h/∂τ − h w Rxᵀ z*'(s) ∂s/∂τ,   ∂Lu/∂τ = ∂l_c/∂u ∂h/∂τ,
 
@@ -14,7 +15,9 @@ all analytic (:meth:`ContactTimingOCP.parameter_derivatives`, checked against di
 model in the tests). The terminal CoM reference c* (3,) can be added as three more parameters
 (∂Lx_N/∂c* = −w_CoM Jcomᵀ), the second channel through which a DCM disturbance reaches the OCP.
 :func:`contact_timing_sensitivity` gives the derivatives of the solution by the three routes of
-:mod:`sensitivity` (Riccati sweep, re-solved finite differences, full KKT).
+:mod:`sensitivity` (Riccati sweep, re-solved finite differences, full KKT), and of the solver's
+feedback gains K (:mod:`sensitivity.ocp_gains`: the Gauss-Newton backward pass differentiated,
+against differences of re-solved gains).
 """
 
 from __future__ import annotations
