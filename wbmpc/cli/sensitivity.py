@@ -150,7 +150,8 @@ def format_dcm(report: dict) -> str:
 
 
 def plot_timing(report: dict, path: str) -> None:
-    """Bars of du0/dτ per joint, one group per touchdown."""
+    """Bars per joint, one group per touchdown: du0/dτ (top) and the relative change of the joint's
+    first gains, ‖dK0_i/dτ‖ / ‖K0_i‖ per 10 ms (bottom)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -158,16 +159,20 @@ def plot_timing(report: dict, path: str) -> None:
 
     J = np.asarray(report["routes"]["riccati"]["du0_dtau"])
     joints = report["joints"]
-    fig, ax = plt.subplots(figsize=(8, 4))
+    relative = {row["joint"]: np.asarray(row["relative_per_s"]) for row in report["gains"]["by_joint"]}
+    R = 100.0 * 0.01 * np.array([relative[name] for name in joints])  # % of the row per 10 ms
+    fig, axes = plt.subplots(2, 1, figsize=(max(8.0, 0.45 * len(joints)), 6.5), sharex=True)
     width = 0.8 / J.shape[1]
-    for j, name in enumerate(report["parameters"]):
-        ax.bar(np.arange(len(joints)) + (j - (J.shape[1] - 1) / 2) * width, J[:, j], width,
-               label=f"{name} ({report['touchdown_times_s'][j]:.3f} s)")
-    ax.set_xticks(np.arange(len(joints)), joints, rotation=20)
-    ax.set_ylabel("du0/dτ [N·m/s]")
-    ax.axhline(0.0, color="k", lw=0.6)
-    ax.legend()
-    ax.set_title("first torques of the whole-body MPC vs the planned touchdown times")
+    for values, ax in ((J, axes[0]), (R, axes[1])):
+        for j, name in enumerate(report["parameters"]):
+            ax.bar(np.arange(len(joints)) + (j - (J.shape[1] - 1) / 2) * width, values[:, j], width,
+                   label=f"{name} ({report['touchdown_times_s'][j]:.3f} s)")
+        ax.axhline(0.0, color="k", lw=0.6)
+    axes[1].set_xticks(np.arange(len(joints)), [name.removesuffix("_joint") for name in joints], rotation=60, ha="right")
+    axes[0].set_ylabel("du0/dτ [N·m/s]")
+    axes[1].set_ylabel("‖dK0_i‖ / ‖K0_i‖ [% per 10 ms]")
+    axes[0].legend()
+    axes[0].set_title(f"{report['robot']}: first torques and first gains of the whole-body MPC vs the touchdown times")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
