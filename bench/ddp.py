@@ -21,12 +21,9 @@ from __future__ import annotations
 
 import argparse
 import gc
-import os
 import time
 
 import numpy as np
-
-os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -53,8 +50,10 @@ def _ratio(ours: dict, theirs: dict) -> dict:
     return {key: ours[key] / theirs[key] for key in ("median_ms", "p90_ms", "p99_ms", "max_ms")}
 
 
-def _schedule(t0: float, dt: float, n_nodes: int, step_duration: float, foot_y=(0.1, -0.1), step_length=0.1):
-    """Alternating single-support gait starting with the right swing at t = 0."""
+def _schedule(t0: float, dt: float, n_nodes: int, step_duration: float, foot_y=(0.1, -0.1), step_length=0.1,
+              t_start: float = 0.0):
+    """Both feet on the ground before ``t_start`` [s], then an alternating single-support gait
+    starting with the right swing."""
     from sequencer.schedule import ContactSchedule
 
     times = t0 + dt * np.arange(n_nodes + 1)
@@ -63,10 +62,12 @@ def _schedule(t0: float, dt: float, n_nodes: int, step_duration: float, foot_y=(
     duration = np.full((n_nodes + 1, 2), np.nan)
     touchdown = np.full((n_nodes + 1, 2, 2), np.nan)
     for k, t in enumerate(times):
-        step = int(np.floor(t / step_duration + 1e-9))
+        if t < t_start - 1e-9:
+            continue
+        step = int(np.floor((t - t_start) / step_duration + 1e-9))
         swing = 1 if step % 2 == 0 else 0
         in_contact[k, swing] = False
-        phase[k, swing] = (t - step * step_duration) / step_duration
+        phase[k, swing] = (t - t_start - step * step_duration) / step_duration
         duration[k, swing] = step_duration
         touchdown[k, swing] = ((step + 1) * step_length, foot_y[swing])
     return ContactSchedule(t0=t0, dt=dt, feet=("left", "right"), in_contact=in_contact, swing_phase=phase,
@@ -75,7 +76,7 @@ def _schedule(t0: float, dt: float, n_nodes: int, step_duration: float, foot_y=(
 
 def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot_y, ticks: int, seed: int,
               speed: float = 0.3, time_budget: float | None = None, horizon_end: str = "repeat",
-              prepare: bool = True) -> dict:
+              prepare: bool = True, t_start: float = 0.0) -> dict:
     """Run both MPCs (and ours with ``time_budget``) on the same measured states; returns tick
     statistics and the control gaps. With ``prepare``, ours runs ``WalkingMPC.prepare`` after each
     update (timed apart): its tick is the update (measurement to solution), its cycle the update
@@ -111,7 +112,7 @@ def _mpc_loop(robot, config, n_nodes: int, dt: float, step_duration: float, foot
     gap = 0.0
     for tick in range(ticks + 1):
         t = tick * dt
-        schedule = _schedule(t, dt, n_nodes, step_duration, foot_y)
+        schedule = _schedule(t, dt, n_nodes, step_duration, foot_y, t_start=t_start)
         com_ref = com0 + np.array([speed * (t + n_nodes * dt), 0.0, 0.0])
         if tick > 0:  # the guess our update is about to make, for Crocoddyl (not timed)
             mpc.ocp.update(x, schedule, com_ref)
