@@ -176,11 +176,13 @@ class BatchedShootingProblem(ShootingProblem):
         nc_max = max((sum(c.nc for c in model.differential.contacts.values()) for model in self.running_models),
                       default=0)
         nf, nfj = (N, nc_max) if self._keep_forces else (0, 0), (N, nc_max, ndx + nu) if self._keep_forces else (0, 0, 0)
+        # rotations and angular Jacobian rows only for terms reading them (frame rotations)
+        self._rotations = any(residual.batch_frame_rotations for residual in self._terms)
         self._horizon = HorizonData(xs=np.zeros((N, nx)), us=np.zeros((N, nu)),
                                     frame_slot={f: s for s, f in enumerate(frame_ids)},
                                     frame_position=np.zeros((N, n_frames, 3)),
-                                    frame_jacobian=np.zeros((N, n_frames, 6, nv)),
-                                    frame_rotation=np.zeros((N, n_frames, 3, 3)),
+                                    frame_jacobian=np.zeros((N, n_frames, 6 if self._rotations else 3, nv)),
+                                    frame_rotation=np.zeros((N, n_frames, 3, 3) if self._rotations else (N, 0, 3, 3)),
                                     contact_force=np.zeros(nf), contact_force_jacobian=np.zeros(nfj),
                                     contact_row={name: np.full(N, -1, dtype=np.int64) for name in contact_names},
                                     contact_sets=[()] * N)
@@ -437,7 +439,8 @@ class BatchedShootingProblem(ShootingProblem):
         if self._kinematics is not None:
             h = self._horizon
             self._kinematics.evaluate(xs[:self.T, :self.state.nq], self._frame_needed, h.frame_position,
-                                      h.frame_jacobian if jacobians else None, h.frame_rotation)
+                                      h.frame_jacobian if jacobians else None,
+                                      h.frame_rotation if self._rotations else None)
 
     def _residuals(self, xs: np.ndarray, us: np.ndarray, jacobians: bool) -> None:
         """Every term's residual rows (and Jacobian nonzeros) at the nodes where it is active."""

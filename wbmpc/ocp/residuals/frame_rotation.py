@@ -38,6 +38,7 @@ class ResidualFrameRotation(BatchedResidual):
         self.state = state
         self.frame_id = int(frame_id)
         self.batch_frames = (self.frame_id,)
+        self.batch_frame_rotations = True
         rotation = np.eye(3) if reference is None else np.array(reference, dtype=float).reshape(3, 3)
         self._reference = rotation.reshape(9).copy()
         self.nr = 3
