@@ -482,10 +482,9 @@ class BatchedShootingProblem(ShootingProblem):
                                                          self._da_dx, self._da_du)
         prepared = self._take_prepared(xs, us)
         nodes = range(self.T) if prepared is None else np.flatnonzero(~prepared).tolist()
-        forces, force_jacobians = (self._forces, self._force_jacobians) if self._keep_forces else ([None] * self.T,) * 2
         for k in nodes:
             self._dynamics_and_derivatives(dynamics[k], dts[k], xs[k], us[k], xnext[k], euler_dx[k], da_dx[k], da_du[k],
-                                           forces[k], force_jacobians[k])
+                                           *self._force_buffers(k))
         self._residuals(xs, us, jacobians=True)
         cost = horizon_derivatives(
             xs, self._dt, self._euler_dx, self._da_dx, self._da_du, self._J_q, self._J_dq, self._r, self._values,
