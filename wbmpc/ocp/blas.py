@@ -71,10 +71,12 @@ def _openblas_libraries() -> list[tuple[str, object, object]]:
 
 
 def _openmp_libraries() -> list[tuple[str, object, object]]:
-    """The OpenMP runtimes loaded in this process, looked up until one is found (one is loaded
-    with the first import of Pinocchio or Crocoddyl)."""
+    """The OpenMP runtimes loaded in this process (the one Pinocchio loads, which Crocoddyl
+    shares), looked up once."""
     global _openmp
-    if not _openmp:
+    if _openmp is None:
+        import pinocchio  # noqa: F401 - make sure its OpenMP runtime is loaded
+
         _openmp = _loaded_libraries(lambda name: name.startswith(_OPENMP_LIBRARIES), _OPENMP_NAMES)
     return _openmp
 
