@@ -7,6 +7,10 @@ Definitions (all times in s, velocities in m/s, world frame):
   ``steady_start`` after the beginning of the run or the last command change, whichever is later.
   The command is in the heading frame: these compare it with world velocities, as long as the
   heading stays near 0 (straight walks along x).
+- ``velocity_error_heading_x/y``: the same in the heading frame, |mean(R(ψ)ᵀ v) - command| with ψ
+  the base yaw at each tick (``mean_velocity_heading_x/y``): what a walk that turns is measured
+  by (walking at 0.3 m/s while turning at 0.3 rad/s goes round a circle; its world velocity
+  averages towards 0).
 - ``mean_yaw_rate``: mean base yaw rate over the steady window [rad/s] (yaw change / time);
   ``yaw_rate_error``: |mean_yaw_rate - commanded yaw rate|.
 - ``rise_time`` (scenarios with a ``speed_switch`` event): time from the switch until the running average of the
@@ -140,6 +144,12 @@ def compute_metrics(log) -> dict[str, Any]:
         metrics["mean_velocity_x"], metrics["mean_velocity_y"] = float(mean_velocity[0]), float(mean_velocity[1])
         metrics["velocity_error_x"], metrics["velocity_error_y"] = float(error[0]), float(error[1])
         yaw = np.unwrap(base_yaw(ticks["x"][window, 3:7]))
+        c, s = np.cos(yaw), np.sin(yaw)
+        vx, vy = velocity[window, 0], velocity[window, 1]
+        heading_velocity = np.array([np.mean(c * vx + s * vy), np.mean(c * vy - s * vx)])
+        heading_error = np.abs(heading_velocity - command[window][-1, :2])
+        metrics["mean_velocity_heading_x"], metrics["mean_velocity_heading_y"] = (float(v) for v in heading_velocity)
+        metrics["velocity_error_heading_x"], metrics["velocity_error_heading_y"] = (float(e) for e in heading_error)
         span = t[window][-1] - t[window][0]
         metrics["mean_yaw_rate"] = float((yaw[-1] - yaw[0]) / span)
         metrics["yaw_rate_error"] = float(abs(metrics["mean_yaw_rate"] - command[window][-1, 2]))

@@ -186,6 +186,22 @@ def test_velocity_error_and_rise_time_definitions():
     assert metrics["real_time_factor"] == pytest.approx(10.0)
 
 
+def test_heading_frame_velocity_error_measures_a_walk_that_turns():
+    """Walking 0.3 m/s forward while turning at 0.3 rad/s: the world velocity averages towards 0,
+    the heading-frame velocity is the command."""
+    t = np.arange(0, 12, 0.001)
+    yaw = 0.3 * t
+    log = _synthetic_log(t, 0.3 * np.cos(yaw), 0.3)
+    log.ticks["base_velocity_world"][:, 1] = 0.3 * np.sin(yaw)
+    log.ticks["x"][:, 3:7] = np.column_stack([np.zeros_like(t), np.zeros_like(t), np.sin(yaw / 2), np.cos(yaw / 2)])
+    log.ticks["velocity_command"][:, 2] = 0.3
+    metrics = compute_metrics(log)
+    assert metrics["velocity_error_heading_x"] == pytest.approx(0.0, abs=1e-9)
+    assert metrics["velocity_error_heading_y"] == pytest.approx(0.0, abs=1e-9)
+    assert metrics["mean_yaw_rate"] == pytest.approx(0.3, rel=1e-6)
+    assert metrics["velocity_error_x"] > 0.2  # the world-frame figure says nothing of such a walk
+
+
 def test_max_stance_slide_compares_the_stance_foot_with_its_touchdown_point():
     from sim.metrics import max_stance_slide
 

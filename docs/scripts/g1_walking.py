@@ -61,6 +61,7 @@ def main() -> None:
             "status": log.status, "fall_time": log.fall_time, "fall_reason": log.fall_reason,
             "velocity_error_mm_s": [_milli(m, "velocity_error_x"), _milli(m, "velocity_error_y")],
             "mean_velocity": [m.get("mean_velocity_x"), m.get("mean_velocity_y")],
+            "velocity_error_heading_mm_s": [_milli(m, "velocity_error_heading_x"), _milli(m, "velocity_error_heading_y")],
             "mean_yaw_rate": m.get("mean_yaw_rate"), "yaw_rate_error": m.get("yaw_rate_error"),
             "mpc_update_median_ms": _milli(m, "mpc_tick_time_median"), "real_time_factor": m.get("real_time_factor"),
         }), flush=True)
