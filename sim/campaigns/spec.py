@@ -261,7 +261,8 @@ def push_map(
     """Push-recovery map (ALIP paper, Fig. 6): 0.1 s pushes, Fx in [-Fx, Fx], Fy in [0, Fy] [N].
 
     Each force is applied at every gait phase in ``phases``: the push starts at
-    ``push_after + phase * T_nom`` (``push_after`` a multiple of the nominal step duration T_nom,
+    ``push_after + phase * T_nom`` (T_nom the nominal step period of the robot's footstep planner,
+    :func:`sim.campaigns.trial.nominal_step_period`; ``push_after`` a multiple of it,
     so phase 0 is a nominal touchdown; the phase measured from the controller's stance switches is
     recorded beside it). With the default five phases that is the paper's five repeats per force
     "at different times to account for varying step phases".
@@ -302,9 +303,9 @@ def push_map(
             compared["step_timing_from"] = float(timing_from)
         variants = {"adaptive": {"step_timing": "adaptive"}, compare_timing: compared}
     if duration is None:
-        from sequencer import SequencerParams
+        from sim.campaigns.trial import nominal_step_period
 
-        t_nom = SequencerParams.bolt_walking().t_nom
+        t_nom = nominal_step_period(robot, "push", shared if controller == "walking" else {})
         latest_end = push_after + max(phases) * t_nom + shared["push_duration"]
         duration = round(latest_end + PUSH_RECOVERY_TIME, 3)
     return CampaignSpec(
