@@ -280,7 +280,8 @@ def push_map(
         controller: "walking" or "pd".
         push_after: time before the pushes [s] (walking reaches steady state).
         duration: simulated time per trial [s]; None = latest push end + ``PUSH_RECOVERY_TIME``.
-        params: extra shared parameters (scenario, runner, controller options).
+        params: extra shared parameters (scenario, runner, controller options); the push acts on the
+            robot's base body (:func:`base_body_name`) unless they set ``base_body``.
         robot: registered robot name.
     """
     for name, value in (("force_max_x", force_max_x), ("force_max_y", force_max_y)):
@@ -289,7 +290,8 @@ def push_map(
     for name, value in (("steps_x", steps_x), ("steps_y", steps_y)):
         if not (isinstance(value, int) and value >= 1):
             raise ParameterError(f"{name}={value!r} must be an integer >= 1")
-    shared = {"push_after": float(push_after), "push_duration": 0.1, **(params or {})}
+    shared = {"push_after": float(push_after), "push_duration": 0.1, "base_body": base_body_name(robot),
+              **(params or {})}
     variants: dict[str, dict[str, Any]] = {DEFAULT_VARIANT: {}}
     if compare_timing is not None:
         from sim.campaigns.trial import STEP_TIMINGS
@@ -323,6 +325,18 @@ def push_map(
         variants=variants,
         seeds=list(seeds),
     )
+
+
+def base_body_name(robot: str) -> str:
+    """The name of ``robot``'s floating base body (the body of its free-flyer joint, where pushes are applied:
+    Bolt's ``base_link``, the G1's and H1's ``pelvis``)."""
+    import pinocchio as pin
+
+    from robots import load_robot
+
+    model = load_robot(robot).pinocchio_model
+    return next(frame.name for frame in model.frames
+                if frame.parentJoint == 1 and frame.type == pin.FrameType.BODY)
 
 
 def terrain(
