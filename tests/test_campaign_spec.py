@@ -8,8 +8,15 @@ import numpy as np
 import pytest
 
 from sequencer import SequencerParams
+from sequencer.alip import AlipParams
 from sim.campaigns import CampaignSpec, RandomSample, builtin_campaign, make_trials
-from sim.campaigns.trial import STIFF_TIMING_WEIGHT, measured_gait_phase, resolve_arguments, trial_key
+from sim.campaigns.trial import (
+    ALIP_FIXED_STEP_PERIOD,
+    STIFF_TIMING_WEIGHT,
+    measured_gait_phase,
+    resolve_arguments,
+    trial_key,
+)
 from wbmpc.errors import ParameterError
 
 
@@ -184,3 +191,25 @@ def test_example_campaign_file_loads():
     assert all(t.arguments["sequencer_params"].t_max > 0.3 for t in trials)
     assert all(t.arguments["sequencer_params_from"][0] < t.arguments["push_time"] for t in fixed)
     assert max(t.arguments["push_time"] for t in trials) + 0.1 < spec.duration
+
+
+def test_the_campaign_times_the_planner_the_trial_runs():
+    common = {"force_y": 100.0, "phase": 0.5, "push_after": 2.0, "speed": 0.0}
+    alip = {**common, "footstep_planner.kind": "alip"}
+    fixed = resolve_arguments("push", "walking", 6.0, {**alip, "step_timing": "fixed"}, robot="g1")
+    assert fixed["push_time"] == pytest.approx(2.0 + 0.5 * AlipParams.preset("g1").t_des)  # the ALIP's T_des
+    from wbmpc.walking.preset import load_walking_preset
+
+    params = load_walking_preset("g1", {k: v for k, v in fixed.items() if k.startswith("footstep_planner")})
+    timed = params.footstep_planner.alip
+    assert timed.t_min == timed.t_des == timed.t_max == ALIP_FIXED_STEP_PERIOD and timed.double_support == 0.1
+    later = resolve_arguments("push", "walking", 6.0, {**alip, "step_timing": "stiff", "step_timing_from": 1.0},
+                              robot="g1")
+    t_switch, stiff = later["sequencer_params_from"]
+    assert t_switch == 1.0 and isinstance(stiff, AlipParams) and stiff.r_period == STIFF_TIMING_WEIGHT
+    # the DCM variant of the G1 starts from the G1's [planner], not Bolt's
+    dcm = resolve_arguments("push", "walking", 6.0, {**common, "step_timing": "fixed", "step_timing_from": 1.0},
+                            robot="g1")
+    g1_planner = load_walking_preset("g1").planner
+    assert dcm["sequencer_params"] == g1_planner and dcm["push_time"] == pytest.approx(2.0 + 0.5 * g1_planner.t_nom)
+    assert dcm["sequencer_params_from"][1].t_min == dcm["sequencer_params_from"][1].t_max == g1_planner.t_nom

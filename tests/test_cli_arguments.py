@@ -139,3 +139,40 @@ def test_walk_passes_robot_and_a_velocity_command_only_when_asked(monkeypatch):
     assert calls[-1][0] == "push" and calls[-1][1]["velocity_command"] == (0.25, 0.0, 0.0)
     assert main(["walk", "--vy", "0.1"]) == 2  # v_x left out: the scenario's speed
     assert calls[-1][1]["velocity_command"] == (0.33, 0.1, 0.0)
+
+
+def test_planner_option_selects_the_walking_presets_footstep_planner(monkeypatch, capsys):
+    import sim.campaigns.run
+    import sim.runner
+
+    calls = []
+
+    def fake_run_scenario(name, **kwargs):
+        calls.append(kwargs)
+        raise ParameterError("stop here")
+
+    monkeypatch.setattr(sim.runner, "run_scenario", fake_run_scenario)
+    assert main(["walk", "--robot", "g1"]) == 2
+    assert not any(key.startswith("footstep_planner") for key in calls[-1])  # the preset's own choice
+    assert main(["walk", "--robot", "g1", "--planner", "alip", "--alip-solver", "ipopt"]) == 2
+    assert calls[-1]["footstep_planner.kind"] == "alip" and calls[-1]["footstep_planner.alip_solver"] == "ipopt"
+    assert main(["run", "push", "--robot", "g1", "--planner", "dcm"]) == 2
+    assert calls[-1]["footstep_planner.kind"] == "dcm"
+    capsys.readouterr()
+    assert main(["walk", "--planner", "alip", "--set", "footstep_planner.kind=dcm"]) == 2
+    assert "--set footstep_planner.kind=... and its option" in capsys.readouterr().err
+    assert main(["walk", "--planner", "lipm"]) == 2
+    assert "argument --planner: invalid choice: 'lipm'" in capsys.readouterr().err
+
+    specs = []
+
+    def fake_run_campaign(spec, out, **kwargs):
+        specs.append(spec)
+        raise ParameterError("stop here")
+
+    monkeypatch.setattr(sim.campaigns.run, "run_campaign", fake_run_campaign)
+    assert main(["campaign", "push-map", "--robot", "g1", "--planner", "alip", "--steps-x", "1", "--steps-y", "1",
+                 "--phases", "0", "--compare-timing", "fixed"]) == 2
+    spec = specs[-1]
+    assert spec.robot == "g1" and spec.params["footstep_planner.kind"] == "alip" and spec.params["base_body"] == "pelvis"
+    assert spec.duration == pytest.approx(3.0 + 0.1 + 2.5)  # phase 0 only

@@ -124,6 +124,29 @@ def test_push_recovery_on_the_alip():
     assert error[0] < 0.005 and error[2] < 0.005 and error[1] < 0.3 and error[3] < 0.3, error
 
 
+@pytest.mark.parametrize("stance_foot, command", [("left", VelocityCommand()), ("right", VelocityCommand(0.3, 0.1, 0.0))])
+def test_a_start_from_standing_plans_from_the_orbit_at_the_stance_start(stance_foot, command):
+    planner = AlipFootstepPlanner(PARAMS)
+    model = planner.model
+    start = planner.stance_start_state(stance_foot, command)
+    # the post-impact state of the orbit: flowing it over T_des (τ = 0) reaches this stance's pre-impact state
+    assert np.allclose(model.flow(start, (0.0, 0.0), PARAMS.t_des), desired_orbit(PARAMS, command)[stance_foot],
+                       atol=1e-9)
+    # in place the stance starts with the CoM half a nominal width inside the stance foot, moving towards it
+    if command == VelocityCommand():
+        side = 1.0 if stance_foot == "left" else -1.0
+        assert start[2] == pytest.approx(-side * PARAMS.width_offset / 2, abs=0.02) and start[0] == 0.0
+        assert side * -start[3] > 0  # L_x = -m z v_y: v_y towards the stance foot
+    stance = StanceState(stance_foot, [0.0, 0.11 if stance_foot == "left" else -0.11], 0.0, 0.6)
+    at_rest = ReducedState([0.0, 0.0, PARAMS.com_height], np.zeros(3), np.zeros(2), np.zeros(3))
+    plan = planner.plan(0.2, stance, at_rest, command)  # 0.4 s before the stance begins
+    assert plan.t0 == 0.6 and planner.last_instance.t_curr == 0.0
+    assert np.array_equal(planner.last_instance.x0, start)  # not the measured state (CoM between the feet, at rest)
+    assert plan.steps[0].touchdown_time >= 0.6 + PARAMS.t_min
+    schedule = contact_schedule(plan, t0=0.2, dt=0.02, n_nodes=40, rounding="nearest")
+    assert schedule.in_contact[schedule.times < 0.6 - 1e-9].all()  # both feet down until the stance begins
+
+
 def test_bad_input_and_failures():
     planner = AlipFootstepPlanner(PARAMS)
     stance, measured = standing()
@@ -131,8 +154,8 @@ def test_bad_input_and_failures():
         planner.check_command(VelocityCommand(1.0, 0.0, 0.0))
     with pytest.raises(ParameterError, match="v_y="):
         planner.plan(0.0, stance, measured, VelocityCommand(0.0, 0.5, 0.0))
-    with pytest.raises(ParameterError, match="t=-1.0 s"):
-        planner.plan(-1.0, stance, measured, VelocityCommand())
+    with pytest.raises(ParameterError, match="t=nan s must be finite"):
+        planner.plan(math.nan, stance, measured, VelocityCommand())
     with pytest.raises(ParameterError, match="solver="):
         AlipFootstepPlanner(PARAMS, solver="snopt")
     with pytest.raises(ParameterError, match="com="):

@@ -33,3 +33,29 @@ def test_g1_starts_from_standing_and_steps_in_place(in_place):
 def test_g1_stepping_in_place_stays_in_place(in_place):
     com = in_place.ticks["com"]
     assert np.max(np.abs(com[-1, :2] - com[0, :2])) < 0.08
+
+
+@pytest.fixture(scope="module")
+def in_place_alip():
+    return run_scenario("walk", robot="g1", duration=2.5, velocity_command=(0.0, 0.0, 0.0), progress=False,
+                        **{"footstep_planner.kind": "alip"})
+
+
+def test_g1_steps_in_place_with_the_alip_planner(in_place_alip):
+    log = in_place_alip
+    assert log.status == "completed", (log.fall_time, log.fall_reason, log.error)
+    assert log.params["omega"] == pytest.approx(np.sqrt(9.81 / 0.64))  # the ALIP's, not the DCM planner's
+    r = log.replans
+    assert (r["stance_switched"] > 0).sum() >= 3
+    assert log.ticks["foot_contact"][log.ticks["t"] < 0.55].all()  # the start from standing
+    assert r["sequencer_ok"].min() == 1.0 and r["mpc_ok"].mean() > 0.95
+    # the planner got the whole body's angular momentum about the stance contact (logged), and stepping in place
+    # it stays small: |L_y| < m z * 0.1 m/s
+    assert np.all(np.isfinite(r["angular_momentum_contact_y"]))
+    assert np.max(np.abs(r["angular_momentum_contact_y"])) < 33.34 * 0.64 * 0.1
+    # the steps alternate about the start, the ALIP's width apart
+    switched = np.flatnonzero(r["stance_switched"] > 0)
+    widths = np.abs(np.diff(r["stance_y"][switched]))
+    assert np.all(np.abs(widths - 0.22) < 0.05), widths
+    com = log.ticks["com"]
+    assert np.max(np.abs(com[-1, :2] - com[0, :2])) < 0.08

@@ -48,6 +48,9 @@ class AlipFootstepPlanner:
     """
 
     feet: tuple[str, ...] = FEET
+    #: reads ``ReducedState.angular_momentum`` (about the stance contact; approximated when None): a controller
+    #: that can measure it hands it over (:class:`wbmpc.walking.planning.PlanningStage`)
+    uses_angular_momentum: bool = True
 
     def __init__(self, params: AlipParams, solver: str = "sqp", warm_start: bool = True) -> None:
         if not isinstance(params, AlipParams):
@@ -78,6 +81,8 @@ class AlipFootstepPlanner:
 
     @property
     def double_support(self) -> float:
+        """Both feet on the ground after each touchdown for this long [s] (``params.double_support``; the
+        contact schedule's only: the ALIP transfers the support at the touchdown)."""
         return self.params.double_support
 
     def command_range(self) -> dict[str, tuple[float, float]]:
@@ -105,11 +110,27 @@ class AlipFootstepPlanner:
             raise ParameterError(f"stance foot={stance.foot!r} must be one of {self.feet}")
         command = as_velocity_command(command)
         t = float(t)
-        if not math.isfinite(t) or t < stance.t_start:
-            raise ParameterError(f"t={t} s must be finite and >= the stance start t_start={stance.t_start} s")
+        if not math.isfinite(t):
+            raise ParameterError(f"t={t} s must be finite")
         self.params.check_velocity(command.v_x, command.v_y)
+        if t < stance.t_start:  # a start from standing (see plan)
+            return AlipInstance(self.stance_start_state(stance.foot, command), 0.0, stance.foot, command.v_x,
+                                command.v_y, command.yaw_rate)
         return AlipInstance(self.measured_state(stance, measured), t - stance.t_start, stance.foot, command.v_x,
                             command.v_y, command.yaw_rate)
+
+    def stance_start_state(self, stance_foot: str, command) -> np.ndarray:
+        """The ALIP state (p_x, L_y, p_y, L_x) of the nominal gait of ``command`` when a stance on ``stance_foot``
+        begins, about its contact, heading frame, shape (4,): the post-impact state x⁺ = x⁻ + B_d ℓ^des of the
+        desired orbit (:func:`sequencer.alip.nlp.orbit`, τ = 0, T = T_des, not turning) at the end of a stance
+        on the other foot, with that stance's desired step (eqs. 12-13). The ALIP counterpart of
+        :meth:`sequencer.dcm_planner.DcmFootstepPlanner.stance_start_dcm`."""
+        if stance_foot not in self.feet:
+            raise ParameterError(f"stance foot={stance_foot!r} must be one of {self.feet}")
+        command = as_velocity_command(command)
+        previous = self.feet[1 - self.feet.index(stance_foot)]
+        pre_impact = orbit(self.params, command.v_x, command.v_y)[previous]
+        return pre_impact + B_D @ desired_steps(self.params, command.v_x, command.v_y, previous)
 
     def solve(self, instance: AlipInstance, warm: AlipSolution | None = None) -> AlipSolution:
         """Solve eq. (11) for ``instance`` (raises AlipSolverError)."""
@@ -117,6 +138,13 @@ class AlipFootstepPlanner:
 
     def plan(self, t: float, stance: StanceState, measured: ReducedState, command: VelocityCommand) -> FootstepPlan:
         """Footsteps from ``t`` [s]: the NMPC's K steps, then nominal ones until t + params.horizon.
+
+        A stance that has not begun (``t < stance.t_start``) is a start from standing, as for the DCM planner
+        (:meth:`sequencer.dcm_planner.DcmFootstepPlanner.plan`): both feet stay on the ground until
+        ``stance.t_start`` (the contact schedule holds them there) and the steps are planned from
+        ``stance.t_start`` (t_curr = 0) and from the nominal gait's state at the start of a stance on this foot
+        (:meth:`stance_start_state`), not from the measured one (the CoM between the feet, at rest): the
+        whole-body OCP moves the centre of pressure over the double support to bring the robot there.
 
         Raises:
             ParameterError: bad input or a command outside :meth:`command_range`.
@@ -129,7 +157,7 @@ class AlipFootstepPlanner:
             warm = self.last_solution if key == self._last_key else self._shifted(self.last_solution, instance)
         solution = self.solve(instance, warm)
         self.last_solution, self.last_instance, self._last_key = solution, instance, key
-        return self.footstep_plan(float(t), stance, measured, instance, solution)
+        return self.footstep_plan(max(float(t), stance.t_start), stance, measured, instance, solution)
 
     def _shifted(self, solution: AlipSolution, instance: AlipInstance) -> AlipSolution:
         """The last solution one step on (after a touchdown), its last step from the orbit; duals zero."""

@@ -261,7 +261,8 @@ def push_map(
     """Push-recovery map (ALIP paper, Fig. 6): 0.1 s pushes, Fx in [-Fx, Fx], Fy in [0, Fy] [N].
 
     Each force is applied at every gait phase in ``phases``: the push starts at
-    ``push_after + phase * T_nom`` (``push_after`` a multiple of the nominal step duration T_nom,
+    ``push_after + phase * T_nom`` (T_nom the nominal step period of the robot's footstep planner,
+    :func:`sim.campaigns.trial.nominal_step_period`; ``push_after`` a multiple of it,
     so phase 0 is a nominal touchdown; the phase measured from the controller's stance switches is
     recorded beside it). With the default five phases that is the paper's five repeats per force
     "at different times to account for varying step phases".
@@ -279,7 +280,8 @@ def push_map(
         controller: "walking" or "pd".
         push_after: time before the pushes [s] (walking reaches steady state).
         duration: simulated time per trial [s]; None = latest push end + ``PUSH_RECOVERY_TIME``.
-        params: extra shared parameters (scenario, runner, controller options).
+        params: extra shared parameters (scenario, runner, controller options); the push acts on the
+            robot's base body (:func:`base_body_name`) unless they set ``base_body``.
         robot: registered robot name.
     """
     for name, value in (("force_max_x", force_max_x), ("force_max_y", force_max_y)):
@@ -288,7 +290,8 @@ def push_map(
     for name, value in (("steps_x", steps_x), ("steps_y", steps_y)):
         if not (isinstance(value, int) and value >= 1):
             raise ParameterError(f"{name}={value!r} must be an integer >= 1")
-    shared = {"push_after": float(push_after), "push_duration": 0.1, **(params or {})}
+    shared = {"push_after": float(push_after), "push_duration": 0.1, "base_body": base_body_name(robot),
+              **(params or {})}
     variants: dict[str, dict[str, Any]] = {DEFAULT_VARIANT: {}}
     if compare_timing is not None:
         from sim.campaigns.trial import STEP_TIMINGS
@@ -302,9 +305,9 @@ def push_map(
             compared["step_timing_from"] = float(timing_from)
         variants = {"adaptive": {"step_timing": "adaptive"}, compare_timing: compared}
     if duration is None:
-        from sequencer import SequencerParams
+        from sim.campaigns.trial import nominal_step_period
 
-        t_nom = SequencerParams.bolt_walking().t_nom
+        t_nom = nominal_step_period(robot, "push", shared if controller == "walking" else {})
         latest_end = push_after + max(phases) * t_nom + shared["push_duration"]
         duration = round(latest_end + PUSH_RECOVERY_TIME, 3)
     return CampaignSpec(
@@ -322,6 +325,18 @@ def push_map(
         variants=variants,
         seeds=list(seeds),
     )
+
+
+def base_body_name(robot: str) -> str:
+    """The name of ``robot``'s floating base body (the body of its free-flyer joint, where pushes are applied:
+    Bolt's ``base_link``, the G1's and H1's ``pelvis``)."""
+    import pinocchio as pin
+
+    from robots import load_robot
+
+    model = load_robot(robot).pinocchio_model
+    return next(frame.name for frame in model.frames
+                if frame.parentJoint == 1 and frame.type == pin.FrameType.BODY)
 
 
 def terrain(

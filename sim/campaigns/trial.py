@@ -5,15 +5,19 @@ Campaign parameters that are not arguments of :func:`sim.run_scenario` (translat
 - ``force_x``, ``force_y`` [N]: push force in the world frame (scenario "push") ->
   ``force = |(Fx, Fy)|``, ``direction = atan2(Fy, Fx)`` [deg].
 - ``phase`` in [0, 1) and ``push_after`` [s] (scenario "push"): the push starts at
-  ``push_after + phase * T_nom``, T_nom the nominal step duration of the trial's sequencer
-  parameters. The phase measured from the controller's stance switches is recorded in the result
+  ``push_after + phase * T_nom``, T_nom the nominal step period of the trial's footstep planner
+  (the robot's walking preset with the trial's overrides: the DCM planner's ``t_nom``, the ALIP
+  planner's ``t_des``; :attr:`wbmpc.walking.preset.WalkingPreset.step_period`). The phase
+  measured from the controller's stance switches is recorded in the result
   (``metrics["push_phase_measured"]``): it can differ from the nominal one when the gait drifts.
 - ``sequencer_params`` may be a preset name (``"table_i"``) or a table of fields that override the
-  Bolt walking preset (campaign files).
-- ``step_timing`` (controller "walking"): "adaptive" (the walking controller's sequencer
-  parameters, the paper's controller), "fixed" (T_min = T_max = T_nom: the step duration cannot
-  change) or "stiff" (the timing weight alpha_2 raised to ``STIFF_TIMING_WEIGHT``: timing changes
-  cost far more than position changes).
+  ``[planner]`` of the trial robot's walking preset (campaign files).
+- ``step_timing`` (controller "walking"), for the planner the trial runs
+  (``footstep_planner.kind``): "adaptive" (the walking preset's planner parameters), "fixed" (the
+  step period cannot change: DCM T_min = T_max = T_nom; ALIP T = ``ALIP_FIXED_STEP_PERIOD``, the
+  ALIP paper's fixed-timing study) or "stiff" (the timing weight raised to
+  ``STIFF_TIMING_WEIGHT``: DCM alpha_2, ALIP R_T; timing changes cost far more than position
+  changes).
 - ``step_timing_from`` [s] (with ``step_timing``; default 0): the variant's timing applies from
   the first touchdown at or after this time, the start being adaptive
   (``WalkingControllerConfig.sequencer_params_from``), so that variants are compared on the same
@@ -43,7 +47,8 @@ import numpy as np
 from wbmpc.errors import ParameterError
 
 STEP_TIMINGS = ("adaptive", "fixed", "stiff")
-STIFF_TIMING_WEIGHT = 1e8  # alpha_2 of the "stiff" step timing (preset: 1, alpha_3 = 1e6)
+STIFF_TIMING_WEIGHT = 1e8  # alpha_2 (DCM; preset: 1, alpha_3 = 1e6) or R_T [1/s^2] (ALIP; preset: 100) of "stiff" timing
+ALIP_FIXED_STEP_PERIOD = 0.35  # [s], the ALIP paper's fixed step period (section 4.3, Fig. 6 top; adaptive: 0.25-0.5 s)
 CAMPAIGN_PARAMETERS = ("force_x", "force_y", "phase", "push_after", "step_timing", "step_timing_from")
 PD_OPTIONS = ("kp", "kd")
 MAX_TRACEBACK_CHARS = 4000
@@ -92,19 +97,24 @@ def make_trials(spec) -> list[Trial]:
             offending trial's parameters (raised before anything runs).
     """
     allowed = _allowed_names(spec.scenario, spec.controller)
+    if spec.controller == "walking":  # and every "section.field" key of the walking preset
+        from wbmpc.walking.preset import is_preset_override
+    else:
+        def is_preset_override(key: str) -> bool:
+            return False
     trials: list[Trial] = []
     points = spec.points()
     for seed in spec.seeds:
         for point in points:
             for variant, overrides in spec.variants.items():
                 params = {**spec.params, **point, **overrides}
-                unknown = sorted(set(params) - allowed)
+                unknown = sorted(k for k in params if k not in allowed and not is_preset_override(k))
                 if unknown:
                     raise ParameterError(
                         f"campaign {spec.name!r}: unknown parameter(s) {unknown}; allowed: {sorted(allowed)}"
                     )
                 try:
-                    arguments = resolve_arguments(spec.scenario, spec.controller, spec.duration, params)
+                    arguments = resolve_arguments(spec.scenario, spec.controller, spec.duration, params, spec.robot)
                 except ParameterError as err:
                     raise ParameterError(f"campaign {spec.name!r}, variant {variant!r}, point {point}: {err}") from err
                 trials.append(
@@ -140,8 +150,9 @@ def _allowed_names(scenario: str, controller: str) -> set[str]:
     return names
 
 
-def resolve_arguments(scenario: str, controller: str, duration: float | None, params: dict[str, Any]) -> dict:
-    """``run_scenario`` keyword arguments for campaign parameters ``params`` (validated).
+def resolve_arguments(scenario: str, controller: str, duration: float | None, params: dict[str, Any],
+                      robot: str = "bolt") -> dict:
+    """``run_scenario`` keyword arguments for campaign parameters ``params`` of a trial of ``robot`` (validated).
 
     Raises:
         ParameterError: conflicting or out-of-range parameters.
@@ -157,19 +168,26 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
         arguments["sequencer_params"] = (
             SequencerParams.preset(given)
             if isinstance(given, str)
-            else SequencerParams.from_dict({**_walking_planner().to_dict(), **given}, "sequencer_params")
+            else SequencerParams.from_dict({**_trial_preset(robot, scenario, {}).planner.to_dict(), **given},
+                                           "sequencer_params")
         )
     step_timing = arguments.pop("step_timing", None)
     step_timing_from = _finite("step_timing_from", arguments.pop("step_timing_from", 0.0))
     if step_timing_from < 0:
         raise ParameterError(f"step_timing_from={step_timing_from} s must be >= 0")
+    # [s], the step period of the planner the trial starts with (the phase's unit)
+    nominal_period = nominal_step_period(robot, scenario, arguments) if "phase" in arguments else None
     if step_timing is not None:
-        timed = _sequencer_params(step_timing, arguments.get("sequencer_params"))
+        preset = _trial_preset(robot, scenario, arguments)
+        adaptive = preset.planner_params
+        timed = timed_planner_params(step_timing, adaptive)
+        planner_key = "sequencer_params" if preset.footstep_planner.kind == "dcm" else "footstep_planner.alip"
         if step_timing_from > 0:
-            arguments["sequencer_params"] = _sequencer_params("adaptive", arguments.get("sequencer_params"))
+            if planner_key == "sequencer_params":
+                arguments["sequencer_params"] = adaptive
             arguments["sequencer_params_from"] = (step_timing_from, timed)
         else:
-            arguments["sequencer_params"] = timed
+            arguments[planner_key] = timed if planner_key == "sequencer_params" else timed.to_dict()
     elif step_timing_from > 0:
         raise ParameterError("step_timing_from needs a step_timing")
     if "force_x" in arguments or "force_y" in arguments:
@@ -189,8 +207,7 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
         push_after = _finite("push_after", arguments.pop("push_after", 0.0))
         if push_after < 0:
             raise ParameterError(f"push_after={push_after} s must be >= 0")
-        t_nom = _sequencer_params("adaptive", arguments.get("sequencer_params")).t_nom
-        arguments["push_time"] = push_after + phase * t_nom
+        arguments["push_time"] = push_after + phase * nominal_period
     elif "push_after" in arguments:
         raise ParameterError("push_after needs a phase (push_time = push_after + phase * T_nom)")
     scenario_args = {k: v for k, v in arguments.items() if k in scenario_parameters(scenario)}
@@ -201,33 +218,56 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
             f"the push ends at t = {events['push_end']:.3f} s, not before the end of the trial (duration={duration} s)"
         )
     if controller == "walking":
-        from wbmpc.walking.preset import is_preset_override, load_walking_preset
-
-        overrides = {("planner" if k == "sequencer_params" else k): v for k, v in arguments.items()
-                     if k == "sequencer_params" or (is_preset_override(k) and k not in scenario_args)}
-        if "mpc_failure_times" in overrides:
-            overrides["mpc_failure_times"] = tuple(float(t) for t in overrides["mpc_failure_times"])
-        load_walking_preset("bolt", overrides)  # validated as the run will load it
+        _trial_preset(robot, scenario, arguments)  # validated as the run will load it
     return arguments
 
 
-def _walking_planner():
-    """The walking controller's planner parameters (Bolt's walking preset)."""
-    from wbmpc.walking.preset import load_walking_preset
+def _trial_preset(robot: str, scenario: str, arguments: dict[str, Any]):
+    """The walking preset of ``robot`` with the preset overrides among ``arguments`` (the trial's controller).
 
-    return load_walking_preset("bolt").planner
+    Raises:
+        ParameterError: an override the preset refuses, or a robot without a walking preset.
+    """
+    from sim.scenarios import scenario_parameters
+    from wbmpc.walking.preset import is_preset_override, load_walking_preset
+
+    scenario_keys = set(scenario_parameters(scenario))
+    overrides = {("planner" if k == "sequencer_params" else k): v for k, v in arguments.items()
+                 if k == "sequencer_params" or (is_preset_override(k) and k not in scenario_keys)}
+    if "mpc_failure_times" in overrides:
+        overrides["mpc_failure_times"] = tuple(float(t) for t in overrides["mpc_failure_times"])
+    return load_walking_preset(robot, overrides)
 
 
-def _sequencer_params(step_timing: str, base: Any = None):
-    """Sequencer parameters for ``step_timing`` from ``base`` (None: the walking controller's default)."""
+def nominal_step_period(robot: str, scenario: str, arguments: dict[str, Any]) -> float:
+    """The nominal step period [s] of the footstep planner of ``robot``'s walking preset with the preset
+    overrides among ``arguments`` (:attr:`wbmpc.walking.preset.WalkingPreset.step_period`)."""
+    return _trial_preset(robot, scenario, arguments).step_period
+
+
+def timed_planner_params(step_timing: str, params):
+    """The footstep planner's parameters ``params`` (``SequencerParams`` or ``AlipParams``) with ``step_timing``.
+
+    "adaptive": unchanged; "fixed": one step period (DCM: T_min = T_max = T_nom; ALIP:
+    ``ALIP_FIXED_STEP_PERIOD``); "stiff": the timing weight set to ``STIFF_TIMING_WEIGHT`` (DCM alpha_2,
+    ALIP R_T), the bounds kept.
+    """
+    from sequencer.alip.params import AlipParams
+
     if step_timing not in STEP_TIMINGS:
         raise ParameterError(f"step_timing={step_timing!r} must be one of {STEP_TIMINGS}")
-    params = base if base is not None else _walking_planner()
-    if step_timing == "fixed":
-        return dataclasses.replace(params, t_min=params.t_nom, t_max=params.t_nom, name=f"{params.name}+fixed_timing")
-    if step_timing == "stiff":
-        return dataclasses.replace(params, alpha2=STIFF_TIMING_WEIGHT, name=f"{params.name}+stiff_timing")
-    return params
+    if step_timing == "adaptive":
+        return params
+    if isinstance(params, AlipParams):
+        if step_timing == "fixed":
+            timed = params.fixed_timing(ALIP_FIXED_STEP_PERIOD)
+        else:
+            timed = dataclasses.replace(params, r_period=STIFF_TIMING_WEIGHT)
+    elif step_timing == "fixed":
+        timed = dataclasses.replace(params, t_min=params.t_nom, t_max=params.t_nom)
+    else:
+        timed = dataclasses.replace(params, alpha2=STIFF_TIMING_WEIGHT)
+    return dataclasses.replace(timed, name=f"{params.name}+{step_timing}_timing")
 
 
 def _finite(name: str, value: Any) -> float:
@@ -286,7 +326,7 @@ def run_trial(trial: Trial) -> dict[str, Any]:
         metrics = dict(log.metrics)
         push_time = log.params.get("events", {}).get("push_start")
         if push_time is not None:
-            t_nom = _sequencer_params("adaptive", trial.arguments.get("sequencer_params")).t_nom
+            t_nom = nominal_step_period(trial.robot, trial.scenario, trial.arguments)
             metrics["push_phase_measured"] = measured_gait_phase(log.replans, push_time, t_nom)
         record.update(
             success=log.status == "completed",

@@ -3,6 +3,7 @@
     wbmpc campaign push-map --workers 2 --out runs/push-map              # Fig. 6-style push map (Bolt)
     wbmpc campaign push-map --robot g1 --out runs/push-map-g1            # another robot
     wbmpc campaign push-map --compare-timing fixed --out runs/timing     # adaptive vs fixed timing
+    wbmpc campaign push-map --robot g1 --planner alip --set speed=0.0    # the G1 in place, the ALIP planner
     wbmpc campaign push-map --out runs/push-map --resume                 # after a kill: go on
     wbmpc campaign terrain --seeds 20 --backend ray                      # terrain seeds on Ray
     wbmpc campaign run my_campaign.toml --backend ray --address auto     # a campaign file, on a cluster
@@ -33,7 +34,7 @@ def register(subparsers) -> None:
     )
     from sim.campaigns.trial import STEP_TIMINGS
     from wbmpc.cli.arguments import COUNT, DURATION, NON_NEGATIVE, PHASE, POSITIVE, output_directory
-    from wbmpc.cli.walk import _parse_assignment, add_robot_argument
+    from wbmpc.cli.walk import _parse_assignment, add_planner_arguments, add_robot_argument
 
     campaign = subparsers.add_parser("campaign", help="campaigns of closed-loop trials (push maps, terrain), local or Ray")
     commands = campaign.add_subparsers(dest="campaign_command", metavar="CAMPAIGN", required=True)
@@ -53,6 +54,7 @@ def register(subparsers) -> None:
     def add_trial_options(parser: argparse.ArgumentParser, duration_default) -> None:
         add_robot_argument(parser)
         parser.add_argument("--controller", choices=("walking", "pd"), default="walking")
+        add_planner_arguments(parser)
         parser.add_argument("--duration", type=DURATION, default=duration_default, help="simulated time per trial [s]")
         parser.add_argument(
             "--set", dest="overrides", action="append", type=_parse_assignment, default=[], metavar="NAME=VALUE",
@@ -102,8 +104,15 @@ def register(subparsers) -> None:
 
 def _spec_from_args(args: argparse.Namespace):
     from sim.campaigns.spec import builtin_campaign
+    from wbmpc.cli.walk import planner_params_from_args
+    from wbmpc.errors import ParameterError
 
     params = dict(args.overrides)
+    planner = planner_params_from_args(args)
+    both = sorted(set(planner) & set(params))
+    if both:
+        raise ParameterError(f"--set {both[0]}=... and its option (--planner/--alip-solver) both given: give one")
+    params.update(planner)
     if args.campaign == "push-map":
         return builtin_campaign(
             "push-map",

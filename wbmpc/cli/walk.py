@@ -6,6 +6,7 @@
     wbmpc run push --robot g1 --force 300 --direction 90 --push-time 5
     wbmpc run waypoints --robot g1 --path square --set speed=0.2 --out runs/g1_square
     wbmpc walk --viewer                       # MuJoCo's viewer, live (needs a display)
+    wbmpc walk --robot g1 --vx 0 --planner alip   # the ALIP step-to-step NMPC plans the steps
 
 Scenario parameters have their own options where common (``--force``...); any other parameter of
 the scenario, runner or controller is passed with ``--set NAME=VALUE``. ``--vx`` (alias
@@ -68,6 +69,7 @@ def add_run_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mpc-failure-at", type=NON_NEGATIVE, action="append", default=None, metavar="T",
                         help="inject an MPC failure at T [s] (repeatable)")
     parser.add_argument("--controller", choices=("walking", "pd"), default="walking")
+    add_planner_arguments(parser)
     parser.add_argument("--render", metavar="FILE", type=_video_path, default=None,
                         help="render an offscreen video of the run (.mp4 or .gif)")
     parser.add_argument("--viewer", action="store_true", help="show the run live in MuJoCo's viewer (needs a display)")
@@ -76,6 +78,28 @@ def add_run_arguments(parser: argparse.ArgumentParser) -> None:
         help="any other scenario/runner/controller parameter (repeatable)",
     )
     add_output_arguments(parser, plot=True)
+
+
+PLANNER_OPTIONS = {"planner": "footstep_planner.kind", "alip_solver": "footstep_planner.alip_solver"}
+"""The footstep-planner options of ``walk``, ``run`` and ``campaign`` -> the walking-preset keys they set."""
+
+
+def add_planner_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--planner dcm|alip`` and ``--alip-solver sqp|ipopt``: the walking preset's ``[footstep_planner]``
+    (default: the preset's, the DCM step QP unless its file says otherwise)."""
+    from wbmpc.walking.preset import ALIP_SOLVERS, PLANNER_KINDS
+
+    parser.add_argument("--planner", choices=PLANNER_KINDS, default=None,
+                        help="footstep planner: dcm (the DCM step QP of the preset's [planner]) or alip (the ALIP "
+                             "NMPC, parameters sequencer/presets/alip/ROBOT.toml; --set footstep_planner.alip_preset="
+                             "NAME|FILE, footstep_planner.alip.FIELD=VALUE); default: the walking preset's")
+    parser.add_argument("--alip-solver", choices=ALIP_SOLVERS, default=None, help="the ALIP NMPC's solver (default sqp)")
+
+
+def planner_params_from_args(args: argparse.Namespace) -> dict:
+    """The walking-preset overrides of ``--planner`` and ``--alip-solver`` (only those given)."""
+    return {key: getattr(args, option) for option, key in PLANNER_OPTIONS.items()
+            if getattr(args, option, None) is not None}
 
 
 def _video_path(text: str) -> str:
@@ -140,7 +164,12 @@ def params_from_args(args: argparse.Namespace) -> dict:
     command = velocity_command_from_args(args)
     if command is not None:
         params["velocity_command"] = command
+    planner = planner_params_from_args(args)
+    params.update(planner)
     overrides = dict(args.overrides)
+    both = sorted(set(planner) & set(overrides))
+    if both:
+        raise ParameterError(f"--set {both[0]}=... and its option (--planner/--alip-solver) both given: give one")
     own = sorted(set(overrides) & set(RUN_SCENARIO_OPTIONS))
     if own:
         raise ParameterError(f"--set {own[0]}=...: {own[0]} is not a scenario/runner/controller parameter; "

@@ -20,8 +20,9 @@ measures it on the G1.
 
 Frames: every vector here is in the world frame (Pinocchio's convention: q the free flyer's world pose,
 v its velocity in the base frame) unless said; :func:`measured_alip_state` turns it into the ALIP state of
-the stance's heading frame (world rotated about z by the stance yaw), (p_x, L_y, p_y, L_x). Nothing here is
-wired into the controller.
+the stance's heading frame (world rotated about z by the stance yaw), (p_x, L_y, p_y, L_x). The walking
+controller's planning stage (:class:`wbmpc.walking.planning.PlanningStage`) hands :func:`contact_angular_momentum`
+to the ALIP planner (``[footstep_planner] angular_momentum = "exact"`` of the walking preset).
 """
 
 from __future__ import annotations

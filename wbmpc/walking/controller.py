@@ -25,7 +25,10 @@ from typing import Any
 
 import numpy as np
 
+from sequencer.alip.params import AlipParams
+from sequencer.alip.planner import AlipFootstepPlanner
 from sequencer.dcm_planner import DcmFootstepPlanner
+from sequencer.params import SequencerParams
 from sequencer.planner import VelocityCommand
 from wbmpc.errors import NoSolutionError, ParameterError
 from wbmpc.walking.controller_config import WalkingControllerConfig
@@ -64,8 +67,12 @@ class WalkingController:
         mpc_solver: callable (problem, default solver) -> solver with
             :class:`wbmpc.ocp.mpc.MPCSolver`'s interface, the MPC's solver (the benchmarks pass
             Crocoddyl's FDDP behind an adapter); None = the library's FDDP.
-        planner: a :class:`sequencer.planner.FootstepPlanner` to use instead of the preset's DCM
-            planner (the preset's ``[planner]`` is then not used).
+        planner: a :class:`sequencer.planner.FootstepPlanner` to use instead of the preset's
+            (``[footstep_planner]``: the DCM step QP of ``[planner]`` by default, or the ALIP NMPC).
+
+    A planner that reads the measured angular momentum (attribute ``uses_angular_momentum``, the ALIP
+    planner's) gets the whole body's about the stance contact when the preset's
+    ``footstep_planner.angular_momentum`` is "exact" (the default), else None (its own approximation).
     """
 
     def __init__(self, preset: WalkingPreset | None = None, mpc_solver=None, planner=None) -> None:
@@ -73,15 +80,22 @@ class WalkingController:
         self.config: WalkingControllerConfig = self.preset.controller
         self.replan_period = self.config.replan_period
         self.mpc_solver = mpc_solver
-        self.planner = self._make_planner(self.preset.planner) if planner is None else planner
+        self.planner = self._make_planner(self.preset.planner_params) if planner is None else planner
         self.omega = float(self.planner.omega)
         self.command = VelocityCommand()
         self.timers = ControllerTimers()
         self.planning: PlanningStage | None = None  # built by reset (it needs the robot)
 
     # ------------------------------------------------------------------ episode setup
-    def _make_planner(self, params):
-        return DcmFootstepPlanner(params, backend=self.config.planner_backend)
+    def _make_planner(self, params: SequencerParams | AlipParams):
+        """The footstep planner of ``params``: the DCM step QP (SequencerParams, ``planner_backend``) or the
+        ALIP NMPC (AlipParams, the preset's ``footstep_planner.alip_solver``)."""
+        if isinstance(params, AlipParams):
+            return AlipFootstepPlanner(params, solver=self.preset.footstep_planner.alip_solver)
+        if isinstance(params, SequencerParams):
+            return DcmFootstepPlanner(params, backend=self.config.planner_backend)
+        raise ParameterError(f"footstep planner parameters must be SequencerParams or AlipParams, "
+                             f"got {type(params).__name__}")
 
     def reset(self, robot: Any, x0: np.ndarray, t0: float) -> None:
         """Build the parts for ``robot`` and solve the first MPC update (cold start) at ``t0``."""
@@ -92,7 +106,9 @@ class WalkingController:
         switch = None
         if cfg.sequencer_params_from is not None:
             switch = (float(cfg.sequencer_params_from[0]), self._make_planner(cfg.sequencer_params_from[1]))
-        self.planning = PlanningStage(robot, planner, cfg, switch)
+        measure = (getattr(planner, "uses_angular_momentum", False)
+                   and preset.footstep_planner.angular_momentum == "exact")
+        self.planning = PlanningStage(robot, planner, cfg, switch, measure_angular_momentum=measure)
         self.omega = self.planning.omega
         self.feet = self.planning.feet
         self.reference_stage = OcpReferenceStage(self.feet, cfg.n_nodes, cfg.node_dt,

@@ -122,7 +122,8 @@ class WalkingControllerConfig:
             foot rolls in undisturbed steps, so that walking on good ground is unchanged.
         mpc_failure_times: injected failures [s]: the MPC update at the first replan at or after
             each time is discarded as if the solver had failed (the last good solution is kept).
-        sequencer_params_from: None, or (t_switch [s], ``SequencerParams``): from the first
+        sequencer_params_from: None, or (t_switch [s], ``SequencerParams`` or ``AlipParams``, of the
+            planner the run starts with): from the first
             touchdown at or after t_switch on, the sequencer uses these parameters instead (the
             current velocity command, integral correction included, and the identified LIPM
             corrections carry over). At a touchdown, not in the middle of a step: switching to
@@ -224,5 +225,5 @@ class WalkingControllerConfig:
             switch = self.sequencer_params_from
             if not (isinstance(switch, tuple) and len(switch) == 2 and np.isfinite(switch[0]) and switch[0] >= 0):
                 raise ParameterError(
-                    f"sequencer_params_from={switch!r} must be None or (t_switch >= 0 [s], SequencerParams)"
+                    f"sequencer_params_from={switch!r} must be None or (t_switch >= 0 [s], SequencerParams or AlipParams)"
                 )

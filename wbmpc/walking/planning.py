@@ -1,7 +1,8 @@
 """The planning stage of the walking controller: measured state -> footstep plan, every replan.
 
 At each replan it measures the reduced state (CoM, CoM velocity, DCM with the planner's ω; the
-feet), switches the stance on a touchdown (:class:`~wbmpc.walking.stance.StanceTracker`),
+feet; for a planner that reads it, the whole body's angular momentum about the stance contact),
+switches the stance on a touchdown (:class:`~wbmpc.walking.stance.StanceTracker`),
 updates the online estimates (:mod:`wbmpc.walking.estimators`) and asks the footstep planner
 for a plan from the current stance with the velocity command (plus the speed integral's
 correction). A planner failure (:class:`wbmpc.errors.SolverError`, e.g. an infeasible step QP)
@@ -10,6 +11,7 @@ keeps the previous plan and is reported in the record; it never stops the loop.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import Any
 
@@ -20,6 +22,7 @@ from robots.conventions import base_yaw
 from sequencer.dcm_planner import DcmFootstepPlanner
 from sequencer.planner import FootstepPlanner, ReducedState, StanceState, VelocityCommand, rotate_xy
 from wbmpc.errors import ParameterError, SolverError
+from wbmpc.walking.alip_state import contact_angular_momentum
 from wbmpc.walking.controller_config import WalkingControllerConfig
 from wbmpc.walking.estimators import LipmCorrectionEstimator, StanceSlide, VelocityIntegral
 from wbmpc.walking.stance import StanceTracker
@@ -34,10 +37,16 @@ class PlanningStage:
         config: the controller's options (touchdown detection, estimator gains, ...).
         planner_after: None or (t_switch [s], planner): from the first touchdown at or after
             t_switch on, plan with this planner (same feet and ω; the LIPM corrections carry over).
+        measure_angular_momentum: hand the planner the whole body's angular momentum about the stance
+            contact (``ReducedState.angular_momentum``, exact:
+            :func:`wbmpc.walking.alip_state.contact_angular_momentum`); False: None (a planner that needs it
+            approximates it from the CoM state). Logged as ``angular_momentum_contact_x/y`` with the
+            centroidal part ``angular_momentum_com_x/y`` [kg·m²/s], world axes.
     """
 
     def __init__(self, robot: Any, planner: FootstepPlanner, config: WalkingControllerConfig,
-                 planner_after: tuple[float, FootstepPlanner] | None = None) -> None:
+                 planner_after: tuple[float, FootstepPlanner] | None = None,
+                 measure_angular_momentum: bool = False) -> None:
         self.model = robot.pinocchio_model
         self.data = self.model.createData()
         self.nq = self.model.nq
@@ -54,6 +63,7 @@ class PlanningStage:
                 f"the first one's {self.omega:.6g} 1/s (z_c fixes the run's omega)"
             )
         self._planner_after = planner_after
+        self.measure_angular_momentum = bool(measure_angular_momentum)
         self.stance = StanceTracker(self.feet, config.touchdown_detection)
         self.slide = StanceSlide(config.stance_slide_follow)
         self.velocity_integral = VelocityIntegral(config.velocity_integral_gain, config.velocity_correction_max,
@@ -165,6 +175,13 @@ class PlanningStage:
             "dcm_offset_bias": np.nan if self.lipm is None else self.lipm.corrections.dcm_offset_bias,
             "stance_drift": np.nan if self.lipm is None else self.lipm.corrections.stance_drift,
         }
+        if self.measure_angular_momentum:  # about the planned contact: the sole's point on the ground under it
+            contact = np.array([*self.slide.plan_position, feet[stance_index, 2]])
+            centroidal = contact_angular_momentum(self.model, self.data, q, v, contact)
+            measured = dataclasses.replace(measured, angular_momentum=centroidal.angular_momentum_contact)
+            for axis, index in (("x", 0), ("y", 1)):
+                record[f"angular_momentum_contact_{axis}"] = float(centroidal.angular_momentum_contact[index])
+                record[f"angular_momentum_com_{axis}"] = float(centroidal.angular_momentum_com[index])
         tic = time.perf_counter()
         planned_stance = StanceState(stance.foot, self.slide.plan_position, stance.yaw, stance.t_start)
         try:

@@ -1,13 +1,18 @@
 """Walking presets: every tuned number of a robot's walking pipeline, in one TOML file per robot.
 
-``wbmpc/walking/presets/<robot>.toml`` has five sections, each loaded into a validated dataclass:
+``wbmpc/walking/presets/<robot>.toml`` has five sections, each loaded into a validated dataclass, and an
+optional sixth:
 
 - ``[planner]``: the DCM step QP (:class:`sequencer.SequencerParams`);
 - ``[ocp]`` (and ``[ocp.state_weights]``): the whole-body OCP (:class:`~wbmpc.walking.ocp.WalkingOCPConfig`);
 - ``[controller]``: horizon, rates, touchdown handling, estimator gains
   (:class:`~wbmpc.walking.controller_config.WalkingControllerConfig`);
 - ``[fall]``: fall thresholds (:class:`FallThresholds`);
-- ``[command]``: the velocity commands the robot can follow (:class:`CommandRange`).
+- ``[command]``: the velocity commands the robot can follow (:class:`CommandRange`);
+- ``[footstep_planner]`` (optional): which footstep planner the controller runs
+  (:class:`FootstepPlannerChoice`): ``kind = "dcm"`` (default, the ``[planner]`` section) or ``"alip"``
+  (the ALIP step-to-step NMPC of :mod:`sequencer.alip`, its parameters from a named ALIP preset with the
+  fields of a ``[footstep_planner.alip]`` sub-table over them).
 
 Overrides address a value as ``"section.name"`` (``"planner.l_max"``, ``"ocp.state_weights.joint_position"``),
 a bare name addresses ``[controller]``; a whole section can be replaced by a dataclass instance
@@ -27,6 +32,8 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from robots.registry import check_robot_name
+from sequencer.alip.params import PRESET_DIR as ALIP_PRESET_DIR
+from sequencer.alip.params import AlipParams
 from sequencer.params import SequencerParams
 from sequencer.planner import VelocityCommand
 from wbmpc.config import read_toml
@@ -37,6 +44,11 @@ from wbmpc.walking.ocp import StateWeights, WalkingOCPConfig
 PRESET_DIR = Path(__file__).resolve().parent / "presets"
 
 SECTIONS = ("planner", "ocp", "controller", "fall", "command")
+OPTIONAL_SECTIONS = ("footstep_planner",)
+ALL_SECTIONS = SECTIONS + OPTIONAL_SECTIONS
+PLANNER_KINDS = ("dcm", "alip")
+ALIP_SOLVERS = ("sqp", "ipopt")
+ANGULAR_MOMENTUM_SOURCES = ("exact", "approximate")
 
 
 @dataclass(frozen=True)
@@ -102,6 +114,76 @@ class CommandRange:
 
 
 @dataclass(frozen=True)
+class FootstepPlannerChoice:
+    """Which footstep planner the walking controller runs (section ``[footstep_planner]``, optional).
+
+    Attributes:
+        kind: ``"dcm"`` (the DCM step QP with the preset's ``[planner]``, the default) or ``"alip"``
+            (:class:`sequencer.alip.AlipFootstepPlanner` with :attr:`alip`).
+        alip_preset: the ALIP parameters' source: a name of ``sequencer/presets/alip/`` (``"g1"``) or the path
+            of an ALIP TOML file; ``""`` = the robot's name.
+        alip_solver: the ALIP NMPC's solver, ``"sqp"`` (fast path) or ``"ipopt"`` (reference).
+        angular_momentum: the ALIP planner's measured angular momentum about the stance contact:
+            ``"exact"`` (the whole body's, :func:`wbmpc.walking.alip_state.contact_angular_momentum`) or
+            ``"approximate"`` (the planner's eqs. 14-15 from the CoM velocity, without the I ω terms).
+            The DCM planner reads neither.
+        alip: the resolved ALIP parameters (kind ``"alip"``; None otherwise): the preset's, with the fields
+            of ``[footstep_planner.alip]`` over them. Their ``double_support`` [s], unless that sub-table sets
+            it, is the walking preset's ``[planner] double_support``: the ALIP preset describes the planner
+            alone (0: the ALIP's instantaneous transfer of the support) while the contact schedule's double
+            support is what the robot's whole-body OCP needs (the G1's flat feet: 0.1 s), the same whichever
+            planner plans the steps.
+    """
+
+    kind: str = "dcm"
+    alip_preset: str = ""
+    alip_solver: str = "sqp"
+    angular_momentum: str = "exact"
+    alip: AlipParams | None = None
+
+    def __post_init__(self) -> None:
+        for name, allowed in (("kind", PLANNER_KINDS), ("alip_solver", ALIP_SOLVERS),
+                              ("angular_momentum", ANGULAR_MOMENTUM_SOURCES)):
+            if getattr(self, name) not in allowed:
+                raise ParameterError(f"footstep_planner.{name}={getattr(self, name)!r} must be one of {allowed}")
+        if not isinstance(self.alip_preset, str):
+            raise ParameterError(f"footstep_planner.alip_preset={self.alip_preset!r} must be a preset name or a path")
+        if self.alip is not None and not isinstance(self.alip, AlipParams):
+            raise ParameterError(f"footstep_planner.alip must be AlipParams or None, got {type(self.alip).__name__}")
+
+
+def _footstep_planner_from_table(table: Mapping[str, Any], robot: str,
+                                 planner: SequencerParams) -> FootstepPlannerChoice:
+    """The ``[footstep_planner]`` section, its ALIP parameters resolved (see :class:`FootstepPlannerChoice`)."""
+    table = dict(table)
+    alip_fields = table.pop("alip", None) or {}
+    if not isinstance(alip_fields, Mapping):
+        raise ParameterError(f"[footstep_planner] alip={alip_fields!r} must be a table of ALIP parameters")
+    allowed = [f.name for f in dataclasses.fields(FootstepPlannerChoice) if f.name != "alip"]
+    unknown = sorted(set(table) - set(allowed))
+    if unknown:
+        raise ParameterError(f"[footstep_planner] has no field {unknown} (allowed: {allowed + ['alip']})")
+    choice = FootstepPlannerChoice(**table)
+    if choice.kind != "alip":
+        return choice
+    source = choice.alip_preset or robot
+    if source.endswith(".toml") or "/" in source:
+        base = AlipParams.from_toml(source)
+    else:
+        available = sorted(p.stem for p in ALIP_PRESET_DIR.glob("*.toml"))
+        if source not in available:
+            raise ParameterError(f"footstep_planner.alip_preset={source!r}: no ALIP preset of that name (available: "
+                                 f"{available}); give a name or the path of an ALIP TOML file")
+        base = AlipParams.preset(source)
+    fields = {"double_support": planner.double_support, **dict(alip_fields)}
+    try:
+        params = AlipParams.from_dict({**base.to_dict(), **fields}, source=f"[footstep_planner.alip] over {source!r}")
+    except ParameterError as err:
+        raise ParameterError(f"[footstep_planner.alip] over the ALIP preset {source!r}: {err}") from None
+    return dataclasses.replace(choice, alip_preset=source, alip=params)
+
+
+@dataclass(frozen=True)
 class WalkingPreset:
     """A robot's walking pipeline, all of its tuned numbers (see the module docstring)."""
 
@@ -112,11 +194,29 @@ class WalkingPreset:
     fall: FallThresholds
     command: CommandRange
     source: str = ""
+    footstep_planner: FootstepPlannerChoice = FootstepPlannerChoice()
+
+    @property
+    def planner_params(self) -> SequencerParams | AlipParams:
+        """The parameters of the footstep planner the controller runs: ``[planner]`` (kind "dcm") or the
+        resolved ALIP parameters (kind "alip")."""
+        if self.footstep_planner.kind == "dcm":
+            return self.planner
+        if self.footstep_planner.alip is None:
+            raise ParameterError("footstep_planner.kind='alip' without its resolved ALIP parameters "
+                                 "(load the preset with load_walking_preset)")
+        return self.footstep_planner.alip
 
     @property
     def omega(self) -> float:
-        """The run's pendulum frequency sqrt(g / z_c) [1/s] (the planner's, the logged DCM's)."""
-        return self.planner.omega
+        """The run's pendulum frequency sqrt(g / z) [1/s] (the running planner's, the logged DCM's)."""
+        return self.planner_params.omega
+
+    @property
+    def step_period(self) -> float:
+        """The running planner's nominal step period [s] (DCM ``t_nom``, ALIP ``t_des``)."""
+        params = self.planner_params
+        return params.t_nom if isinstance(params, SequencerParams) else params.t_des
 
 
 def available_walking_presets() -> list[str]:
@@ -176,7 +276,7 @@ def _as_table(value) -> dict[str, Any]:
 
 def _apply_override(tables: dict[str, dict[str, Any]], key: str, value: Any) -> None:
     parts = key.split(".")
-    if parts[0] not in SECTIONS:
+    if parts[0] not in ALL_SECTIONS:
         parts = ["controller", *parts]
     section, path = parts[0], parts[1:]
     if not path:  # a whole section: a dataclass instance or a table of fields
@@ -215,23 +315,25 @@ def load_walking_preset(robot: str, overrides: Mapping[str, Any] | None = None,
     path = PRESET_DIR / f"{robot}.toml" if path is None else Path(path)
     data = read_toml(path, "walking preset")
     missing = [s for s in SECTIONS if s not in data]
-    extra = sorted(set(data) - set(SECTIONS))
+    extra = sorted(set(data) - set(ALL_SECTIONS))
     if missing or extra:
-        raise ParameterError(f"walking preset {str(path)!r}: sections must be {list(SECTIONS)} "
-                             f"(missing {missing}, unknown {extra})")
+        raise ParameterError(f"walking preset {str(path)!r}: sections must be {list(SECTIONS)} and optionally "
+                             f"{list(OPTIONAL_SECTIONS)} (missing {missing}, unknown {extra})")
     tables = {section: _as_table(data[section]) for section in SECTIONS}
+    tables["footstep_planner"] = {"alip": {}, **_as_table(data.get("footstep_planner", {}))}
     for key, value in (overrides or {}).items():
         _apply_override(tables, key, value)
     sections = {section: _BUILDERS[section](tables[section]) for section in SECTIONS}
-    return WalkingPreset(robot=robot, source=str(path), **sections)
+    footstep_planner = _footstep_planner_from_table(tables["footstep_planner"], robot, sections["planner"])
+    return WalkingPreset(robot=robot, source=str(path), footstep_planner=footstep_planner, **sections)
 
 
 def preset_override_keys() -> set[str]:
     """Names accepted as overrides besides dotted ``section.field`` keys: the sections and the
     controller's fields."""
-    return set(SECTIONS) | {f.name for f in dataclasses.fields(WalkingControllerConfig)}
+    return set(ALL_SECTIONS) | {f.name for f in dataclasses.fields(WalkingControllerConfig)}
 
 
 def is_preset_override(key: str) -> bool:
     """True when ``key`` addresses the walking preset (a section, ``section.field`` or a controller field)."""
-    return key in preset_override_keys() or key.split(".", 1)[0] in SECTIONS
+    return key in preset_override_keys() or key.split(".", 1)[0] in ALL_SECTIONS
