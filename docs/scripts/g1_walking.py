@@ -31,8 +31,14 @@ RUNS = {
 NOISE = {"noise_q": 1e-4, "noise_v": 1e-3}  # [rad or m], [rad/s or m/s] std of the measurement noise
 
 
-def _number(value: str):
-    return float(value) if any(c in value for c in ".eE") else int(value)
+def _value(text: str):
+    """A --set value: an int, a float, or else the text itself (e.g. footstep_planner.kind=alip)."""
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
 
 
 def _milli(metrics: dict, key: str):
@@ -46,9 +52,9 @@ def main() -> None:
     parser.add_argument("--noise", action="store_true", help="measurement noise (see the module docstring)")
     parser.add_argument("--only", nargs="+", choices=sorted(RUNS), default=None, help="run only these")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="walking-preset override (a number), e.g. ocp.wrench_cone_weight=1e3")
+                        help="walking-preset override, e.g. ocp.wrench_cone_weight=1e3 or footstep_planner.kind=alip")
     args = parser.parse_args()
-    overrides = {key: _number(value) for key, _, value in (item.partition("=") for item in args.set)}
+    overrides = {key: _value(value) for key, _, value in (item.partition("=") for item in args.set)}
     options = NOISE if args.noise else {}
     warnings.simplefilter("ignore")
     for name in args.only or RUNS:
