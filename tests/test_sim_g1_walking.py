@@ -14,7 +14,9 @@ pytestmark = pytest.mark.filterwarnings("error::wbmpc.walking.ocp.SlowPathWarnin
 
 @pytest.fixture(scope="module")
 def in_place():
-    return run_scenario("walk", robot="g1", duration=2.5, velocity_command=(0.0, 0.0, 0.0), progress=False)
+    """The DCM step QP (the preset's ALIP planner is the other fixture), without the ALIP's speed integral."""
+    return run_scenario("walk", robot="g1", duration=2.5, velocity_command=(0.0, 0.0, 0.0), progress=False,
+                        **{"footstep_planner.kind": "dcm", "controller.velocity_integral_gain": 0.0})
 
 
 def test_g1_starts_from_standing_and_steps_in_place(in_place):

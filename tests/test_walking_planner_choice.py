@@ -30,10 +30,12 @@ def g1():
 
 
 def test_the_preset_chooses_the_planner_and_the_alip_gets_the_robots_double_support():
-    dcm = load_walking_preset("g1")
-    assert dcm.footstep_planner == FootstepPlannerChoice() and dcm.planner_params is dcm.planner
+    assert load_walking_preset("bolt").footstep_planner == FootstepPlannerChoice()  # no section: the DCM step QP
+    dcm = load_walking_preset("g1", {"footstep_planner.kind": "dcm"})
+    assert dcm.planner_params is dcm.planner
     assert isinstance(WalkingController(dcm).planner, DcmFootstepPlanner)
-    alip = load_walking_preset("g1", {"footstep_planner.kind": "alip"})
+    alip = load_walking_preset("g1")  # the G1 preset's [footstep_planner] names the ALIP NMPC
+    assert alip.footstep_planner.kind == "alip"
     controller = WalkingController(alip)
     assert isinstance(controller.planner, AlipFootstepPlanner) and isinstance(controller.planner, FootstepPlanner)
     # the ALIP preset's model and bounds, the contact schedule's double support of the robot's preset
