@@ -208,8 +208,8 @@ def test_the_campaign_times_the_planner_the_trial_runs():
     t_switch, stiff = later["sequencer_params_from"]
     assert t_switch == 1.0 and isinstance(stiff, AlipParams) and stiff.r_period == STIFF_TIMING_WEIGHT
     # the DCM variant of the G1 starts from the G1's [planner], not Bolt's
-    dcm = resolve_arguments("push", "walking", 6.0, {**common, "step_timing": "fixed", "step_timing_from": 1.0},
-                            robot="g1")
+    dcm = resolve_arguments("push", "walking", 6.0, {**common, "footstep_planner.kind": "dcm", "step_timing": "fixed",
+                                                      "step_timing_from": 1.0}, robot="g1")
     g1_planner = load_walking_preset("g1").planner
     assert dcm["sequencer_params"] == g1_planner and dcm["push_time"] == pytest.approx(2.0 + 0.5 * g1_planner.t_nom)
     assert dcm["sequencer_params_from"][1].t_min == dcm["sequencer_params_from"][1].t_max == g1_planner.t_nom
