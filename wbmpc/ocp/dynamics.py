@@ -5,9 +5,20 @@ For the active contacts (stacked Jacobian Jc (nc, nv), drift a0 (nc,)), the acce
 contact forces λ solve the KKT system
 
     [M  Jcᵀ] [ a ]   [τ − b]
-    [Jc  0 ] [−λ ] = [ −a0 ]
+    [Jc −μI] [−λ ] = [ −a0 ]
 
-where M includes the rotor armature (``model.armature``) and b the nonlinear effects.
+where M includes the rotor armature (``model.armature``), b the nonlinear effects and μ ≥ 0 the
+contact damping (``contact_damping``, Crocoddyl's ``JMinvJt_damping``, Pinocchio's
+``ProximalSettings.mu`` with one proximal iteration). μ = 0 is the rigid contact. With μ > 0
+
+    λ = −(Jc M⁻¹ Jcᵀ + μ I)⁻¹ (a0 + Jc M⁻¹ (τ − b)),   Jc a + a0 = −μ λ:
+
+a compliant contact, whose acceleration gives way by μ per unit of force ([m/s² per N] on force
+rows, [rad/s² per N·m] on moment rows), and, where Jc is rank deficient (two flat feet without
+ankle roll: an internal squeeze between them loads no joint), the damped least-squares split of
+the force the rigid contact leaves undetermined (its component along the null space of Jcᵀ is
+−(that component of a0)/μ instead of arbitrary). The derivatives below are those of this
+regularised system (both backends).
 
 Two interchangeable backends compute it (they agree to ~1e-13, see the tests):
 
@@ -47,14 +58,20 @@ class DifferentialActionModelContactFwdDynamics:
         active_contacts: names of the contacts enforced at this node (default: all).
         backend: "pinocchio" (constraint dynamics and its derivatives, default) or "kkt"
             (Crocoddyl's formulas); same results.
+        contact_damping: μ of the KKT system above, >= 0 (0: rigid contacts, the default), in
+            [m/s² per N] (force rows) and [rad/s² per N·m] (moment rows).
     """
 
     BACKENDS = ("pinocchio", "kkt")
 
     def __init__(self, state: StateMultibody, actuation: ActuationFloatingBase, contacts: dict,
-                 costs: CostModelSum, active_contacts=None, backend: str = "pinocchio"):
+                 costs: CostModelSum, active_contacts=None, backend: str = "pinocchio",
+                 contact_damping: float = 0.0):
         if backend not in self.BACKENDS:
             raise ParameterError(f"backend={backend!r} is not one of {self.BACKENDS}")
+        if isinstance(contact_damping, bool) or not (np.isfinite(contact_damping) and contact_damping >= 0.0):
+            raise ParameterError(f"contact_damping={contact_damping!r} must be finite and >= 0")
+        self.contact_damping = float(contact_damping)
         self.backend = backend
         self.state = state
         self.actuation = actuation
@@ -66,7 +83,9 @@ class DifferentialActionModelContactFwdDynamics:
         self._costs_use_force_derivatives = any(
             getattr(item.cost.residual, "uses_contact_forces", False) for item in costs.costs.values())
         self.constraint_models = {name: c.rigid_constraint_model() for name, c in self.contacts.items()}
-        self.proximal_settings = pin.ProximalSettings(1e-12, 0.0, 1)  # mu = 0: the exact KKT solve
+        # one proximal iteration from λ = 0: the damped KKT solve (mu = 0: the exact one); the
+        # derivatives read settings.iter = 1 and differentiate that same solve
+        self.proximal_settings = pin.ProximalSettings(1e-12, self.contact_damping, 1)
         names = list(self.contacts) if active_contacts is None else list(active_contacts)
         self.set_active_contacts(names)
 
@@ -151,7 +170,7 @@ class DifferentialActionModelContactFwdDynamics:
                 data.a0[row:row + contact.nc] = cdata.a0
                 row += contact.nc
         if nc:
-            data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc, data.a0, 0.0)
+            data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc, data.a0, self.contact_damping)
             forces = pdata.lambda_c
         else:
             # no contact (flight): keep M⁻¹ of this point, RNEA derivatives overwrite data.M
@@ -227,7 +246,7 @@ class DifferentialActionModelContactFwdDynamics:
             data.fext[contact.joint_id] = cdata.fext
             data.fext_joints.append(contact.joint_id)
         pin.computeRNEADerivatives(model, pdata, q, v, data.xout, data.fext)
-        if nc:
+        if nc:  # the inverse of the damped KKT matrix forwardDynamics factorised
             Kinv = pin.getKKTContactDynamicMatrixInverse(model, pdata, data.Jc)
         else:
             Kinv = data.Minv

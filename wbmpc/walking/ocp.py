@@ -152,6 +152,14 @@ class WalkingOCPConfig:
             while the pelvis lagged by a third of the planned heading (49 deg after 10 s), the
             hips twisting until the fall (docs/closed_loop.md).
         baumgarte_gains: (Kp [1/s²], Kd [1/s]) of the contact constraints.
+        contact_damping: μ >= 0 of the contact dynamics' KKT system (:mod:`wbmpc.ocp.dynamics`,
+            Crocoddyl's ``JMinvJt_damping``), in [m/s² per N] on force rows and [rad/s² per N·m]
+            on moment rows: the contact acceleration gives way by μ λ (a compliant contact; with
+            Kp = 0 a stance foot's velocity error settles at μ λ / Kd), and a force the rigid
+            contacts leave undetermined gets the damped least-squares split. 0 = rigid (default,
+            the paper's). Needed where the stacked contact Jacobian is (near) rank deficient: the
+            H1's two flat soles without ankle roll, whose lateral squeeze loads no joint
+            (docs/ocp.md "Contact damping").
         dynamics_backend: "pinocchio" (constraintDynamics and its derivatives, fast) or "kkt"
             (Crocoddyl's formulas written out); same results (see :mod:`wbmpc.ocp.dynamics`).
         evaluation: how the horizon is evaluated, same results: "batched" (the Pinocchio calls
@@ -183,6 +191,7 @@ class WalkingOCPConfig:
     swing_orientation_weight: float = 0.0
     base_yaw_reference: str = "fixed"
     baumgarte_gains: tuple[float, float] = (0.0, 50.0)
+    contact_damping: float = 0.0
     dynamics_backend: str = "pinocchio"
     evaluation: str = "auto"
     max_line_search_trials: int = 10
@@ -208,6 +217,10 @@ class WalkingOCPConfig:
             raise ParameterError(f"friction_coefficient={self.friction_coefficient} must be > 0")
         if len(self.baumgarte_gains) != 2 or min(self.baumgarte_gains) < 0:
             raise ParameterError(f"baumgarte_gains={self.baumgarte_gains} must be (Kp >= 0, Kd >= 0)")
+        if isinstance(self.contact_damping, bool) or not (np.isfinite(self.contact_damping)
+                                                           and self.contact_damping >= 0):
+            raise ParameterError(f"contact_damping={self.contact_damping} must be finite and >= 0 "
+                                 "([m/s² per N], 0 = rigid contacts)")
         if int(self.max_line_search_trials) != self.max_line_search_trials or self.max_line_search_trials < 1:
             raise ParameterError(f"max_line_search_trials={self.max_line_search_trials} must be an integer >= 1")
         if self.dynamics_backend not in ("pinocchio", "kkt"):
@@ -400,7 +413,8 @@ class WalkingOCP:
                       CostModelResidual(ResidualCoMPosition(state, np.zeros(3), nu)), cfg.com_terminal_weight)
         contacts = {foot: self._contact(foot) for foot in self.feet}
         dam = DifferentialActionModelContactFwdDynamics(state, self.actuation, contacts, costs,
-                                                        backend=cfg.dynamics_backend)
+                                                        backend=cfg.dynamics_backend,
+                                                        contact_damping=cfg.contact_damping)
         return IntegratedActionModelEuler(dam, 0.0 if terminal else self.dt)
 
     def _sole_size(self) -> tuple[float, float]:
