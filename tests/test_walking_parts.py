@@ -9,6 +9,7 @@ import dataclasses
 import numpy as np
 import pinocchio as pin
 import pytest
+from robot_extras import needs_h1_extra
 
 from robots import load_robot
 from sequencer.corrections import LipmCorrections
@@ -336,3 +337,49 @@ def test_a_custom_planners_command_limit_is_checked_before_the_run():
     with pytest.raises(ParameterError, match=r"v_x=0.4"):
         run_scenario("walk", duration=0.1, velocity_command=(0.4, 0.0, 0.0),
                      controller=WalkingController(preset, planner=short))
+
+
+# ------------------------------------------------------------------------------ quasi-static load
+
+
+@pytest.mark.parametrize("robot_name", ["g1", pytest.param("h1", marks=needs_h1_extra)])
+def test_the_quasi_static_load_keeps_each_centre_of_pressure_in_its_sole(robot_name):
+    """Both soles on the ground at the reference posture: the wrenches and torques balance gravity,
+    and each sole's centre of pressure lies inside its sole rectangle (the H1's 2 cm wide soles got
+    5 cm outside with moments weighted like forces)."""
+    from wbmpc_fixtures import alternating_schedule, standing_state
+
+    from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig, quasi_static_controls, quasi_static_load
+
+    robot = load_robot(robot_name)
+    ocp = WalkingOCP(robot, WalkingOCPConfig(evaluation="nodes"), n_nodes=2, dt=0.02)
+    x0 = standing_state(robot)
+    ocp.update(x0, alternating_schedule(0.0, 0.02, 2, t_start=1.0), np.zeros(3))  # both feet in contact
+    tau, wrenches = quasi_static_load(ocp, x0)
+    np.testing.assert_array_equal(tau, quasi_static_controls(ocp, x0))
+    assert sorted(wrenches) == ["left", "right"]
+    model = robot.pinocchio_model
+    data = model.createData()
+    q = x0[: model.nq]
+    gravity = pin.computeGeneralizedGravity(model, data, q)
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    load = np.concatenate([np.zeros(6), tau])
+    half_length, half_width = 0.5 * np.asarray(robot.sole_size)
+    for foot, wrench in wrenches.items():
+        J = pin.getFrameJacobian(model, data, model.getFrameId(robot.foot_frames[foot]), pin.LOCAL)
+        load += J.T @ wrench
+        cop_x, cop_y = wrench[4] / wrench[2], -wrench[3] / wrench[2]  # sole frame [m]
+        assert abs(cop_x) < 0.5 * half_length and abs(cop_y) < 0.5 * half_width, (foot, cop_x, cop_y)
+        assert wrench[2] > 0.3 * ocp.mass * 9.81
+    np.testing.assert_allclose(load, gravity, rtol=0, atol=1e-8 * np.max(np.abs(gravity)))
+
+
+def test_contact_wrench_scales_weigh_moments_by_the_sole():
+    from wbmpc.walking.ocp import contact_wrench_scales
+
+    np.testing.assert_allclose(contact_wrench_scales(100.0, (0.2, 0.1)),
+                               [100.0, 100.0, 100.0, 5.0, 10.0, 100.0 * 0.5 * np.hypot(0.2, 0.1)])
+    np.testing.assert_array_equal(contact_wrench_scales(100.0), np.full(6, 100.0))
+    with pytest.raises(ParameterError, match=r"sole_size=\(0.2, 0.0\) must be \(length > 0, width > 0\)"):
+        contact_wrench_scales(100.0, (0.2, 0.0))

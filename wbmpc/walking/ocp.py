@@ -532,14 +532,29 @@ class WalkingOCP:
 
 
 def quasi_static_controls(ocp: WalkingOCP, x: np.ndarray) -> np.ndarray:
-    """Torques (nu,) [N·m] holding the configuration of x still on the node-0 stance feet.
+    """Torques (nu,) [N·m] holding the configuration of x still on the node-0 stance feet: the
+    torques of :func:`quasi_static_load`."""
+    return quasi_static_load(ocp, x)[0]
+
+
+def quasi_static_load(ocp: WalkingOCP, x: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Torques (nu,) [N·m] and contact wrenches holding the configuration of x still on the node-0
+    stance feet.
 
     Solves S^T tau + sum_c J_c^T f_c = g(q) (g the generalised gravity, S the actuated rows) for
-    the torques and contact forces of least weighted norm, sum_i (tau_i / tau_max_i)^2 +
-    sum_c ||f_c||^2 / (m g)^2: where the contacts leave freedom (a humanoid's two flat feet: 12
-    wrench components for 6 base equations) the load goes to the contacts and the torques stay
-    within the robot's limits. With as many unknowns as equations (Bolt's two point feet) it is the
-    exact solution, whatever the weights.
+    the torques and contact wrenches of least weighted norm, sum_i (tau_i / tau_max_i)^2 + sum_c
+    sum_k (f_ck / s_k)^2 with s_k = m g for a force and m g times the sole's half size for a flat
+    foot's moment (:func:`contact_wrench_scales`): where the contacts leave freedom (a humanoid's
+    two flat feet: 12 wrench components for 6 base equations) the load goes to the contacts, the
+    torques stay within the robot's limits and each sole's centre of pressure stays near its
+    centre (the moment that puts it at the sole's edge costs as much as the whole weight; with
+    moments scaled like forces the H1 got ±12.5 N·m of roll per sole, a centre of pressure 5 cm
+    outside its 2 cm wide sole). With as many unknowns as equations (Bolt's two point feet, a
+    single flat stance foot) it is the exact solution, whatever the weights.
+
+    Returns:
+        (torques (nu,) [N·m], stance foot -> its contact's force (3,) [N], world-aligned, for a
+        point foot, or wrench (6,) (force [N], moment [N·m]) in the sole frame for a flat foot).
     """
     model = ocp.state.pinocchio
     pdata = model.createData()
@@ -550,11 +565,32 @@ def quasi_static_controls(ocp: WalkingOCP, x: np.ndarray) -> np.ndarray:
     dam = ocp.problem.running_models[0].differential
     columns = [np.vstack([np.zeros((6, ocp.nu)), np.eye(ocp.nu)])]
     scales = [ocp.torque_limit]
+    wrench_scale = contact_wrench_scales(ocp.mass * GRAVITY, ocp.robot.sole_size)
+    rows, row = {}, ocp.nu
     for name in dam.active_contacts:
         contact = dam.contacts[name]
         J = pin.getFrameJacobian(model, pdata, contact.frame_id, pin.LOCAL_WORLD_ALIGNED if contact.nc == 3 else pin.LOCAL)
         columns.append(J[: contact.nc].T)
-        scales.append(np.full(contact.nc, ocp.mass * GRAVITY))
+        scales.append(wrench_scale[: contact.nc])
+        rows[name] = slice(row, row + contact.nc)
+        row += contact.nc
     scale = np.concatenate(scales)
     A = np.hstack(columns) * scale  # unknowns in units of their scale
-    return (scale * (np.linalg.pinv(A) @ gravity))[: ocp.nu]
+    solution = scale * (np.linalg.pinv(A) @ gravity)
+    return solution[: ocp.nu], {name: solution[r] for name, r in rows.items()}
+
+
+def contact_wrench_scales(weight: float, sole_size=None) -> np.ndarray:
+    """Scales (6,) of a contact wrench (f [N], m [N·m]) in the sole frame for
+    :func:`quasi_static_controls`: ``weight`` [N] for the forces; for the moments about the
+    sole's x (roll), y (pitch) and z (yaw) axes ``weight`` times the lever arm that moves the
+    centre of pressure of that load to the sole's edge: half the width, half the length, and half
+    the diagonal for yaw. ``sole_size`` (length, width) [m] along the sole frame's x and y; None
+    (point feet, or a robot without a sole rectangle): ``weight`` for every component."""
+    if sole_size is None:
+        return np.full(6, float(weight))
+    length, width = (float(v) for v in sole_size)
+    if not (np.isfinite(length) and np.isfinite(width) and length > 0 and width > 0):
+        raise ParameterError(f"sole_size={sole_size} must be (length > 0, width > 0) [m]")
+    arms = (0.5 * width, 0.5 * length, 0.5 * np.hypot(length, width))
+    return float(weight) * np.concatenate([np.ones(3), arms])
