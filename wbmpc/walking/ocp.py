@@ -40,7 +40,7 @@ from wbmpc.errors import ParameterError, check_finite
 from wbmpc.ocp.activations import ActivationQuadraticBarrier, ActivationWeightedQuad
 from wbmpc.ocp.actuation import ActuationFloatingBase
 from wbmpc.ocp.batched_problem import BatchedShootingProblem, batched_evaluation_support
-from wbmpc.ocp.contacts import ContactModel3D, ContactModel6D
+from wbmpc.ocp.contacts import ContactModel3D, ContactModel6D, sole_lever_arms
 from wbmpc.ocp.costs import CostModelResidual, CostModelSum
 from wbmpc.ocp.dynamics import DifferentialActionModelContactFwdDynamics
 from wbmpc.ocp.integrator import IntegratedActionModelEuler
@@ -160,6 +160,12 @@ class WalkingOCPConfig:
             the paper's). Needed where the stacked contact Jacobian is (near) rank deficient: the
             H1's two flat soles without ankle roll, whose lateral squeeze loads no joint
             (docs/ocp.md "Contact damping").
+        contact_damping_moments: how the damping weighs a flat foot's moment rows: "uniform" (μ
+            on every row, Crocoddyl's ``JMinvJt_damping``) or "sole" (μ / r² on the moment rows,
+            r the sole's lever arms, :func:`wbmpc.ocp.contacts.sole_lever_arms`: the sole as four
+            damped corner contacts, whose split of an undetermined force keeps each centre of
+            pressure near its sole's centre; needs dynamics_backend "kkt" and the robot's
+            ``sole_size``).
         dynamics_backend: "pinocchio" (constraintDynamics and its derivatives, fast) or "kkt"
             (Crocoddyl's formulas written out); same results (see :mod:`wbmpc.ocp.dynamics`).
         evaluation: how the horizon is evaluated, same results: "batched" (the Pinocchio calls
@@ -192,6 +198,7 @@ class WalkingOCPConfig:
     base_yaw_reference: str = "fixed"
     baumgarte_gains: tuple[float, float] = (0.0, 50.0)
     contact_damping: float = 0.0
+    contact_damping_moments: str = "uniform"
     dynamics_backend: str = "pinocchio"
     evaluation: str = "auto"
     max_line_search_trials: int = 10
@@ -221,6 +228,12 @@ class WalkingOCPConfig:
                                                            and self.contact_damping >= 0):
             raise ParameterError(f"contact_damping={self.contact_damping} must be finite and >= 0 "
                                  "([m/s² per N], 0 = rigid contacts)")
+        if self.contact_damping_moments not in CONTACT_DAMPING_MOMENTS:
+            raise ParameterError(f"contact_damping_moments={self.contact_damping_moments!r} must be one of "
+                                 f"{CONTACT_DAMPING_MOMENTS}")
+        if self.contact_damping_moments == "sole" and self.dynamics_backend != "kkt":
+            raise ParameterError("contact_damping_moments='sole' needs dynamics_backend='kkt' (Pinocchio's "
+                                 f"constraintDynamics damps every row by one mu), got {self.dynamics_backend!r}")
         if int(self.max_line_search_trials) != self.max_line_search_trials or self.max_line_search_trials < 1:
             raise ParameterError(f"max_line_search_trials={self.max_line_search_trials} must be an integer >= 1")
         if self.dynamics_backend not in ("pinocchio", "kkt"):
@@ -234,6 +247,7 @@ class WalkingOCPConfig:
 
 
 BASE_YAW_REFERENCES = ("fixed", "footholds")
+CONTACT_DAMPING_MOMENTS = ("uniform", "sole")
 
 
 def foothold_heading(in_contact: np.ndarray, contact_yaw: np.ndarray, touchdown_yaw: np.ndarray) -> np.ndarray:
@@ -396,7 +410,7 @@ class WalkingOCP:
                           cfg.friction_cone_weight, active=False)
             flat = self.contact_type == "flat6d"
             if not terminal and cfg.wrench_cone_weight > 0 and flat:
-                length, width = self._sole_size()
+                length, width = self._sole_size("wrench_cone_weight > 0")
                 residual = ResidualWrenchCone(state, foot, cfg.friction_coefficient,
                                               0.5 * cfg.cop_sole_fraction * length, 0.5 * cfg.cop_sole_fraction * width, nu)
                 costs.add(f"{foot}_wrench_cone",
@@ -412,15 +426,23 @@ class WalkingOCP:
             costs.add("com_position",
                       CostModelResidual(ResidualCoMPosition(state, np.zeros(3), nu)), cfg.com_terminal_weight)
         contacts = {foot: self._contact(foot) for foot in self.feet}
+        lever_arms = None
+        if cfg.contact_damping_moments == "sole":
+            if self.contact_type != "flat6d":
+                raise ParameterError(f"contact_damping_moments='sole' needs flat feet (robot {self.robot.name!r} has "
+                                     f"{self.contact_type!r} contacts)")
+            lever_arms = {foot: sole_lever_arms(self._sole_size("contact_damping_moments='sole'"))
+                          for foot in self.feet}
         dam = DifferentialActionModelContactFwdDynamics(state, self.actuation, contacts, costs,
                                                         backend=cfg.dynamics_backend,
-                                                        contact_damping=cfg.contact_damping)
+                                                        contact_damping=cfg.contact_damping,
+                                                        damping_lever_arms=lever_arms)
         return IntegratedActionModelEuler(dam, 0.0 if terminal else self.dt)
 
-    def _sole_size(self) -> tuple[float, float]:
+    def _sole_size(self, needed_by: str) -> tuple[float, float]:
         size = self.robot.sole_size
         if size is None:
-            raise ParameterError(f"wrench_cone_weight > 0 needs the robot's sole_size (robot {self.robot.name!r} has none)")
+            raise ParameterError(f"{needed_by} needs the robot's sole_size (robot {self.robot.name!r} has none)")
         return size
 
     # ------------------------------------------------------------------ update
@@ -583,14 +605,11 @@ def quasi_static_load(ocp: WalkingOCP, x: np.ndarray) -> tuple[np.ndarray, dict[
 def contact_wrench_scales(weight: float, sole_size=None) -> np.ndarray:
     """Scales (6,) of a contact wrench (f [N], m [N·m]) in the sole frame for
     :func:`quasi_static_controls`: ``weight`` [N] for the forces; for the moments about the
-    sole's x (roll), y (pitch) and z (yaw) axes ``weight`` times the lever arm that moves the
-    centre of pressure of that load to the sole's edge: half the width, half the length, and half
-    the diagonal for yaw. ``sole_size`` (length, width) [m] along the sole frame's x and y; None
-    (point feet, or a robot without a sole rectangle): ``weight`` for every component."""
+    sole's x (roll), y (pitch) and z (yaw) axes ``weight`` times the sole's lever arm about that
+    axis (:func:`wbmpc.ocp.contacts.sole_lever_arms`: half the width, half the length, half the
+    diagonal), the moment that moves the centre of pressure of that load to the sole's edge.
+    ``sole_size`` (length, width) [m] along the sole frame's x and y; None (point feet, or a
+    robot without a sole rectangle): ``weight`` for every component."""
     if sole_size is None:
         return np.full(6, float(weight))
-    length, width = (float(v) for v in sole_size)
-    if not (np.isfinite(length) and np.isfinite(width) and length > 0 and width > 0):
-        raise ParameterError(f"sole_size={sole_size} must be (length > 0, width > 0) [m]")
-    arms = (0.5 * width, 0.5 * length, 0.5 * np.hypot(length, width))
-    return float(weight) * np.concatenate([np.ones(3), arms])
+    return float(weight) * np.concatenate([np.ones(3), sole_lever_arms(sole_size)])
