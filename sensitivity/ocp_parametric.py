@@ -8,7 +8,8 @@ solution, with the dynamics δx_{k+1} = g_k(δx_k, δu_k; p) = f_k(x_k ⊕ δx_k
     ℒ = Σ_k ℓ_k(x_k ⊕ δx_k, u_k + δu_k; p) + ℓ_N + Σ_k λ_{k+1}ᵀ (g_k − δx_{k+1}) + λ_0ᵀ (x0 ⊖ x_0 − δx_0),
 
 the first-order conditions at δ = 0 are the costate recursion λ_N = ∇ℓ_N, λ_k = Lx_k + Fx_kᵀ λ_{k+1},
-Lu_k + Fu_kᵀ λ_{k+1} = 0 and the dynamics. The implicit-function theorem gives d(δx, δu, δλ)/dp from
+Lu_k + Fu_kᵀ λ_{k+1} = 0 and the dynamics (λ estimated by the Riccati pass's value gradient,
+:func:`costates`). The implicit-function theorem gives d(δx, δu, δλ)/dp from
 the linear-quadratic problem
 
     min Σ_k ½ [δx; δu]ᵀ H_k [δx; δu] + [q_k; r_k]ᵀ [δx; δu] + ½ δx_Nᵀ H_N δx_N + q_Nᵀ δx_N
@@ -32,7 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wbmpc.errors import ParameterError
+from wbmpc.errors import ParameterError, SolverError
+from wbmpc.ocp.solvers.riccati import riccati_backward
 
 HESSIANS = ("exact", "gauss-newton")
 
@@ -96,13 +98,41 @@ def check_converged(stop: float, th_stop: float, is_feasible: bool = True) -> No
         raise ParameterError("solver is_feasible=False: the base solution has gaps (solve it further)")
 
 
-def costates(problem) -> np.ndarray:
-    """λ (N + 1, ndx): λ_N = Lx_N, λ_k = Lx_k + Fx_kᵀ λ_{k+1} (the problem's derivatives at the solution)."""
-    N = problem.T
-    lam = np.zeros((N + 1, problem.ndx))
-    lam[N] = problem.Lx[N]
-    for k in range(N - 1, -1, -1):
-        lam[k] = problem.Lx[k] + problem.Fx[k].T @ lam[k + 1]
+COSTATE_METHODS = ("value-gradient", "open-loop")
+
+
+def costates(problem, method: str = "value-gradient") -> np.ndarray:
+    """λ (N + 1, ndx), the dynamics' multipliers at a converged solution (needs calcDiff there).
+
+    At an exact optimum λ_N = Lx_N, λ_k = Lx_k + Fx_kᵀ λ_{k+1} and Lu_k + Fu_kᵀ λ_{k+1} = 0. A solver's
+    solution is optimal to Qu ≠ 0 only, and ``method`` says which estimate of λ is returned:
+
+    - "value-gradient" (default): the value gradient Vx_k of the Riccati pass at the solution (the
+      problem's gradients, Gauss-Newton blocks, no regularisation): Vx_k = Qx_k − K_kᵀ Qu_k, which is
+      λ at an exact optimum and whose error stays of the order of the solution's (P δx): the closed
+      loop carries it;
+    - "open-loop": the recursion above, which carries the residual's consequences with the open-loop
+      Fxᵀ: on the G1's walking OCP (N = 50, 20 ms) it grew the solver's |Qu| ~ 3e-11 into
+      |Lu + Fuᵀ λ| = 4e-4 at node 0 (the open-loop dynamics amplify ~1.4x per node there), and the
+      sensitivity built on it disagreed with re-solved OCPs by 1.1 %.
+
+    Raises:
+        ParameterError: an unknown method. SolverError: the Gauss-Newton Quu is not positive definite.
+    """
+    if method not in COSTATE_METHODS:
+        raise ParameterError(f"method={method!r} must be one of {COSTATE_METHODS}")
+    N, ndx, nu = problem.T, problem.ndx, problem.nu
+    lam = np.zeros((N + 1, ndx))
+    if method == "open-loop":
+        lam[N] = problem.Lx[N]
+        for k in range(N - 1, -1, -1):
+            lam[k] = problem.Lx[k] + problem.Fx[k].T @ lam[k + 1]
+        return lam
+    failed = riccati_backward(problem.Fx, problem.Fu, problem.Lx, problem.Lu, problem.Lxx, problem.Lxu, problem.Luu,
+                              np.zeros((N + 1, ndx)), 0.0, True, lam, np.zeros((N + 1, ndx, ndx)), np.zeros((N, nu)),
+                              np.zeros((N, nu, nu)), np.zeros((N, nu)), np.zeros((N, nu)), np.zeros((N, nu, ndx)))
+    if failed >= 0:
+        raise SolverError(f"the Gauss-Newton Quu is not positive definite at node {failed}: not a converged solution")
     return lam
 
 
@@ -205,18 +235,33 @@ def lagrangian_hessians(problem, xs, us, lam: np.ndarray, step: float = 1e-6) ->
     return Hxx, Hxu, Huu
 
 
+def _dead_zone_rows(cost_data):
+    """(r, R, distance to the nearest bound) of a node's active dead-zone cost rows (lb < ub)."""
+    rows = cost_data.lb < cost_data.ub
+    rows &= cost_data.term_scale[cost_data.row_term] > 0  # active terms only
+    r, lb, ub = cost_data.r[rows], cost_data.lb[rows], cost_data.ub[rows]
+    return r, cost_data.R[rows], np.minimum(np.abs(r - lb), np.abs(r - ub))
+
+
 def dead_zone_margin(cost_data) -> float:
     """Smallest distance, in the tangent/control coordinates, of a node's dead-zone cost rows
     (lb < ub) from their bounds: min |r − bound| / max |∂r/∂(x, u)| over those rows (inf: none).
     Needs calcDiff at the point (the problem's node data: ``data.differential.costs``)."""
-    rows = cost_data.lb < cost_data.ub
-    rows &= cost_data.term_scale[cost_data.row_term] > 0  # active terms only
-    if not np.any(rows):
+    r, R, distance = _dead_zone_rows(cost_data)
+    if r.size == 0:
         return np.inf
-    r, lb, ub = cost_data.r[rows], cost_data.lb[rows], cost_data.ub[rows]
-    slope = np.max(np.abs(cost_data.R[rows]), axis=1)
-    distance = np.minimum(np.abs(r - lb), np.abs(r - ub)) / np.maximum(slope, 1e-300)
-    return float(np.min(distance))
+    slope = np.max(np.abs(R), axis=1)
+    return float(np.min(distance / np.maximum(slope, 1e-300)))
+
+
+def dead_zone_step(cost_data, direction: np.ndarray) -> float:
+    """The largest ε for which no dead-zone row of a node crosses its bound along (δx, δu) = ε
+    ``direction`` (ndx + nu,), to first order: min |r − bound| / |∂r/∂(x, u) · direction| (inf: no
+    such row moves). Needs calcDiff at the point."""
+    r, R, distance = _dead_zone_rows(cost_data)
+    rate = np.abs(R @ direction)
+    moving = rate > 0
+    return float(np.min(distance[moving] / rate[moving])) if np.any(moving) else np.inf
 
 
 def linear_quadratic(problem, xs, us, derivatives: ParameterDerivatives, hessian: str = "exact",

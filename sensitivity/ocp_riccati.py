@@ -27,7 +27,7 @@ import numpy as np
 from numba import njit
 
 from sensitivity.ocp_parametric import LinearQuadratic
-from wbmpc.errors import SolverError
+from wbmpc.errors import ParameterError, SolverError
 from wbmpc.ocp.solvers.riccati import cholesky_in_place, riccati_backward
 
 
@@ -57,8 +57,10 @@ class OcpSensitivity:
     seconds: dict
 
 
-def factorise(lq: LinearQuadratic) -> RiccatiFactorisation:
-    """The Riccati factorisation of the LQ problem's Hessian (one backward pass).
+def factorise(lq: LinearQuadratic, regularization: float = 0.0) -> RiccatiFactorisation:
+    """The Riccati factorisation of the LQ problem's Hessian (one backward pass); ``regularization``
+    ρ >= 0 is added to the diagonals of Quu and of P as FDDP's backward pass adds its ``preg`` (0: the
+    factorisation of the Hessian itself).
 
     Raises:
         SolverError: Quu is not positive definite at some node (no strict local minimum: the
@@ -70,9 +72,11 @@ def factorise(lq: LinearQuadratic) -> RiccatiFactorisation:
     Vx = np.zeros((N + 1, ndx))
     K = np.zeros((N, nu, ndx))
     Quu = np.zeros((N, nu, nu))
+    if not (np.isfinite(regularization) and regularization >= 0):
+        raise ParameterError(f"regularization={regularization} must be finite and >= 0")
     failed = riccati_backward(lq.Fx, lq.Fu, np.zeros((N + 1, ndx)), np.zeros((N, nu)), lq.Hxx, lq.Hxu, lq.Huu,
-                              np.zeros((N + 1, ndx)), 0.0, True, Vx, P, np.zeros((N, nu)), Quu, np.zeros((N, nu)),
-                              np.zeros((N, nu)), K)
+                              np.zeros((N + 1, ndx)), float(regularization), True, Vx, P, np.zeros((N, nu)), Quu,
+                              np.zeros((N, nu)), np.zeros((N, nu)), K)
     if failed >= 0:
         raise SolverError(f"the {lq.hessian} Hessian's Quu is not positive definite at node {failed}: no strict "
                           "local minimum, the solution has no parametric derivative")

@@ -215,24 +215,33 @@ def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_t
                            next_touchdown: float | None = None) -> ContactSchedule:
     """A schedule whose contact phases are timed continuously by the touchdown times in the horizon.
 
-    The phases and their node counts come from the plan sampled with ``rounding="nearest"``
-    (:func:`contact_schedule`): phase 0 runs from node 0 to the node of the first touchdown in the
-    horizon, phase i from the node of touchdown i to the node of touchdown i + 1, the last phase
-    to node ``n_nodes``, and phase i keeps its n_i nodes whatever the times. With τ_0 = t0,
-    τ_1 < … < τ_m the touchdown times and τ_{m+1} = t_end = t0 + n_nodes dt (the horizon's end
-    stays put), the nodes of phase i have the spacing h_i = (τ_{i+1} − τ_i) / n_i and the times
-    τ_i + j h_i, j = 0 … n_i − 1. The swing phase at a node is s = (t − t_lift-off) / (t_touchdown −
-    t_lift-off) of its time: j / n_i inside the horizon (it does not depend on the times), and a
-    smooth function of τ_1 for the swing in progress at t0 (lift-off ``plan.t_stance_start``) and
-    of τ_m for the swing still running at t_end (touchdown the plan's next one, held fixed).
-    When every τ_i − t0 is a multiple of dt the schedule equals ``contact_schedule(plan, t0, dt,
+    The contact events are the touchdowns τ_i of the plan and the lift-offs: the foot landing at
+    touchdown i + 1 lifts off at ℓ_i = τ_i + d after touchdown i (ℓ_0 = ``plan.t_stance_start`` + d,
+    a fixed time), d = ``plan.double_support`` [s]. The double-support duration d is **held fixed**:
+    the lift-off moves with the touchdown before it, so a derivative in τ_i is taken at constant
+    double support (the swing after it shortens by as much as τ_i is late, the double-support
+    phase only moves). With d = 0 a lift-off is its touchdown. The events inside the horizon
+    (t0, t_end), t_end = t0 + n_nodes dt (the horizon's end stays put), b_1 < … < b_M split it into
+    M + 1 phases (b_0 = t0, b_{M+1} = t_end): single support, the double support after each
+    touchdown, standing before ℓ_0. Phase p keeps the n_p nodes it has on the nominal grid sampled
+    with ``rounding="nearest"`` (:func:`contact_schedule`, which also gives the contact sets,
+    footholds and yaws) whatever the times; its nodes get the spacing h_p = (b_{p+1} − b_p) / n_p and
+    the times b_p + j h_p, j = 0 … n_p − 1. Every event is τ_i, τ_i + d or fixed, so ∂b/∂τ_i is 1
+    or 0 and ∂h_p/∂τ = (∂b_{p+1}/∂τ − ∂b_p/∂τ) / n_p (0 for a double-support phase: d / n_p).
+
+    The swing phase at a node is s = (t − ℓ) / (T − ℓ) of its time, ℓ the swing's lift-off and T its
+    touchdown: j / n_p inside the horizon (it does not depend on the times), and a smooth function
+    of τ_1 for the swing in progress at t0 (lift-off before t0), and of ℓ_m = τ_m + d and the plan's
+    next touchdown (held fixed, ``next_touchdown``) for the swing still running at t_end. When every
+    event's time minus t0 is a multiple of dt the schedule equals ``contact_schedule(plan, t0, dt,
     n_nodes, "nearest")`` with ``node_spacing`` = dt.
 
     Args:
-        plan: FootstepPlan with ``double_support == 0`` (one foot in contact at a time).
+        plan: FootstepPlan (any ``double_support`` >= 0 [s]).
         t0, dt, n_nodes: the nominal grid (as :func:`contact_schedule`).
-        touchdown_times: shape (m,), the times [s] of the plan's m touchdowns inside the horizon,
-            strictly increasing in (t0, t_end) and before the plan's next touchdown; None: the plan's.
+        touchdown_times: shape (m,), the times [s] of the plan's m touchdowns before t_end; with the
+            lift-offs they imply, the events inside the horizon must stay strictly increasing inside
+            (t0, t_end) and those outside it outside, on the same side; None: the plan's.
         next_touchdown: the time [s] of the touchdown ending the swing in progress at t_end (after
             t_end); None: the plan's.
 
@@ -240,28 +249,17 @@ def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_t
         ContactSchedule with ``node_spacing``, ``touchdown_times`` and their Jacobians.
 
     Raises:
-        ParameterError: double support, a touchdown within half a node of t0, t_end or another
-            touchdown (its phase would have no node), or ``touchdown_times`` of the wrong shape,
-            unordered or outside the horizon.
+        ParameterError: an event within half a node of t0, t_end or another event (its phase would
+            have no node), or ``touchdown_times`` of the wrong shape, not finite, unordered or
+            moving an event into or out of the horizon.
     """
-    if float(plan.double_support) != 0.0:
-        raise ParameterError(f"double_support={plan.double_support} s: a timed schedule needs one foot in contact "
-                             "at a time (double_support = 0)")
     nominal = contact_schedule(plan, t0, dt, n_nodes, rounding="nearest")
     t0, dt, n_nodes = float(t0), float(dt), int(n_nodes)
     t_end = t0 + n_nodes * dt
+    d = float(plan.double_support)
     planned = plan.touchdown_times
     m = int(np.searchsorted(planned, t_end, side="left"))  # touchdowns before t_end (contact_schedule: not all)
     grid = t0 + dt * np.arange(n_nodes + 1)
-    first_node = np.searchsorted(grid + 0.5 * dt, planned[:m], side="left")  # the "nearest" rule
-    boundaries = np.concatenate([[0], first_node, [n_nodes]])
-    if np.any(np.diff(boundaries) < 1):
-        raise ParameterError(f"the plan's touchdowns {np.round(planned[:m], 4).tolist()} s put a contact phase of no node "
-                             f"on the grid t0={t0} s, dt={dt} s, n_nodes={n_nodes} (a touchdown within half a node of "
-                             "t0, t_end or another touchdown): change n_nodes or dt")
-    upper = planned[m] if next_touchdown is None else float(next_touchdown)
-    if not (math.isfinite(upper) and upper > t_end):
-        raise ParameterError(f"next_touchdown={next_touchdown} s must be finite and after the horizon's end {t_end:.6g} s")
     if touchdown_times is None:
         tau = planned[:m].copy()
     else:
@@ -269,54 +267,91 @@ def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_t
         if tau.shape != (m,):
             raise ParameterError(f"touchdown_times has shape {tau.shape}, expected ({m},): the plan has {m} touchdowns "
                                  f"in the horizon ({t0}, {t_end:.4g}) s")
-        edges = np.concatenate([[t0], tau, [t_end]])
-        if not (np.all(np.isfinite(tau)) and np.all(np.diff(edges) > 0)):
-            raise ParameterError(f"touchdown_times={tau.tolist()} s must be finite, strictly increasing and inside the "
-                                 f"horizon ({t0}, {t_end:.6g}) s")
+        if not np.all(np.isfinite(tau)):
+            raise ParameterError(f"touchdown_times={tau.tolist()} s must be finite")
+    upper = planned[m] if next_touchdown is None else float(next_touchdown)
+    if not (math.isfinite(upper) and upper > t_end):
+        raise ParameterError(f"next_touchdown={next_touchdown} s must be finite and after the horizon's end {t_end:.6g} s")
+    # events in time order: (nominal time, time at tau, the column of tau it moves with or -1); the lift-off
+    # ℓ_i after touchdown i (lift_offs[i]: its index in events) and touchdown i + 1 (touchdowns[i])
+    events, lift_offs, touchdowns = [], [], []
+    for i in range(m + 1):
+        if i == 0 or d > 0.0:
+            lift = (float(plan.t_stance_start) + d, -1) if i == 0 else (planned[i - 1] + d, i - 1)
+            events.append((lift[0], lift[0] if i == 0 else tau[i - 1] + d, lift[1]))
+        lift_offs.append(len(events) - 1)
+        if i < m:
+            touchdowns.append(len(events))
+            events.append((planned[i], tau[i], i))
+    nominal_times = np.array([e[0] for e in events])
+    values = np.array([e[1] for e in events])
+    inside = (nominal_times > t0) & (nominal_times < t_end)
+    after = nominal_times >= t_end
+    near_end = after & (np.searchsorted(grid + 0.5 * dt, nominal_times, side="left") <= n_nodes)
+    if np.any(near_end) or planned[m] <= t_end + 0.5 * dt:
+        late = float(nominal_times[near_end][0]) if np.any(near_end) else float(planned[m])
+        raise ParameterError(f"the plan's contact event at {late:.4g} s is within half a node after the horizon's end "
+                             f"t_end={t_end:.6g} s (the terminal node would be sampled past it): change n_nodes or dt")
+    node_of = np.searchsorted(grid + 0.5 * dt, nominal_times[inside], side="left")  # the "nearest" rule
+    boundaries = np.concatenate([[0], node_of, [n_nodes]])
+    if np.any(np.diff(boundaries) < 1):
+        raise ParameterError(f"the plan's contact events {np.round(nominal_times[inside], 4).tolist()} s put a contact "
+                             f"phase of no node on the grid t0={t0} s, dt={dt} s, n_nodes={n_nodes} (an event within "
+                             "half a node of t0, t_end or another event): change n_nodes or dt")
+    edges = np.concatenate([[t0], values[inside], [t_end]])  # b_0 … b_{M+1}
+    if not np.all(np.diff(edges) > 0):
+        raise ParameterError(f"touchdown_times={tau.tolist()} s must be strictly increasing and inside the horizon "
+                             f"({t0}, {t_end:.6g}) s, with the lift-offs {d} s after them in between")
+    crossed = (after & (values < t_end)) | (~inside & ~after & (values > t0))
+    if np.any(crossed):
+        raise ParameterError(f"touchdown_times={tau.tolist()} s move the contact event at "
+                             f"{float(values[crossed][0]):.6g} s across t0 or t_end (planned at "
+                             f"{float(nominal_times[crossed][0]):.6g} s): the phases would change")
+    edge_columns = np.concatenate([[-1], [e[2] for e, on in zip(events, inside) if on], [-1]]).astype(int)
     counts = np.diff(boundaries)
-    edges = np.concatenate([[t0], tau, [t_end]])  # τ_0 … τ_{m+1}
     n_feet = len(nominal.feet)
     spacing = np.empty(n_nodes)
     spacing_jacobian = np.zeros((n_nodes, m))
     times = np.empty(n_nodes + 1)
     times_jacobian = np.zeros((n_nodes + 1, m))  # ∂t_k/∂τ
-    for i in range(m + 1):
-        nodes = np.arange(boundaries[i], boundaries[i + 1])
-        spacing[nodes] = (edges[i + 1] - edges[i]) / counts[i]
-        fraction = (nodes - boundaries[i]) / counts[i]
-        times[nodes] = edges[i] + fraction * (edges[i + 1] - edges[i])
-        if i >= 1:
-            spacing_jacobian[nodes, i - 1] = -1.0 / counts[i]
-            times_jacobian[nodes, i - 1] = 1.0 - fraction
-        if i < m:
-            spacing_jacobian[nodes, i] = 1.0 / counts[i]
-            times_jacobian[nodes, i] = fraction
+    for p in range(counts.size):
+        nodes = np.arange(boundaries[p], boundaries[p + 1])
+        spacing[nodes] = (edges[p + 1] - edges[p]) / counts[p]
+        fraction = (nodes - boundaries[p]) / counts[p]
+        times[nodes] = edges[p] + fraction * (edges[p + 1] - edges[p])
+        if edge_columns[p] >= 0:
+            spacing_jacobian[nodes, edge_columns[p]] -= 1.0 / counts[p]
+            times_jacobian[nodes, edge_columns[p]] += 1.0 - fraction
+        if edge_columns[p + 1] >= 0:
+            spacing_jacobian[nodes, edge_columns[p + 1]] += 1.0 / counts[p]
+            times_jacobian[nodes, edge_columns[p + 1]] += fraction
     times[n_nodes] = t_end
-    # the swing of phase i: lift-off at τ_i (the plan's stance start for i = 0), touchdown at τ_{i+1} (the
-    # plan's next touchdown for the last phase); as (value, column of τ or -1 for a fixed time)
+    # the swing at node k runs in the stance interval I_k (touchdowns at or before the node, "nearest"):
+    # lift-off ℓ_{I_k}, touchdown τ_{I_k + 1} (the plan's next touchdown for I_k = m), as (value, column or -1)
+    interval = np.searchsorted(np.searchsorted(grid + 0.5 * dt, planned[:m], side="left"), np.arange(n_nodes + 1),
+                               side="right")
     in_contact = nominal.in_contact
     swing_phase = np.where(in_contact, np.nan, 0.0)
     swing_duration = np.where(in_contact, np.nan, 0.0)
     phase_jacobian = np.zeros((n_nodes + 1, n_feet, m))
     next_jacobian = np.zeros((n_nodes + 1, n_feet))
-    for i in range(m + 1):
-        lift = (float(plan.t_stance_start), -1) if i == 0 else (tau[i - 1], i - 1)
-        land = (tau[i], i) if i < m else (upper, -1)
+    for k in range(n_nodes + 1):
+        i = int(interval[k])
+        lift = events[lift_offs[i]][1:]
+        land = events[touchdowns[i]][1:] if i < m else (upper, -1)
         duration = land[0] - lift[0]
-        end = boundaries[i + 1] + (1 if i == m else 0)  # the terminal node belongs to the last phase
-        for k in range(boundaries[i], end):
-            for j in np.flatnonzero(~in_contact[k]):
-                s = (times[k] - lift[0]) / duration
-                swing_phase[k, j] = s
-                swing_duration[k, j] = duration
-                ds = times_jacobian[k] / duration
-                if lift[1] >= 0:
-                    ds[lift[1]] += (s - 1.0) / duration
-                if land[1] >= 0:
-                    ds[land[1]] -= s / duration
-                else:
-                    next_jacobian[k, j] = -s / duration
-                phase_jacobian[k, j] = ds
+        for j in np.flatnonzero(~in_contact[k]):
+            s = (times[k] - lift[0]) / duration
+            swing_phase[k, j] = s
+            swing_duration[k, j] = duration
+            ds = times_jacobian[k] / duration
+            if lift[1] >= 0:
+                ds[lift[1]] += (s - 1.0) / duration
+            if land[1] >= 0:
+                ds[land[1]] -= s / duration
+            else:
+                next_jacobian[k, j] = -s / duration
+            phase_jacobian[k, j] = ds
     return ContactSchedule(
         t0=t0, dt=dt, feet=nominal.feet, in_contact=in_contact, swing_phase=swing_phase,
         swing_duration=swing_duration, touchdown_position=nominal.touchdown_position,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 import pinocchio as pin
@@ -16,9 +17,12 @@ from wbmpc.ocp.batched_problem import BatchedShootingProblem, batched_evaluation
 from wbmpc.ocp.problem import ShootingProblem
 from wbmpc.ocp.solvers import SolverFDDP
 from wbmpc.walking.ocp import SlowPathWarning, WalkingOCP, WalkingOCPConfig
+from wbmpc.walking.preset import load_walking_preset
 
-# every term the batched pass supports, a Baumgarte position gain (moving contact references)
-BATCHED_TERMS = WalkingOCPConfig(foothold_weight=100.0, touchdown_height_weight=1e5, baumgarte_gains=(20.0, 40.0))
+# every running term of a point-foot walking OCP the batched pass supports (contact-force
+# regularisation and friction cones included), a Baumgarte position gain (moving contact references)
+BATCHED_TERMS = WalkingOCPConfig(foothold_weight=100.0, touchdown_height_weight=1e5, baumgarte_gains=(20.0, 40.0),
+                                 contact_force_weight=1e-2, friction_cone_weight=10.0)
 STACKED = ("xnext", "Fx", "Fu", "Lx", "Lu", "Lxx", "Lxu", "Luu")
 
 
@@ -54,12 +58,13 @@ def test_walking_ocp_uses_the_batched_problem_when_it_can(bolt):
     assert WalkingOCP(bolt, WalkingOCPConfig(), 5, 0.01).evaluation == "batched"
     nodes = WalkingOCP(bolt, WalkingOCPConfig(evaluation="nodes"), 5, 0.01)
     assert nodes.evaluation == "nodes" and type(nodes.problem) is ShootingProblem
-    with pytest.warns(SlowPathWarning, match="node-wise evaluation.*ResidualContactForce"):  # said, not silent
-        fallback = WalkingOCP(bolt, WalkingOCPConfig(contact_force_weight=1e-2), 5, 0.01)
+    # the touchdown velocity (ResidualFrameVelocity) has no batched evaluation
+    with pytest.warns(SlowPathWarning, match="node-wise evaluation.*ResidualFrameVelocity"):  # said, not silent
+        fallback = WalkingOCP(bolt, WalkingOCPConfig(touchdown_velocity_weight=1.0), 5, 0.01)
     assert fallback.evaluation == "nodes"
-    assert "ResidualContactForce" in fallback.evaluation_note
-    with pytest.raises(ParameterError, match="evaluation='batched'.*ResidualContactForce"):
-        WalkingOCP(bolt, WalkingOCPConfig(contact_force_weight=1e-2, evaluation="batched"), 5, 0.01)
+    assert "ResidualFrameVelocity" in fallback.evaluation_note
+    with pytest.raises(ParameterError, match="evaluation='batched'.*ResidualFrameVelocity"):
+        WalkingOCP(bolt, WalkingOCPConfig(touchdown_velocity_weight=1.0, evaluation="batched"), 5, 0.01)
     with pytest.raises(ParameterError, match="evaluation='fast'"):
         WalkingOCPConfig(evaluation="fast")
     assert batched_evaluation_support(fallback.problem) is not None
@@ -85,6 +90,8 @@ def test_values_and_derivatives_match_the_node_pipeline(bolt, t0):
     assert {"control_bounds", "state_regularization", "terminal_com_position"} <= active
     assert any(name.endswith("_foothold") for name in active)
     assert any(name.endswith("_touchdown_height") for name in active)
+    assert any(name.endswith("_contact_force") for name in active)
+    assert any(name.endswith("_friction_cone") for name in active)
 
 
 def test_a_node_without_contacts_uses_aba(bolt):
@@ -92,26 +99,62 @@ def test_a_node_without_contacts_uses_aba(bolt):
     ocp.update(standing_state(bolt), alternating_schedule(0.0, 0.01, 6), np.array([0.1, 0.0, 0.3]))
     ocp.problem.running_models[2].differential.set_active_contacts([])  # a flight node
     for foot in ocp.feet:
-        ocp.problem.running_models[2].differential.costs.costs[f"{foot}_height"].active = True
+        costs = ocp.problem.running_models[2].differential.costs.costs
+        costs[f"{foot}_height"].active = True
+        costs[f"{foot}_contact_force"].active = costs[f"{foot}_friction_cone"].active = False  # no contact to read
     nodes, batched = _twin_problems(ocp)
     xs, us = _random_trajectory(bolt, 6, ocp.nu, seed=4)
     assert batched.calcDiff(xs, us) == pytest.approx(nodes.calc_and_diff(xs, us), rel=1e-13)
     _assert_same(nodes, batched)
 
 
-def test_g1_flat_feet_match_the_node_pipeline():
+@pytest.mark.parametrize("n_nodes", [10, 50])
+def test_g1_preset_flat_feet_match_the_node_pipeline(n_nodes):
+    """The G1 preset's OCP (wrench cones on the 6D sole contacts, swing-sole orientation) with the
+    contact-wrench regularisation too and a Baumgarte position gain: batched (no SlowPathWarning),
+    and equal to the node-wise pipeline, values, derivatives and the rollout."""
     g1 = load_robot("g1")
-    config = WalkingOCPConfig(swing_apex_height=0.08, baumgarte_gains=(10.0, 30.0), foothold_weight=10.0)
-    ocp = WalkingOCP(g1, config, n_nodes=10, dt=0.02)
-    ocp.update(standing_state(g1), alternating_schedule(0.0, 0.02, 10, step_duration=0.4, foot_y=(0.12, -0.12)),
-               np.array([0.05, 0.0, 0.7]))
+    config = dataclasses.replace(load_walking_preset("g1").ocp, contact_force_weight=1e-4, baumgarte_gains=(10.0, 30.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SlowPathWarning)
+        ocp = WalkingOCP(g1, config, n_nodes=n_nodes, dt=0.02)
     assert ocp.evaluation == "batched"
+    ocp.update(standing_state(g1), alternating_schedule(0.0, 0.02, n_nodes, step_duration=0.4, foot_y=(0.12, -0.12)),
+               np.array([0.05, 0.0, 0.7]))
     nodes, batched = _twin_problems(ocp)
     rng = np.random.default_rng(2)
-    xs = np.array([random_state(g1, rng, 0.05, 0.2) for _ in range(11)])
-    us = rng.standard_normal((10, ocp.nu))
+    xs = np.array([random_state(g1, rng, 0.05, 0.2) for _ in range(n_nodes + 1)])
+    us = rng.standard_normal((n_nodes, ocp.nu))
+    cost = nodes.calc(xs, us)
+    assert batched.calc(xs, us) == pytest.approx(cost, rel=1e-13)
     assert batched.calcDiff(xs, us) == pytest.approx(nodes.calc_and_diff(xs, us), rel=1e-13)
     _assert_same(nodes, batched)
+    assert batched.term_costs() == pytest.approx(nodes.term_costs(), rel=1e-12, abs=1e-14)
+    active = {name for name, value in batched.term_costs().items() if value > 0}
+    assert {"left_wrench_cone", "left_contact_force", "right_orientation"} <= active
+    solver = SolverFDDP(nodes)
+    solver._set_candidate(xs, us, False)
+    solver._calc_diff()
+    solver._backward_pass()
+    rollouts = []
+    for problem in (nodes, batched):
+        xs_try, us_try, dx = np.zeros_like(xs), np.zeros_like(us), np.zeros((n_nodes, problem.ndx))
+        rollouts.append(problem.forward_rollout(solver.xs, solver.us, solver._k, solver._K, solver.fs, 0.5, xs_try,
+                                                us_try, dx))
+    assert rollouts[1] == pytest.approx(rollouts[0], rel=1e-12)
+
+
+def test_a_force_term_active_where_its_contact_is_not_is_an_error_naming_it(bolt):
+    ocp = WalkingOCP(bolt, BATCHED_TERMS, n_nodes=6, dt=0.01)
+    ocp.update(standing_state(bolt), alternating_schedule(0.0, 0.01, 6), np.array([0.1, 0.0, 0.3]))
+    batched = ocp.problem
+    costs = batched.running_models[2].differential.costs.costs
+    swing = next(foot for foot in ocp.feet if not costs[f"{foot}_friction_cone"].active)
+    costs[f"{swing}_friction_cone"].active = True
+    xs, us = _random_trajectory(bolt, 6, ocp.nu, seed=4)
+    with pytest.raises(ParameterError, match=rf"cost on contact '{swing}' \(ResidualFrictionCone\) is active at "
+                                             "running node 2, whose contact set"):
+        batched.calc(xs, us)
 
 
 @pytest.mark.parametrize("alpha", [1.0, 0.25])
@@ -249,9 +292,43 @@ def test_sparse_gauss_newton_writes_exactly_the_dense_result_on_its_hessian_entr
 
 
 def test_a_term_without_batched_evaluation_is_an_error_naming_it(bolt):
-    ocp = WalkingOCP(bolt, WalkingOCPConfig(contact_force_weight=1e-2, evaluation="nodes"), 5, 0.01)
+    ocp = WalkingOCP(bolt, WalkingOCPConfig(touchdown_velocity_weight=1.0, evaluation="nodes"), 5, 0.01)
     p = ocp.problem
-    with pytest.raises(ParameterError, match=r"cost 'left_contact_force' \(ResidualContactForce\) cannot be batched"):
+    with pytest.raises(ParameterError, match=r"cost 'left_touchdown_velocity' \(ResidualFrameVelocity\) cannot be "
+                                             "batched: the compiled horizon kinematics"):
+        BatchedShootingProblem(p.x0, p.running_models, p.terminal_model)
+
+
+class _PlainControlResidual:
+    """A residual written by a user without a batched evaluation (r = u, node-wise only)."""
+
+    def __init__(self, state, nu):
+        self.state, self.nu, self.nr = state, nu, nu
+
+    def calc(self, data, x, u, shared):
+        data.r[:] = u
+
+    def calcDiff(self, data, x, u, shared):
+        data.Ru[:] = np.eye(self.nu)
+
+    def createData(self):
+        from wbmpc.ocp.residuals import ResidualData
+
+        return ResidualData(self.nr, self.state.ndx, self.nu)
+
+
+def test_a_custom_residual_without_batched_evaluation_keeps_the_problem_node_wise(bolt):
+    """The reason names the custom class; the problems stay node-wise and equal to themselves."""
+    from wbmpc.ocp.costs import CostModelResidual
+
+    ocp = WalkingOCP(bolt, WalkingOCPConfig(evaluation="nodes"), 5, 0.01)
+    p = ocp.problem
+    assert batched_evaluation_support(p) is None
+    for model in p.running_models:
+        model.differential.costs.add("plain", CostModelResidual(_PlainControlResidual(ocp.state, ocp.nu)), 1.0)
+    assert batched_evaluation_support(p) == ("cost 'plain' (_PlainControlResidual) cannot be batched: it declares "
+                                             "no batched evaluation")
+    with pytest.raises(ParameterError, match=r"cannot be evaluated batched: cost 'plain' \(_PlainControlResidual\)"):
         BatchedShootingProblem(p.x0, p.running_models, p.terminal_model)
 
 

@@ -13,19 +13,24 @@ from wbmpc.ocp.blas import limit_blas_threads
 
 
 def _counts() -> list[int]:
-    return [int(getter()) for _, _, getter in blas._openblas_libraries()]
+    return [int(getter()) for _, _, getter in blas._openblas_libraries() + blas._openmp_libraries()]
 
 
-@pytest.mark.skipif("OPENBLAS_NUM_THREADS" in os.environ, reason="the environment fixes the thread count")
+@pytest.mark.skipif("OPENBLAS_NUM_THREADS" in os.environ or "OMP_NUM_THREADS" in os.environ,
+                    reason="the environment fixes the thread count")
 def test_limit_blas_threads_is_scoped():
-    before = _counts()
-    with limit_blas_threads(1) as limited:
-        assert len(limited) == len(before)
-        assert all(count == 1 for count in _counts())
-    assert _counts() == before
-    with pytest.raises(RuntimeError), limit_blas_threads(1):
-        raise RuntimeError("inside")
-    assert _counts() == before
+    import pinocchio  # noqa: F401 - loads an OpenMP runtime (libgomp)
+
+    assert blas._openmp_libraries(), "Pinocchio's OpenMP runtime was not found"
+    with limit_blas_threads(2):  # more than one to start from, whatever the machine
+        before = _counts()
+        with limit_blas_threads(1) as limited:
+            assert len(limited) == len(before)
+            assert all(count == 1 for count in _counts())
+        assert _counts() == before == [2] * len(before)
+        with pytest.raises(RuntimeError), limit_blas_threads(1):
+            raise RuntimeError("inside")
+        assert _counts() == before
 
 
 @pytest.mark.skipif("OPENBLAS_NUM_THREADS" in os.environ, reason="the environment fixes the thread count")

@@ -12,7 +12,9 @@ from wbmpc.ocp.kernels.frames import FrameKinematics, frame_kinematics_support
 
 
 @pytest.mark.parametrize("robot_name", ["bolt", "g1"])
-def test_positions_and_jacobians_match_pinocchio(robot_name):
+@pytest.mark.parametrize("rows", [3, 6])
+def test_positions_and_jacobians_match_pinocchio(robot_name, rows):
+    """Positions, rotations and the LOCAL_WORLD_ALIGNED Jacobian (linear rows, or linear and angular)."""
     robot = load_robot(robot_name)
     model = robot.pinocchio_model
     frame_ids = [model.getFrameId(name) for name in robot.foot_frames.values()]
@@ -22,18 +24,20 @@ def test_positions_and_jacobians_match_pinocchio(robot_name):
                    for _ in range(20)])
     needed = rng.random((20, len(frame_ids))) < 0.7
     positions = np.full((20, len(frame_ids), 3), np.nan)
-    jacobians = np.full((20, len(frame_ids), 3, model.nv), np.nan)
-    kinematics.evaluate(qs, needed, positions, jacobians)
+    jacobians = np.full((20, len(frame_ids), rows, model.nv), np.nan)
+    rotations = np.full((20, len(frame_ids), 3, 3), np.nan)
+    kinematics.evaluate(qs, needed, positions, jacobians, rotations)
     data = model.createData()
     for t, q in enumerate(qs):
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
         for s, frame_id in enumerate(frame_ids):
             if not needed[t, s]:
-                assert np.isnan(positions[t, s]).all()  # untouched
+                assert np.isnan(positions[t, s]).all() and np.isnan(rotations[t, s]).all()  # untouched
                 continue
             np.testing.assert_allclose(positions[t, s], data.oMf[frame_id].translation, rtol=0, atol=1e-14)
-            expected = pin.getFrameJacobian(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED)[:3]
+            np.testing.assert_allclose(rotations[t, s], data.oMf[frame_id].rotation, rtol=0, atol=1e-14)
+            expected = pin.getFrameJacobian(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED)[:rows]
             np.testing.assert_allclose(jacobians[t, s], expected, rtol=0, atol=1e-13)
 
 
@@ -46,6 +50,15 @@ def test_positions_only():
     data = model.createData()
     pin.framesForwardKinematics(model, data, np.asarray(robot.q_reference, dtype=float))
     np.testing.assert_allclose(positions[0, 0], data.oMf[model.getFrameId("FL_FOOT")].translation, atol=1e-14)
+
+
+def test_jacobians_of_another_row_count_are_refused():
+    robot = load_robot("bolt")
+    model = robot.pinocchio_model
+    kinematics = FrameKinematics(model, [model.getFrameId("FL_FOOT")])
+    with pytest.raises(ParameterError, match=r"jacobians has shape \(1, 1, 4, 12\)"):
+        kinematics.evaluate(np.asarray(robot.q_reference, dtype=float)[None], np.ones((1, 1), dtype=bool),
+                            np.zeros((1, 1, 3)), np.zeros((1, 1, 4, model.nv)))
 
 
 def test_unsupported_models_are_named():

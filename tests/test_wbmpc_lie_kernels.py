@@ -12,6 +12,8 @@ from wbmpc.ocp.kernels.lie import (
     free_flyer_ddifference_second,
     free_flyer_dintegrate,
     free_flyer_integrate,
+    so3_log,
+    so3_log_jacobian,
 )
 
 
@@ -91,6 +93,27 @@ def test_half_turn_is_left_to_pinocchio(model):
     q0 = pin.neutral(model)
     q1 = pin.integrate(model, q0, np.r_[0, 0, 0, np.pi - 1e-3, 0, 0, np.zeros(model.nv - 6)])
     assert not free_flyer_ddifference_second(q0, q1, np.empty((model.nv, model.nv)))
+
+
+@pytest.mark.parametrize("angle", [0.0, 1e-9, 1e-6, 0.05, 0.3, 2.0, np.pi - 0.02])
+def test_so3_log_and_its_jacobian_match_pinocchio(angle):
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        axis = rng.standard_normal(3)
+        R = pin.exp3(angle * axis / np.linalg.norm(axis))
+        w, J = np.full(3, np.nan), np.full((3, 3), np.nan)
+        theta = so3_log(R, w)
+        # 2 sin θ is small near the half turn: its rounding grows as 1/(π − θ) (Pinocchio branches there)
+        np.testing.assert_allclose(w, pin.log3(R), rtol=0, atol=1e-12 if angle < 3.0 else 1e-10)
+        assert theta == pytest.approx(np.linalg.norm(pin.log3(R)), abs=3e-8)  # from the trace: ~√eps near 0
+        so3_log_jacobian(w, J)
+        np.testing.assert_allclose(J, pin.Jlog3(R), rtol=0, atol=1e-10 if angle < 3.0 else 1e-8)
+
+
+def test_so3_log_leaves_the_half_turn_to_pinocchio():
+    w = np.full(3, np.nan)
+    assert so3_log(pin.exp3(np.array([0.0, np.pi - 1e-3, 0.0])), w) < 0.0
+    assert np.isnan(w).all()  # untouched
 
 
 def test_euler_step(model):

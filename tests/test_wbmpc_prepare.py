@@ -21,8 +21,13 @@ def bolt():
     return load_robot("bolt")
 
 
-def _pair(bolt, horizon_end):
-    make = lambda: WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=N_NODES, dt=DT, max_iterations=1,  # noqa: E731
+# terms reading the contact forces: their forces and derivatives are prepared too
+FORCE_TERMS = WalkingOCPConfig(contact_force_weight=1e-2, friction_cone_weight=10.0)
+
+
+def _pair(bolt, horizon_end, config=None):
+    config = WalkingOCPConfig() if config is None else config
+    make = lambda: WalkingMPC(bolt, config, n_nodes=N_NODES, dt=DT, max_iterations=1,  # noqa: E731
                               cold_start_iterations=10, horizon_end=horizon_end)
     return make(), make()
 
@@ -34,12 +39,13 @@ def _assert_same(a, b):
     np.testing.assert_array_equal(a.K, b.K)
 
 
-@pytest.mark.parametrize("horizon_end", ["repeat", "rollout"])
-def test_prepared_updates_equal_plain_ones(bolt, horizon_end):
+@pytest.mark.parametrize("horizon_end,config", [("repeat", None), ("rollout", None), ("rollout", FORCE_TERMS)])
+def test_prepared_updates_equal_plain_ones(bolt, horizon_end, config):
     """Ticks one node apart, a re-timed schedule (every touchdown one node later), a skipped tick
     and a failed update: each update is bit-identical with and without preparation, and the
     preparation is used where the guess and the contact sets match, not elsewhere."""
-    plain, prepared = _pair(bolt, horizon_end)
+    plain, prepared = _pair(bolt, horizon_end, config)
+    assert prepared.ocp.evaluation == "batched"
     assert prepared.prepare() == 0  # no solution yet
     x = standing_state(bolt)
     # (time [s], start of the gait [s] (0.01: re-timed), measured state is NaN)

@@ -62,24 +62,40 @@ def format_report(report: dict) -> str:
 WRT = ("step-qp", "contact-timing", "dcm")
 
 
-def timing_report(n_nodes: int, fd_step: float | None) -> dict:
-    """``--wrt contact-timing``: the default Bolt walking OCP's du0/dτ, dforces0/dτ, dCoM_N/dτ by route."""
-    from wbmpc.walking.timing import contact_timing_sensitivity, standing_start_timing_ocp
+def timing_report(robot: str, n_nodes: int | None, fd_step: float | None) -> dict:
+    """``--wrt contact-timing``: a standing robot's walking OCP (the preset's node spacing, N default the
+    preset's) and its du0/dτ, dK0/dτ, dforces0/dτ, dCoM_N/dτ by route."""
+    from wbmpc.walking.preset import load_walking_preset
+    from wbmpc.walking.timing import (
+        contact_timing_sensitivity,
+        gain_reaction_by_joint,
+        standing_start_timing_ocp,
+        state_tangent_names,
+    )
 
-    timed = standing_start_timing_ocp("bolt", n_nodes=n_nodes)
+    controller = load_walking_preset(robot).controller
+    n_nodes = controller.n_nodes if n_nodes is None else n_nodes
+    timed = standing_start_timing_ocp(robot, n_nodes=n_nodes, dt=controller.node_dt)
     solver = timed.solve(th_stop=1e-17)
     kwargs = {} if fd_step is None else {"fd_step": fd_step}
     result = contact_timing_sensitivity(timed, solver, **kwargs)
     model = timed.ocp.state.pinocchio
-    names = {"u0": "du0_dtau", "forces0": "dforces0_dtau", "com_terminal": "dcom_terminal_dtau"}
-    routes = {route: {names[key]: out[key] for key in names} for route, out in result.routes.items()}
+    names = {"u0": "du0_dtau", "K0": "dK0_dtau", "forces0": "dforces0_dtau", "com_terminal": "dcom_terminal_dtau"}
+    routes = {route: {names[key]: out[key] for key in names if key in out} for route, out in result.routes.items()}
+    joints, tangent = list(model.names[2:]), state_tangent_names(model)
     return {
-        "robot": "bolt", "n_nodes": n_nodes, "dt_s": timed.ocp.dt, "parameters": result.parameter_names,
-        "touchdown_times_s": result.touchdown_times, "joints": list(model.names[2:]),
+        "robot": robot, "n_nodes": n_nodes, "dt_s": timed.ocp.dt, "parameters": result.parameter_names,
+        "touchdown_times_s": result.touchdown_times, "double_support_s": float(timed.plan.double_support),
+        "joints": joints, "state_tangent": tangent,
         "stance_feet_node0": list(timed.problem.running_models[0].differential.active_contacts),
-        "units": {"du0_dtau": "N·m/s", "dforces0_dtau": "N/s", "dcom_terminal_dtau": "m/s"},
+        "units": {"du0_dtau": "N·m/s", "dK0_dtau": "(N·m per unit of the state_tangent component)/s",
+                  "dforces0_dtau": "N/s (6D contacts: force N/s, then moment N·m/s)", "dcom_terminal_dtau": "m/s"},
         "routes": routes, "disagreement": result.disagreement,
         "max_relative_disagreement": result.max_relative_disagreement,
+        "gains": {"K0": result.gains["K0"], "sign": "SolverFDDP.K: u = u* + K (x ⊖ x*)",
+                  "regularization": result.gains["regularization"], "block_steps_s": result.gains["block_steps"],
+                  "solver_K0_gap": result.gains["solver_K0_gap"],
+                  "by_joint": gain_reaction_by_joint(result.gains["K0"], result.dK_dtouchdown, joints, tangent)},
         "gauss_newton": {"du0_dtau": result.gauss_newton["outputs"]["u0"],
                          "relative_gap": result.gauss_newton["gap_to_finite_differences"]},
         "cost": result.cost, "settings": result.settings,
@@ -95,7 +111,8 @@ def dcm_report(n_nodes: int, fd_step: float | None) -> dict:
 
 
 def format_timing(report: dict) -> str:
-    lines = [f"{report['robot']} walking OCP, N={report['n_nodes']}: touchdowns "
+    lines = [f"{report['robot']} walking OCP, N={report['n_nodes']}, dt={report['dt_s']} s, double support "
+             f"{report['double_support_s']} s: touchdowns "
              + ", ".join(f"{n} {t:.4f} s" for n, t in zip(report["parameters"], report["touchdown_times_s"])),
              "du0/dtau [N·m/s] (Riccati sweep, exact Hessian):"]
     J = np.asarray(report["routes"]["riccati"]["du0_dtau"])
@@ -104,12 +121,21 @@ def format_timing(report: dict) -> str:
     for pair, gaps in report["disagreement"].items():
         lines.append(f"  {pair}: " + ", ".join(f"{k} {v:.2e}" for k, v in gaps.items()))
     lines.append(f"largest relative disagreement between routes: {report['max_relative_disagreement']:.2e}")
+    lines.append("first gains K0: the joints whose gains move most, ||dK0_i/dtau|| [N·m/(state unit)/s] and relative "
+                 "to ||K0_i|| [1/s], per touchdown:")
+    by_joint = report["gains"]["by_joint"]
+    for row in by_joint[:5]:
+        lines.append(f"  {row['joint']:>26} " + " ".join(f"{a:>9.3g} ({b:.3g}/s)" for a, b in
+                                                        zip(row["dK_norm_per_s"], row["relative_per_s"]))
+                     + f"  largest on {row['largest_column']}")
     lines.append("Gauss-Newton sweep (FDDP's factorisation) vs finite differences: "
                  + ", ".join(f"{k} {v:.2e}" for k, v in report["gauss_newton"]["relative_gap"].items()))
     c = report["cost"]
     lines.append(f"cost: sweep {c['sensitivity_sweep_s'] * 1e3:.3f} ms = {c['sweep_over_riccati']:.2f} Riccati pass "
                  f"({c['riccati_pass_s'] * 1e3:.3f} ms); exact Hessian {c['exact_hessian_s']:.3f} s; "
-                 f"re-solves {c.get('finite_differences_s', float('nan')):.3f} s")
+                 f"re-solves {c.get('finite_differences_s', float('nan')):.3f} s; gains: block differences "
+                 f"{c['gain_block_derivatives_s']:.3f} s, recursion {c['gain_recursion_s'] * 1e3:.3f} ms = "
+                 f"{c['gain_recursion_over_riccati']:.2f} Riccati pass")
     return "\n".join(lines)
 
 
@@ -124,7 +150,8 @@ def format_dcm(report: dict) -> str:
 
 
 def plot_timing(report: dict, path: str) -> None:
-    """Bars of du0/dτ per joint, one group per touchdown."""
+    """Bars per joint, one group per touchdown: du0/dτ (top) and the relative change of the joint's
+    first gains, ‖dK0_i/dτ‖ / ‖K0_i‖ per 10 ms (bottom)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -132,16 +159,20 @@ def plot_timing(report: dict, path: str) -> None:
 
     J = np.asarray(report["routes"]["riccati"]["du0_dtau"])
     joints = report["joints"]
-    fig, ax = plt.subplots(figsize=(8, 4))
+    relative = {row["joint"]: np.asarray(row["relative_per_s"]) for row in report["gains"]["by_joint"]}
+    R = 100.0 * 0.01 * np.array([relative[name] for name in joints])  # % of the row per 10 ms
+    fig, axes = plt.subplots(2, 1, figsize=(max(8.0, 0.45 * len(joints)), 6.5), sharex=True)
     width = 0.8 / J.shape[1]
-    for j, name in enumerate(report["parameters"]):
-        ax.bar(np.arange(len(joints)) + (j - (J.shape[1] - 1) / 2) * width, J[:, j], width,
-               label=f"{name} ({report['touchdown_times_s'][j]:.3f} s)")
-    ax.set_xticks(np.arange(len(joints)), joints, rotation=20)
-    ax.set_ylabel("du0/dτ [N·m/s]")
-    ax.axhline(0.0, color="k", lw=0.6)
-    ax.legend()
-    ax.set_title("first torques of the whole-body MPC vs the planned touchdown times")
+    for values, ax in ((J, axes[0]), (R, axes[1])):
+        for j, name in enumerate(report["parameters"]):
+            ax.bar(np.arange(len(joints)) + (j - (J.shape[1] - 1) / 2) * width, values[:, j], width,
+                   label=f"{name} ({report['touchdown_times_s'][j]:.3f} s)")
+        ax.axhline(0.0, color="k", lw=0.6)
+    axes[1].set_xticks(np.arange(len(joints)), [name.removesuffix("_joint") for name in joints], rotation=60, ha="right")
+    axes[0].set_ylabel("du0/dτ [N·m/s]")
+    axes[1].set_ylabel("‖dK0_i‖ / ‖K0_i‖ [% per 10 ms]")
+    axes[0].legend()
+    axes[0].set_title(f"{report['robot']}: first torques and first gains of the whole-body MPC vs the touchdown times")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -252,7 +283,12 @@ def run_sensitivity(args: argparse.Namespace) -> int:
     if alip_only or args.yaw_rate != 0.0:
         raise ParameterError(f"{alip_only or ['--yaw-rate']} are options of --planner alip")
     if args.wrt != "step-qp":
-        report = (timing_report if args.wrt == "contact-timing" else dcm_report)(args.nodes, args.fd_step)
+        if args.wrt == "dcm" and args.robot not in (None, "bolt"):
+            raise ParameterError(f"--robot {args.robot}: --wrt dcm (the end-to-end chain) is built for bolt only")
+        if args.wrt == "contact-timing":
+            report = timing_report(args.robot or "bolt", args.nodes, args.fd_step)
+        else:
+            report = dcm_report(100 if args.nodes is None else args.nodes, args.fd_step)
         if args.plot and args.wrt == "contact-timing":
             plot_timing(report, args.plot)
         if args.json:
@@ -288,7 +324,8 @@ def register(subparsers) -> None:
     parser.add_argument("--seed", type=SEED, default=0, help="seed of the Monte Carlo samples")
     parser.add_argument("--wrt", choices=WRT, default="step-qp",
                         help="step-qp: the footstep QP to the DCM (default); contact-timing: the whole-body OCP's u0, "
-                        "node-0 forces and terminal CoM to the touchdown times; dcm: the end-to-end du0/dtheta")
+                        "first gains K0, node-0 forces and terminal CoM to the touchdown times (--robot, default "
+                        "bolt); dcm: the end-to-end du0/dtheta (bolt)")
     parser.add_argument("--fd-step", type=POSITIVE, default=None,
                         help="central-difference step of the re-solved route: [s] for contact-timing (default 2e-5), "
                         "[m] for dcm (default 1e-4); for --planner alip relative to each parameter's unit (default 1e-6)")
@@ -302,6 +339,8 @@ def register(subparsers) -> None:
     alip.add_argument("--push", nargs=2, type=FINITE, metavar=("DPX", "DPY"), default=None,
                       help="horizontal impulse on the CoM added to the state [N·s] (L_y += z DPX, L_x -= z DPY)")
     alip.add_argument("--yaw-rate", type=FINITE, default=0.0, help="commanded turning rate [rad/s]")
-    parser.add_argument("--nodes", type=COUNT, default=100, help="OCP horizon N for contact-timing and dcm (default 100)")
+    parser.add_argument("--nodes", type=COUNT, default=None,
+                        help="OCP horizon N for contact-timing (default the --robot's preset, bolt 100, g1 50) and dcm "
+                        "(default 100)")
     add_output_arguments(parser, plot=True)
     parser.set_defaults(func=run_sensitivity)

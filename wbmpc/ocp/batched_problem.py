@@ -10,12 +10,15 @@ reads the same node models (contacts, cost terms, weights, references) and evalu
 - a Python loop over the nodes doing only what needs Pinocchio: contact-constrained dynamics
   (``constraintDynamics`` with the node's contact set, or ABA without contacts) and, in
   :meth:`calcDiff`, its derivatives; one Pinocchio data per contact set, so it stays in cache;
+  when a term reads contact forces, each node's stacked forces λ and their derivatives
+  [∂λ/∂x, ∂λ/∂u] are copied out of it (``HorizonData.contact_force``, ``contact_force_jacobian``);
   the Euler step (and, in the rollout, the feedback law) are the compiled kernels the node-wise
   model calls (:mod:`wbmpc.ocp.kernels.integration`, :mod:`wbmpc.ocp.kernels.feedback`);
 - one Python call per cost term: each residual declares its batched evaluation
   (:class:`~wbmpc.ocp.residuals.base.BatchedResidual`: its rows and Jacobian nonzeros at every
   active node, by the compiled rows its node-wise ``calc`` uses), reading the frame kinematics of
-  the active frame terms computed for all nodes in one compiled pass (:mod:`wbmpc.ocp.kernels.frames`);
+  the active frame terms (positions, rotations, Jacobians) computed for all nodes in one compiled
+  pass (:mod:`wbmpc.ocp.kernels.frames`), and the kept contact forces;
 - one compiled pass over the nodes running what the node-wise models run per node: the Euler
   transition Jacobians, the cost value, the Gauss-Newton derivatives of the cost rows
   (:mod:`wbmpc.ocp.kernels.costs`) and their dt scaling.
@@ -167,10 +170,23 @@ class BatchedShootingProblem(ShootingProblem):
                                       for frame_id in frame_ids], dtype=np.bool_).reshape(len(frame_ids), n_terms)
         self._kinematics = FrameKinematics(self._pin_model, frame_ids) if frame_ids else None
         n_frames = max(len(frame_ids), 1)
+        # the contact forces and their derivatives of every node, kept when a term reads them
+        self._keep_forces = any(getattr(residual, "uses_contact_forces", False) for residual in self._terms)
+        contact_names = sorted({name for model in self.running_models for name in model.differential.contacts})
+        nc_max = max((sum(c.nc for c in model.differential.contacts.values()) for model in self.running_models),
+                      default=0)
+        nf, nfj = (N, nc_max) if self._keep_forces else (0, 0), (N, nc_max, ndx + nu) if self._keep_forces else (0, 0, 0)
+        # rotations and angular Jacobian rows only for terms reading them (frame rotations)
+        self._rotations = any(residual.batch_frame_rotations for residual in self._terms)
         self._horizon = HorizonData(xs=np.zeros((N, nx)), us=np.zeros((N, nu)),
                                     frame_slot={f: s for s, f in enumerate(frame_ids)},
                                     frame_position=np.zeros((N, n_frames, 3)),
-                                    frame_jacobian=np.zeros((N, n_frames, 3, nv)))
+                                    frame_jacobian=np.zeros((N, n_frames, 6 if self._rotations else 3, nv)),
+                                    frame_rotation=np.zeros((N, n_frames, 3, 3) if self._rotations else (N, 0, 3, 3)),
+                                    contact_force=np.zeros(nf), contact_force_jacobian=np.zeros(nfj),
+                                    contact_row={name: np.full(N, -1, dtype=np.int64) for name in contact_names},
+                                    contact_sets=[()] * N)
+        self._forces, self._force_jacobians = self._horizon.contact_force, self._horizon.contact_force_jacobian
         self._w = np.stack([d.differential.costs.w for d in self.running_datas])
         self._lb = np.stack([d.differential.costs.lb for d in self.running_datas])
         self._ub = np.stack([d.differential.costs.ub for d in self.running_datas])
@@ -207,6 +223,8 @@ class BatchedShootingProblem(ShootingProblem):
         self._prepared_euler_dx = np.zeros((N, ndx))
         self._prepared_da_dx = np.zeros((N, nv, ndx))
         self._prepared_da_du = np.zeros((N, nv, nu))
+        self._prepared_forces = np.zeros_like(self._forces)
+        self._prepared_force_jacobians = np.zeros_like(self._force_jacobians)
         self.prepared_used = 0  # nodes the last calcDiff took from the preparation
         self._detached = False
         # (residual, active mask (N,), references, residual rows (N, nr), Jacobian nonzeros) of
@@ -234,10 +252,17 @@ class BatchedShootingProblem(ShootingProblem):
         references, weights and activity of the cost terms need no sync: the node residuals and
         cost items write them into the batched arrays."""
         keys = self._node_contact_keys
+        h = self._horizon
         for k, model in enumerate(self.running_models):
             dam = model.differential
             if dam.active_key != keys[k] or dam._moving_references:
                 self._node_dynamics[k] = self._dynamics_of(dam)
+                if dam.active_key != keys[k]:
+                    for rows in h.contact_row.values():
+                        rows[k] = -1
+                    for name, rows in dam._active_rows:
+                        h.contact_row[name][k] = rows.start
+                    h.contact_sets[k] = dam.active_key
                 keys[k] = dam.active_key
 
     def set_term_scale(self, index: int, scale: float) -> None:
@@ -313,7 +338,7 @@ class BatchedShootingProblem(ShootingProblem):
                 continue
             self._dynamics_and_derivatives(entry, self._dt[k], xs[k], us[k], self._prepared_xnext[k],
                                            self._prepared_euler_dx[k], self._prepared_da_dx[k],
-                                           self._prepared_da_du[k])
+                                           self._prepared_da_du[k], *self._force_buffers(k, prepared=True))
             self._prepared_x[k] = xs[k]
             self._prepared_u[k] = us[k]
             self._prepared_key[k] = keys[k]
@@ -339,7 +364,19 @@ class BatchedShootingProblem(ShootingProblem):
         self._euler_dx[nodes] = self._prepared_euler_dx[nodes]
         self._da_dx[nodes] = self._prepared_da_dx[nodes]
         self._da_du[nodes] = self._prepared_da_du[nodes]
+        if self._keep_forces:
+            self._forces[nodes] = self._prepared_forces[nodes]
+            self._force_jacobians[nodes] = self._prepared_force_jacobians[nodes]
         return match
+
+    def _force_buffers(self, k: int, prepared: bool = False) -> tuple:
+        """(forces (nc_max,), force Jacobians (nc_max, ndx + nu)) of node k to fill, evaluation
+        or preparation buffers; (None, None) when no term reads contact forces."""
+        if not self._keep_forces:
+            return None, None
+        if prepared:
+            return self._prepared_forces[k], self._prepared_force_jacobians[k]
+        return self._forces[k], self._force_jacobians[k]
 
     # ----------------------------------------------------------------- evaluation
     def _node_dynamics_calc(self, k: int, x: np.ndarray, u: np.ndarray) -> None:
@@ -352,18 +389,25 @@ class BatchedShootingProblem(ShootingProblem):
         tau[6:] = u
         if constraints is not None:
             a = pin.constraintDynamics(model, pdata, q, v, tau, constraints, constraint_datas, settings)
+            if self._keep_forces:
+                forces = pdata.lambda_c
+                self._forces[k, :forces.size] = forces
         else:
             a = pin.aba(model, pdata, q, v, tau)
         free_flyer_euler_step(x, a, self._dt[k], self._euler_dx[k], self.xnext[k])
 
     def _dynamics_and_derivatives(self, entry: tuple, dt: float, x: np.ndarray, u: np.ndarray, xnext: np.ndarray,
-                                  euler_dx: np.ndarray, da_dx: np.ndarray, da_du: np.ndarray) -> None:
+                                  euler_dx: np.ndarray, da_dx: np.ndarray, da_du: np.ndarray,
+                                  forces: np.ndarray | None = None, force_jacobians: np.ndarray | None = None) -> None:
         """The Pinocchio work of one node in :meth:`calcDiff` and :meth:`prepare_dynamics`.
 
         Contact dynamics of the contact set ``entry`` (an item of ``_node_dynamics``) at the state
         x (nx,) and joint torques u (nu,) [N·m] (ABA without contact), the Euler step of dt [s]
         into xnext (nx,) and euler_dx (ndx,), then ∂a/∂x into da_dx (nv, ndx) and ∂a/∂u into
-        da_du (nv, nu).
+        da_du (nv, nu). With ``forces`` (nc_max,) and ``force_jacobians`` (nc_max, ndx + nu): the
+        stacked contact forces λ of the set (Pinocchio's ``lambda_c``, each contact in its
+        constraint's frame, as the node-wise dynamics reads them) into forces[:nc] and
+        [∂λ/∂x, ∂λ/∂u] into force_jacobians[:nc].
         """
         model, nq, nv = self._pin_model, self.state.nq, self.state.nv
         constraints, pdata, constraint_datas, settings = entry
@@ -377,18 +421,26 @@ class BatchedShootingProblem(ShootingProblem):
         else:
             a = pin.constraintDynamics(model, pdata, q, v, tau, constraints, constraint_datas, settings)
             free_flyer_euler_step(x, a, dt, euler_dx, xnext)
-            da_dq, da_dv, da_dtau = pin.computeConstraintDynamicsDerivatives(
-                model, pdata, constraints, constraint_datas, settings)[:3]
+            da_dq, da_dv, da_dtau, dl_dq, dl_dv, dl_dtau = pin.computeConstraintDynamicsDerivatives(
+                model, pdata, constraints, constraint_datas, settings)
+            if forces is not None:
+                nc = dl_dq.shape[0]
+                forces[:nc] = pdata.lambda_c
+                force_jacobians[:nc, :nv] = dl_dq
+                force_jacobians[:nc, nv:2 * nv] = dl_dv
+                force_jacobians[:nc, 2 * nv:] = dl_dtau[:, 6:]
         da_dx[:, :nv] = da_dq
         da_dx[:, nv:] = da_dv
         da_du[:] = da_dtau[:, 6:]
 
     def _frame_kinematics(self, xs: np.ndarray, jacobians: bool) -> None:
-        """Positions (and LOCAL_WORLD_ALIGNED Jacobians) of the frames of the active frame terms."""
+        """Positions, rotations (and LOCAL_WORLD_ALIGNED Jacobians) of the frames of the active
+        frame terms."""
         if self._kinematics is not None:
             h = self._horizon
             self._kinematics.evaluate(xs[:self.T, :self.state.nq], self._frame_needed, h.frame_position,
-                                      h.frame_jacobian if jacobians else None)
+                                      h.frame_jacobian if jacobians else None,
+                                      h.frame_rotation if self._rotations else None)
 
     def _residuals(self, xs: np.ndarray, us: np.ndarray, jacobians: bool) -> None:
         """Every term's residual rows (and Jacobian nonzeros) at the nodes where it is active."""
@@ -431,7 +483,8 @@ class BatchedShootingProblem(ShootingProblem):
         prepared = self._take_prepared(xs, us)
         nodes = range(self.T) if prepared is None else np.flatnonzero(~prepared).tolist()
         for k in nodes:
-            self._dynamics_and_derivatives(dynamics[k], dts[k], xs[k], us[k], xnext[k], euler_dx[k], da_dx[k], da_du[k])
+            self._dynamics_and_derivatives(dynamics[k], dts[k], xs[k], us[k], xnext[k], euler_dx[k], da_dx[k], da_du[k],
+                                           *self._force_buffers(k))
         self._residuals(xs, us, jacobians=True)
         cost = horizon_derivatives(
             xs, self._dt, self._euler_dx, self._da_dx, self._da_du, self._J_q, self._J_dq, self._r, self._values,
@@ -455,6 +508,7 @@ class BatchedShootingProblem(ShootingProblem):
         model, nq = self._pin_model, self.state.nq
         constraint_dynamics = pin.constraintDynamics
         dynamics, dts, euler_dx, xnexts, tau = self._node_dynamics, self._dt, self._euler_dx, self.xnext, self._tau
+        forces = self._forces if self._keep_forces else None
         xnext = self.x0
         for t in range(N):
             x_try = xs_try[t]
@@ -470,6 +524,9 @@ class BatchedShootingProblem(ShootingProblem):
             else:
                 a = constraint_dynamics(model, pdata, x_try[:nq], x_try[nq:], tau, constraints, constraint_datas,
                                         settings)
+                if forces is not None:
+                    lambda_c = pdata.lambda_c
+                    forces[t, :lambda_c.size] = lambda_c
                 free_flyer_euler_step(x_try, a, dts[t], euler_dx[t], xnexts[t])
             xnext = xnexts[t]
         if closing:

@@ -1,12 +1,13 @@
 """The walking OCP with continuous contact timings, and the sensitivity of its solution to them.
 
-The touchdown times τ (m,) inside the horizon are parameters of the OCP: every contact phase keeps
-its number of nodes and the node spacing is the phase's duration over that number
-(:func:`sequencer.schedule.timed_contact_schedule`). A running node k of phase i then depends on τ
-through its spacing h_k = (τ_{i+1} − τ_i)/n_i only (the dynamics x⁺ = x ⊕ f(x, u; h) and the cost
-h · l_c(x, u)) and, for the swing in progress at t0 and the swing still running at t_end, through
-the swing phase s_k(τ) of the height reference z*(s) (eq. 19); inside the horizon s = j/n_i does
-not depend on τ. So
+The touchdown times τ (m,) inside the horizon are parameters of the OCP: every contact phase
+(single support, the double support after each touchdown, which keeps its duration d, so its
+lift-off τ_i + d moves with τ_i) keeps its number of nodes and the node spacing is the phase's
+duration over that number (:func:`sequencer.schedule.timed_contact_schedule`). A running node k of
+phase i then depends on τ through its spacing h_k = (b_{i+1} − b_i)/n_i only (b the phase's ends:
+τ_i, τ_i + d or fixed; the dynamics x⁺ = x ⊕ f(x, u; h) and the cost h · l_c(x, u)) and, for the
+swing in progress at t0 and the swing still running at t_end, through the swing phase s_k(τ) of
+the height reference z*(s) (eq. 19); inside the horizon s = j/n_i does not depend on τ. So
 
     ∂x⁺/∂τ = ∂x⁺/∂h ∂h/∂τ,   ∂Lx/∂τ = ∂l_c/∂x ∂h/∂τ − h w Rxᵀ z*'(s) ∂s/∂τ,   ∂Lu/∂τ = ∂l_c/∂u ∂h/∂τ,
 
@@ -14,7 +15,9 @@ all analytic (:meth:`ContactTimingOCP.parameter_derivatives`, checked against di
 model in the tests). The terminal CoM reference c* (3,) can be added as three more parameters
 (∂Lx_N/∂c* = −w_CoM Jcomᵀ), the second channel through which a DCM disturbance reaches the OCP.
 :func:`contact_timing_sensitivity` gives the derivatives of the solution by the three routes of
-:mod:`sensitivity` (Riccati sweep, re-solved finite differences, full KKT).
+:mod:`sensitivity` (Riccati sweep, re-solved finite differences, full KKT), and of the solver's
+feedback gains K (:mod:`sensitivity.ocp_gains`: the Gauss-Newton backward pass differentiated,
+against differences of re-solved gains).
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import numpy as np
 import pinocchio as pin
 
 from sensitivity.ocp_finite_differences import check_fd_step, finite_difference_sensitivity
+from sensitivity.ocp_gains import block_derivatives, gain_derivatives, solver_gains, time_gain_recursion
 from sensitivity.ocp_kkt import kkt_sensitivity
 from sensitivity.ocp_parametric import (
     ParameterDerivatives,
@@ -51,8 +55,9 @@ class ContactTimingOCP:
 
     Args:
         ocp: the walking OCP (``evaluation="nodes"``: the batched problem fixes its node spacings).
-        plan: the ``sequencer.horizon.FootstepPlan`` (double_support = 0); its touchdowns inside
-            the horizon are the parameters, their nominal values the plan's.
+        plan: the ``sequencer.horizon.FootstepPlan``; its touchdowns inside the horizon are the
+            parameters, their nominal values the plan's; with double support (the G1's) each lift-off
+            stays ``plan.double_support`` after its touchdown (:func:`sequencer.timed_contact_schedule`).
         t0: time of node 0 [s].
         x0: initial state (nx,).
         com_terminal_reference: terminal CoM reference (3,) [m], world.
@@ -210,13 +215,21 @@ class TimingSensitivity:
         parameter_names: (m,) names; touchdown_times: τ (m_τ,) [s].
         routes: route name -> outputs name -> derivative (u0 (nu, m) [N·m/s], forces0 (nc, m) [N/s],
             com_terminal (3, m) [m/s], com (N + 1, 3, m); per metre for the c* columns), plus
-            "us" (N, nu, m) and "xs" (N + 1, ndx, m).
+            "us" (N, nu, m) and "xs" (N + 1, ndx, m); with ``gains``, the routes "riccati" (the
+            recursion's derivative, :mod:`sensitivity.ocp_gains`) and "finite_differences" (re-solved
+            gains) also have "K" (N, nu, ndx, m) and "K0" (nu, ndx, m): dK/dp of the solver's gains
+            [gain unit/s: N·m/rad/s, N·m·s/rad/s, N·m/m/s …, the unit of the state component].
         disagreement: "<route> vs riccati" -> output -> max |J_route − J_riccati| / max |J_riccati|.
-        max_relative_disagreement: the largest of them over the routes and u0, forces0, com_terminal.
+        max_relative_disagreement: the largest of them over the routes and :data:`COMPARED_OUTPUTS`.
         gauss_newton: the same outputs from the Riccati sweep with FDDP's Gauss-Newton Hessian (its
             own factorisation) and their relative gap to the finite differences (None if not asked).
-        cost: wall times [s] (Hessian, factorisation, sweep, one Riccati pass, re-solves, KKT).
-        settings: fd_step [s], th_stop, hessian_step, stationarity residual of the base solution.
+        gains: the solver's first gains "K0" (nu, ndx) (``SolverFDDP.K[0]``, u = u* + K (x ⊖ x*)), the regularisation ρ
+            they carry, the steps of the blocks' differences per parameter ("block_steps") and the
+            gap between the solver's own K0 and K0 recomputed at the solution ("solver_K0_gap", the
+            solver's K comes from the pass before its last step); None if not asked.
+        cost: wall times [s] (Hessian, factorisation, sweep, one Riccati pass, re-solves, KKT, the
+            gains' block differences and recursion).
+        settings: fd_step [s], th_stop, hessian_step, gain_step, stationarity residual of the base solution.
     """
 
     parameter_names: list
@@ -227,9 +240,19 @@ class TimingSensitivity:
     gauss_newton: dict | None
     cost: dict
     settings: dict
+    gains: dict | None = None
+
+    @property
+    def dK_dtouchdown(self) -> np.ndarray:
+        """dK_0/dτ (nu, ndx, m_τ) [gain unit/s] of the first node's gains (Riccati route)."""
+        if self.gains is None:
+            raise ParameterError("gains=False: the gains' derivative was not computed")
+        return self.routes["riccati"]["K0"][..., : self.touchdown_times.size]
 
 
-COMPARED_OUTPUTS = ("u0", "forces0", "com_terminal")
+#: the outputs whose route gaps make :attr:`TimingSensitivity.max_relative_disagreement` (when both
+#: routes have them): first torques, first gains, node-0 contact forces, CoM trajectory and terminal CoM
+COMPARED_OUTPUTS = ("u0", "K0", "forces0", "com", "com_terminal")
 
 
 def relative_gap(a: np.ndarray, b: np.ndarray) -> float:
@@ -241,8 +264,9 @@ def relative_gap(a: np.ndarray, b: np.ndarray) -> float:
 def contact_timing_sensitivity(timed: ContactTimingOCP, solver: SolverFDDP, fd_step: float = 2e-5,
                                th_stop: float = 1e-12, com_reference: bool = False,
                                routes=ROUTES, gauss_newton: bool = True, hessian_step: float = 1e-6,
-                               fd_th_stop: float = 1e-20, kkt_solver: str = "auto") -> TimingSensitivity:
-    """d(xs*, us*, forces*, CoM*)/dτ at a converged solution by the routes asked.
+                               fd_th_stop: float = 1e-20, kkt_solver: str = "auto", gains: bool = True,
+                               gain_step: float = 1e-6) -> TimingSensitivity:
+    """d(xs*, us*, K, forces*, CoM*)/dτ at a converged solution by the routes asked.
 
     Args:
         timed: the timed OCP, at the parameters the solution was computed for.
@@ -255,6 +279,10 @@ def contact_timing_sensitivity(timed: ContactTimingOCP, solver: SolverFDDP, fd_s
         hessian_step: step of the exact Hessian's differences (tangent units).
         fd_th_stop: the stop the re-solves of route (b) are converged to.
         kkt_solver: "auto", "dense" or "sparse" (route c).
+        gains: also dK/dp of the solver's gains (Gauss-Newton backward pass with the solver's
+            regularisation ``solver.preg``, :mod:`sensitivity.ocp_gains`), and by route (b) the
+            differences of the gains at the re-solved solutions.
+        gain_step: the largest step [s] (and [m] for c*) of the blocks' directional differences, > 0.
 
     Raises:
         ParameterError: non-converged base solution (names its stop), fd_step <= 0 or not finite,
@@ -266,64 +294,117 @@ def contact_timing_sensitivity(timed: ContactTimingOCP, solver: SolverFDDP, fd_s
     if unknown:
         raise ParameterError(f"routes={sorted(unknown)} are not among {ROUTES}")
     xs, us = solver.xs.copy(), solver.us.copy()
+    problem = timed.problem
+    regularization = float(solver.preg)
     base_tau = timed.touchdown_times
     base_com = timed.com_terminal_reference.copy()
     m_tau = base_tau.size
+    p0 = np.concatenate([base_tau, base_com if com_reference else []])
     names = timed.parameter_names + (["com_reference_x", "com_reference_y", "com_reference_z"] if com_reference else [])
+
+    def set_at(p):
+        timed.set_parameters(p[:m_tau], base_com + (p[m_tau:] if com_reference else 0.0))
+
     cost = {}
     tic = time.perf_counter()
     derivatives = timed.parameter_derivatives(xs, us, com_reference)
     cost["parameter_derivatives_s"] = time.perf_counter() - tic
     tic = time.perf_counter()
-    lq = linear_quadratic(timed.problem, xs, us, derivatives, "exact", hessian_step)
+    lq = linear_quadratic(problem, xs, us, derivatives, "exact", hessian_step)
     cost["exact_hessian_s"] = time.perf_counter() - tic
-    stationarity = stationarity_residual(timed.problem, costates(timed.problem))
+    stationarity = stationarity_residual(problem, costates(problem))
     with limit_blas_threads(1):
         riccati = riccati_sensitivity(lq)
         cost.update({f"riccati_{k}_s": v for k, v in riccati.seconds.items()})
         cost.update(time_sweep_against_riccati(lq))
     results = {"riccati": _route_outputs(timed, xs, us, riccati.dxs, riccati.dus)}
+    lq_gn = linear_quadratic(problem, xs, us, derivatives, "gauss-newton") if gains or gauss_newton else None
+    gain_report = None
+    if gains:
+        tic = time.perf_counter()
+        blocks = block_derivatives(problem, set_at, p0, xs, us, riccati.dxs, riccati.dus, gain_step)
+        cost["gain_block_derivatives_s"] = time.perf_counter() - tic
+        with limit_blas_threads(1):
+            gain_sens = gain_derivatives(lq_gn, blocks, regularization)
+            cost.update(time_gain_recursion(lq_gn, blocks, regularization))
+        results["riccati"].update(K=gain_sens.dK, K0=gain_sens.dK[0])
+        K0 = gain_sens.K[0]
+        gain_report = {"K0": K0.copy(), "regularization": regularization, "block_steps": blocks.steps,
+                       "solver_K0_gap": relative_gap(np.asarray(solver.K[0]), K0)}
     if "kkt" in routes:
         kkt = kkt_sensitivity(lq, kkt_solver)
         cost.update({f"kkt_{k}_s": v for k, v in kkt.seconds.items()})
         results["kkt"] = _route_outputs(timed, xs, us, kkt.dxs, kkt.dus)
-    fd_outputs = None
     if "finite_differences" in routes:
         def solve_at(p):
-            timed.set_parameters(p[:m_tau], base_com + (p[m_tau:] if com_reference else 0.0))
+            set_at(p)
             re_solved = timed.solve(xs, us, th_stop=fd_th_stop)
             out = timed.outputs(re_solved.xs, re_solved.us)
+            if gains:
+                K = solver_gains(problem, re_solved.xs, re_solved.us, regularization)
+                out.update(K=K, K0=K[0])
             return {"xs": re_solved.xs.copy(), "us": re_solved.us.copy(), **out}
 
-        p0 = np.concatenate([base_tau, base_com if com_reference else []])
         try:
-            fd, fd_outputs = finite_difference_sensitivity(timed.problem.state, solve_at, p0, fd_step)
+            fd, fd_outputs = finite_difference_sensitivity(problem.state, solve_at, p0, fd_step)
         finally:
-            timed.set_parameters(base_tau, base_com)
+            set_at(p0)
         cost["finite_differences_s"] = fd.seconds["re-solves"]
         results["finite_differences"] = {**fd_outputs, "xs": fd.dxs, "us": fd.dus}
-    timed.problem.calc_and_diff(xs, us)
+    problem.calc_and_diff(xs, us)
     disagreement = {}
     for name, out in results.items():
         if name != "riccati":
             disagreement[f"{name} vs riccati"] = {key: relative_gap(out[key], results["riccati"][key])
-                                                  for key in COMPARED_OUTPUTS + ("us",)}
+                                                  for key in COMPARED_OUTPUTS + ("K", "us")
+                                                  if key in out and key in results["riccati"]}
     largest = max((gap for gaps in disagreement.values() for key, gap in gaps.items() if key in COMPARED_OUTPUTS),
                   default=0.0)
     gn = None
     if gauss_newton:
-        lq_gn = linear_quadratic(timed.problem, xs, us, derivatives, "gauss-newton")
         gn_sens = riccati_sensitivity(lq_gn)
         gn = {"outputs": _route_outputs(timed, xs, us, gn_sens.dxs, gn_sens.dus)}
         reference = results.get("finite_differences", results["riccati"])
         gn["gap_to_" + ("finite_differences" if "finite_differences" in results else "riccati")] = {
-            key: relative_gap(gn["outputs"][key], reference[key]) for key in COMPARED_OUTPUTS + ("us",)}
+            key: relative_gap(gn["outputs"][key], reference[key]) for key in ("u0", "forces0", "com_terminal", "us")}
     return TimingSensitivity(
         parameter_names=names, touchdown_times=base_tau, routes=results, disagreement=disagreement,
         max_relative_disagreement=largest, gauss_newton=gn, cost=cost,
         settings={"fd_step": fd_step, "th_stop": th_stop, "fd_th_stop": fd_th_stop, "hessian_step": hessian_step,
-                  "base_stop": float(solver.stop), "stationarity_residual": stationarity},
+                  "gain_step": gain_step, "base_stop": float(solver.stop), "stationarity_residual": stationarity},
+        gains=gain_report,
     )
+
+
+def state_tangent_names(model) -> list[str]:
+    """Names of the ndx state-tangent components of a free-flyer robot (Pinocchio's difference): the
+    base translation and rotation (base frame), the joint angles, then the base twist and joint rates."""
+    joints = list(model.names[2:])
+    base = [f"base_{kind}_{axis}" for kind in ("linear", "angular") for axis in "xyz"]
+    names = base + [f"q_{name}" for name in joints] + [f"v_{name}" for name in base] + [f"v_{name}" for name in joints]
+    if len(names) != 2 * model.nv:
+        raise ParameterError(f"model with nv={model.nv}: not a free-flyer robot with one-dof joints")
+    return names
+
+
+def gain_reaction_by_joint(K0: np.ndarray, dK0: np.ndarray, joints, columns) -> list[dict]:
+    """Which actuated joints' gains move most with the touchdown times, largest first.
+
+    Args:
+        K0: the first gains (nu, ndx); dK0: dK0/dτ (nu, ndx, m) [per s]; joints: the nu joint names;
+        columns: the ndx state-tangent names (:func:`state_tangent_names`).
+
+    Returns:
+        per joint i: "joint", "dK_norm_per_s" (m,) = ‖dK0[i, :, j]‖ (Euclidean over the state
+        components, in the gains' mixed units per s), "relative_per_s" (m,) = that / ‖K0[i]‖ [1/s],
+        "largest_column" the state-tangent component of its largest |dK0| entry; sorted by the largest
+        relative change over the touchdowns.
+    """
+    norms = np.linalg.norm(dK0, axis=1)  # (nu, m)
+    scale = np.maximum(np.linalg.norm(K0, axis=1), 1e-300)
+    rows = [{"joint": name, "dK_norm_per_s": norms[i], "relative_per_s": norms[i] / scale[i],
+             "largest_column": columns[int(np.argmax(np.abs(dK0[i]).max(axis=1)))]} for i, name in enumerate(joints)]
+    return sorted(rows, key=lambda row: -float(np.max(row["relative_per_s"])))
 
 
 def _route_outputs(timed: ContactTimingOCP, xs, us, dxs, dus) -> dict:

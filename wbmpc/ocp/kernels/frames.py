@@ -1,5 +1,6 @@
-"""Compiled forward kinematics of chosen frames over a whole horizon: world positions [m] and
-LOCAL_WORLD_ALIGNED linear Jacobians (3, nv), for a free-flyer root followed by revolute joints.
+"""Compiled forward kinematics of chosen frames over a whole horizon: world positions [m],
+world rotations and LOCAL_WORLD_ALIGNED Jacobians (linear rows, optionally the angular ones:
+(3 or 6, nv)), for a free-flyer root followed by revolute joints.
 
 Pinocchio gives the same numbers frame by frame (``updateFramePlacement``, ``getFrameJacobian``),
 at a binding call each; the batched evaluation (:mod:`wbmpc.ocp.batched_problem`) needs them for the
@@ -10,7 +11,8 @@ evaluates all nodes in one compiled pass. Agreement with Pinocchio: ~1e-15
 Conventions: joint i's world placement oMi = oM_parent · jointPlacement_i · exp(axis_i q_i); the
 free flyer's joint transform is (R(quaternion), p) with its velocity (v, ω) in its own frame, so
 a point p_f moving with the tree has ṗ_f = R₁ v + (R₁ ω) × (p_f − p₁) + Σ_j (R_j a_j) × (p_f − p_j) q̇_j
-over the revolute joints j supporting it.
+over the revolute joints j supporting it, and the frame's angular velocity in world axes is
+ω_f = R₁ ω + Σ_j (R_j a_j) q̇_j (the angular rows of the LOCAL_WORLD_ALIGNED Jacobian).
 """
 
 from __future__ import annotations
@@ -73,13 +75,18 @@ class FrameKinematics:
         self.nv = model.nv
 
     def evaluate(self, qs: np.ndarray, needed: np.ndarray, positions: np.ndarray,
-                 jacobians: np.ndarray | None = None) -> None:
-        """Positions (T, n_frames, 3) and, if given, Jacobians (T, n_frames, 3, nv) of the frames
-        with ``needed[t, s]`` at the configurations ``qs`` (T, nq); other entries are untouched."""
+                 jacobians: np.ndarray | None = None, rotations: np.ndarray | None = None) -> None:
+        """World positions (T, n_frames, 3) [m] and, if given, LOCAL_WORLD_ALIGNED Jacobians
+        (T, n_frames, 3, nv) (linear rows) or (T, n_frames, 6, nv) (linear then angular rows) and
+        world rotations (T, n_frames, 3, 3) of the frames with ``needed[t, s]`` at the
+        configurations ``qs`` (T, nq); other entries are untouched."""
+        if jacobians is not None and jacobians.shape[2] not in (3, 6):
+            raise ParameterError(f"jacobians has shape {jacobians.shape}: 3 (linear) or 6 (linear, angular) rows allowed")
         frame_kinematics(qs, needed, self.parents, self.placement_rotation, self.placement_translation, self.axes,
                          self.idx_q, self.idx_v, self.frame_joint, self.frame_rotation, self.frame_translation,
                          self.support, positions, jacobians if jacobians is not None else np.zeros((0, 0, 3, 0)),
-                         jacobians is not None)
+                         jacobians is not None, rotations if rotations is not None else np.zeros((0, 0, 3, 3)),
+                         rotations is not None)
 
 
 @njit(cache=True)
@@ -101,8 +108,9 @@ def _axis_rotation(axis, angle, out):
 
 @njit(cache=True)
 def frame_kinematics(qs, needed, parents, placement_rotation, placement_translation, axes, idx_q, idx_v, frame_joint,
-                     frame_rotation, frame_translation, support, positions, jacobians, with_jacobians):
-    """Kernel of :meth:`FrameKinematics.evaluate`."""
+                     frame_rotation, frame_translation, support, positions, jacobians, with_jacobians, rotations,
+                     with_rotations):
+    """Kernel of :meth:`FrameKinematics.evaluate` (angular Jacobian rows when jacobians has 6 rows)."""
     n_joints = parents.size
     n_frames = frame_joint.size
     R = np.zeros((n_joints, 3, 3))  # world rotation of each joint frame
@@ -144,15 +152,18 @@ def frame_kinematics(qs, needed, parents, placement_rotation, placement_translat
             for a in range(3):
                 pf[a] += p[j, a]
                 positions[t, s, a] = pf[a]
+            if with_rotations:
+                mat3_mul(R[j], frame_rotation[s], rotations[t, s])
             if not with_jacobians:
                 continue
             J = jacobians[t, s]
+            angular = J.shape[0] == 6
             J[:, :] = 0.0
             for i in range(1, n_joints):
                 if not support[s, i]:
                     continue
                 r0, r1, r2 = pf[0] - p[i, 0], pf[1] - p[i, 1], pf[2] - p[i, 2]
-                if i == 1:  # base: linear R₁, angular −[r]× R₁
+                if i == 1:  # base: linear R₁, angular −[r]× R₁ (linear rows), R₁ (angular rows)
                     v0 = idx_v[i]
                     for a in range(3):
                         for b in range(3):
@@ -162,9 +173,17 @@ def frame_kinematics(qs, needed, parents, placement_rotation, placement_translat
                         J[0, v0 + 3 + b] = w1 * r2 - w2 * r1
                         J[1, v0 + 3 + b] = w2 * r0 - w0 * r2
                         J[2, v0 + 3 + b] = w0 * r1 - w1 * r0
+                        if angular:
+                            J[3, v0 + 3 + b] = w0
+                            J[4, v0 + 3 + b] = w1
+                            J[5, v0 + 3 + b] = w2
                 else:  # revolute: (R_i a_i) × (p_f − p_i)
                     mat3_vec(R[i], axes[i], w)
                     col = idx_v[i]
                     J[0, col] = w[1] * r2 - w[2] * r1
                     J[1, col] = w[2] * r0 - w[0] * r2
                     J[2, col] = w[0] * r1 - w[1] * r0
+                    if angular:
+                        J[3, col] = w[0]
+                        J[4, col] = w[1]
+                        J[5, col] = w[2]

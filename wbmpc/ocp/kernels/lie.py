@@ -257,6 +257,44 @@ def free_flyer_dintegrate(q, dq, J_q, J_dq):
 
 
 @njit(cache=True)
+def so3_log(R, w):
+    """w (3,) = log3(R) [rad] of a rotation matrix R (3, 3) (Pinocchio's log3: w = θ / (2 sin θ)
+    vee(R − Rᵀ), the limit 1/2 for small θ); returns the angle θ as Pinocchio takes it, from the
+    trace (so only to ~1e-8 rad near 0, where it is used for series branches). Within 1e-2 rad of a half turn,
+    where Pinocchio takes a special branch, returns −1 (w untouched): the caller then uses
+    Pinocchio."""
+    trace = R[0, 0] + R[1, 1] + R[2, 2]
+    if trace >= 3.0:
+        theta = 0.0
+    elif trace <= -1.0:
+        return -1.0
+    else:
+        theta = np.arccos((trace - 1.0) / 2.0)
+    if theta >= np.pi - 1e-2:
+        return -1.0
+    eps3 = 1e-5  # a safe small-angle threshold; the Taylor limit is exact to 1e-11 below it
+    t = (theta / np.sin(theta) if theta > eps3 else 1.0) / 2.0
+    w[0] = t * (R[2, 1] - R[1, 2])
+    w[1] = t * (R[0, 2] - R[2, 0])
+    w[2] = t * (R[1, 0] - R[0, 1])
+    return theta
+
+
+@njit(cache=True)
+def so3_log_jacobian(w, J):
+    """J (3, 3) = Pinocchio's Jlog3 at w = log3(R) (3,) [rad]: the inverse of the SO(3) right
+    Jacobian, I + ½[ω]× + (1/θ² − (1 + cos θ)/(2θ sin θ)) [ω]×², θ = |ω| (the derivative of
+    log3(R exp(δ)) in δ at 0)."""
+    theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    if theta < 0.1:  # series of the closed form (cancellation ~ eps/θ²)
+        t2 = theta * theta
+        d = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0 + t2 * t2 * t2 / 1209600.0
+    else:
+        d = 1.0 / (theta * theta) - (1.0 + np.cos(theta)) / (2.0 * theta * np.sin(theta))
+    _so3_polynomial(w, 0.5, d, J)
+
+
+@njit(cache=True)
 def free_flyer_ddifference_second(q0, q1, J):
     """J (nv, nv) = ∂(q1 ⊖ q0)/∂q1 (Pinocchio's dDifference ARG1): the base block is Jlog6 of
     M0⁻¹ M1 (inverse of Jexp6 at the difference), joints identity. False near a half turn (the
@@ -268,17 +306,9 @@ def free_flyer_ddifference_second(q0, q1, J):
     J[:, :] = 0.0
     for i in range(6, nv):
         J[i, i] = 1.0
-    w = xi[3:6]
-    theta = np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-    # inverse of the SO(3) right Jacobian: I + ½[ω]× + (1/θ² − (1 + cos θ)/(2θ sin θ)) [ω]×²
-    if theta < 0.1:  # series of the closed form below (cancellation ~ eps/θ²)
-        t2 = theta * theta
-        d = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0 + t2 * t2 * t2 / 1209600.0
-    else:
-        d = 1.0 / (theta * theta) - (1.0 + np.cos(theta)) / (2.0 * theta * np.sin(theta))
     work = np.empty((5, 3, 3))  # A⁻¹, Q, A⁻¹Q, A⁻¹QA⁻¹ and −ξ
     A_inv, Q, AQ, AQA, minus_v, minus_w = work[0], work[1], work[2], work[3], work[4, 0], work[4, 1]
-    _so3_polynomial(w, 0.5, d, A_inv)
+    so3_log_jacobian(xi[3:6], A_inv)
     _negate_twist(xi, minus_v, minus_w)
     _se3_left_coupling(minus_v, minus_w, Q)
     mat3_mul(A_inv, Q, AQ)
@@ -300,21 +330,10 @@ def free_flyer_difference(q0, q1, nq, out):
     for i in range(3):
         dp[i] = q1[i] - q0[i]
     mat3_tvec(R0, dp, p)
-    trace = R[0, 0] + R[1, 1] + R[2, 2]
-    if trace >= 3.0:
-        theta = 0.0
-    elif trace <= -1.0:
+    theta = so3_log(R, out[3:6])
+    if theta < 0.0:
         return False
-    else:
-        theta = np.arccos((trace - 1.0) / 2.0)
-    if theta >= np.pi - 1e-2:
-        return False
-    # log3 (Pinocchio): w = θ / (2 sin θ) vee(R − Rᵀ), with the limit 1/2 for small θ
-    eps3 = 1e-5  # a safe small-angle threshold; the Taylor limit is exact to 1e-11 below it
-    t = (theta / np.sin(theta) if theta > eps3 else 1.0) / 2.0
-    w0 = t * (R[2, 1] - R[1, 2])
-    w1 = t * (R[0, 2] - R[2, 0])
-    w2 = t * (R[1, 0] - R[0, 1])
+    w0, w1, w2 = out[3], out[4], out[5]
     t2 = theta * theta
     if t2 < 1e-8:
         alpha = 1.0 - t2 / 12.0 - t2 * t2 / 720.0
@@ -331,9 +350,6 @@ def free_flyer_difference(q0, q1, nq, out):
     out[0] = alpha * p[0] - 0.5 * cross0 + beta * wp * w0
     out[1] = alpha * p[1] - 0.5 * cross1 + beta * wp * w1
     out[2] = alpha * p[2] - 0.5 * cross2 + beta * wp * w2
-    out[3] = w0
-    out[4] = w1
-    out[5] = w2
     for i in range(7, nq):
         out[i - 1] = q1[i] - q0[i]
     return True

@@ -1,13 +1,18 @@
 """Compiled residual rows shared by the node-wise residuals and their batched evaluation: each
 residual of :mod:`wbmpc.ocp.residuals` that can be batched computes its rows with these kernels
 at one node (``calc``/``calcDiff``) and over every active node of a horizon (``batch_calc``/
-``batch_calc_diff``, which loop over the same per-node kernel)."""
+``batch_calc_diff``, which loop over the same per-node kernel).
+
+Kernels writing a dense Jacobian block take it as a 2-D array: the node-wise Rx/Ru (views of
+the cost sum's stacked rows) or, in the batched evaluation, one node's Jacobian nonzeros viewed
+as (nr, n) (:func:`jacobian_blocks`), so both are written by the same code."""
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
-from wbmpc.ocp.kernels.lie import free_flyer_ddifference_second, free_flyer_state_difference
+from wbmpc.ocp.kernels.lie import free_flyer_ddifference_second, free_flyer_state_difference, so3_log, so3_log_jacobian
 
 
 @njit(cache=True, inline="always")
@@ -82,3 +87,135 @@ def frame_jacobian_rows_many(jacobians, axes, mask, values):
             for a in range(axes.size):
                 for c in range(nv):
                     values[k, a * nv + c] = jacobians[k, axes[a], c]
+
+
+@njit(cache=True, inline="always")
+def _rotation_error(reference, R, E):
+    """E (3, 3) = R_refᵀ R, the reference R_ref given row-major as reference (9,)."""
+    for a in range(3):
+        for b in range(3):
+            E[a, b] = reference[a] * R[0, b] + reference[3 + a] * R[1, b] + reference[6 + a] * R[2, b]
+
+
+@njit(cache=True)
+def frame_rotation_rows(reference, R, r):
+    """Frame-rotation residual r (3,) = log3(R_refᵀ R) [rad] (the rotation from the reference to
+    the frame, in the frame's axes) of the world rotation R (3, 3) and the reference R_ref
+    (row-major (9,)). False (r untouched) within 1e-2 rad of a half turn: the caller then uses
+    Pinocchio's log3."""
+    E = np.empty((3, 3))
+    _rotation_error(reference, R, E)
+    return so3_log(E, r) >= 0.0
+
+
+@njit(cache=True)
+def frame_rotation_jacobian(reference, R, J_angular, out):
+    """Its Jacobian out (3, nv) = Jlog3(R_refᵀ R) Rᵀ J_angular: J_angular (3, nv) the angular rows
+    of the frame's LOCAL_WORLD_ALIGNED Jacobian (Rᵀ J_angular is the LOCAL one). False (out
+    untouched) near a half turn, as :func:`frame_rotation_rows`."""
+    work = np.empty((4, 3, 3))  # E, Jlog3, Jlog3 Rᵀ and log3(E)
+    E, J_log, M, w = work[0], work[1], work[2], work[3, 0]
+    _rotation_error(reference, R, E)
+    if so3_log(E, w) < 0.0:
+        return False
+    so3_log_jacobian(w, J_log)
+    for a in range(3):
+        for b in range(3):
+            M[a, b] = J_log[a, 0] * R[b, 0] + J_log[a, 1] * R[b, 1] + J_log[a, 2] * R[b, 2]
+    for a in range(3):
+        m0, m1, m2 = M[a, 0], M[a, 1], M[a, 2]
+        for c in range(J_angular.shape[1]):
+            out[a, c] = m0 * J_angular[0, c] + m1 * J_angular[1, c] + m2 * J_angular[2, c]
+    return True
+
+
+@njit(cache=True)
+def frame_rotation_rows_many(rotations, references, mask, r, ok):
+    """:func:`frame_rotation_rows` at the nodes with mask[k]: rotations (N, 3, 3), references
+    (N, 9), r (N, 3); ok[k] False where Pinocchio must take over. True if none did."""
+    all_ok = True
+    for k in range(mask.size):
+        ok[k] = True
+        if mask[k] and not frame_rotation_rows(references[k], rotations[k], r[k]):
+            ok[k] = False
+            all_ok = False
+    return all_ok
+
+
+@njit(cache=True)
+def frame_rotation_jacobian_many(rotations, jacobians, references, mask, values, ok):
+    """:func:`frame_rotation_jacobian` at the nodes with mask[k]: jacobians (N, 6, nv) the
+    LOCAL_WORLD_ALIGNED frame Jacobians (angular rows 3..5), values (N, 3, nv); ok[k] False where
+    Pinocchio must take over. True if none did."""
+    all_ok = True
+    for k in range(mask.size):
+        ok[k] = True
+        if mask[k] and not frame_rotation_jacobian(references[k], rotations[k], jacobians[k, 3:], values[k]):
+            ok[k] = False
+            all_ok = False
+    return all_ok
+
+
+@njit(cache=True)
+def linear_force_rows(A, force, b, r):
+    """Residual rows r (nr,) = A force[:m] − b of a contact force: A (nr, m), force (≥ m,) [N, N·m]
+    in the contact's frame, b (nr,)."""
+    for i in range(r.size):
+        total = -b[i]
+        for j in range(A.shape[1]):
+            total += A[i, j] * force[j]
+        r[i] = total
+
+
+@njit(cache=True)
+def linear_force_jacobian(A, D, out):
+    """Their Jacobian out (nr, n) = A D[:m] from the force derivatives D (≥ m, n) (columns: state
+    tangent then control, or one of them)."""
+    m, n = A.shape[1], D.shape[1]
+    for i in range(A.shape[0]):
+        for c in range(n):
+            out[i, c] = 0.0
+        for j in range(m):
+            a = A[i, j]
+            if a == 0.0:
+                continue
+            for c in range(n):
+                out[i, c] += a * D[j, c]
+
+
+@njit(cache=True)
+def linear_force_rows_many(A, forces, offsets, references, mask, r):
+    """:func:`linear_force_rows` at the nodes with mask[k], the contact's force at
+    forces[k, offsets[k]:] (forces (N, nc_max), the node's stacked contact forces); returns −1,
+    or the first such node whose contact is not in its contact set (offsets[k] < 0)."""
+    m = A.shape[1]
+    for k in range(mask.size):
+        if mask[k]:
+            o = offsets[k]
+            if o < 0:
+                return k
+            linear_force_rows(A, forces[k, o:o + m], references[k], r[k])
+    return -1
+
+
+@njit(cache=True)
+def linear_force_jacobian_many(A, force_jacobians, offsets, mask, values):
+    """:func:`linear_force_jacobian` at the nodes with mask[k], the force derivatives at
+    force_jacobians[k, offsets[k]:] ((N, nc_max, ndx + nu): ∂λ/∂x then ∂λ/∂u), values
+    (N, nr, ndx + nu); returns −1, or the first such node whose contact is not in its contact set."""
+    m = A.shape[1]
+    for k in range(mask.size):
+        if mask[k]:
+            o = offsets[k]
+            if o < 0:
+                return k
+            linear_force_jacobian(A, force_jacobians[k, o:o + m], values[k])
+    return -1
+
+
+def jacobian_blocks(values: np.ndarray, nr: int) -> np.ndarray:
+    """The Jacobian nonzeros (N, nr · n) of a term whose pattern is dense row-major over n
+    columns, as (N, nr, n) without copying (each node's block written in place by the kernels)."""
+    blocks = values.view()
+    blocks.shape = (values.shape[0], nr, values.shape[1] // nr)  # raises rather than copy
+    return blocks

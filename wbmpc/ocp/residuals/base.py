@@ -37,9 +37,19 @@ class HorizonData:
 
     Attributes:
         xs: states (N, nx) of the evaluation; us: controls (N, nu).
-        frame_slot: frame id -> slot s of frame_position (N, n_frames, 3) [m, world] and
-            frame_jacobian (N, n_frames, 3, nv) (LOCAL_WORLD_ALIGNED linear rows), computed for
-            the nodes where a term needing the frame is active (Jacobians in calcDiff only).
+        frame_slot: frame id -> slot s of frame_position (N, n_frames, 3) [m, world],
+            frame_jacobian (N, n_frames, 3 or 6, nv) (LOCAL_WORLD_ALIGNED: linear rows 0..2, angular
+            rows 3..5) and frame_rotation (N, n_frames, 3, 3) (world), computed for the nodes where
+            a term needing the frame is active (Jacobians in calcDiff only); the angular rows and
+            rotations only when a term declares ``batch_frame_rotations`` (else 3 rows, no rotations).
+        contact_force: (N, nc_max) the stacked contact forces of each node's contact set, in the
+            order of the set (as the node's dynamics computes them: 3D point contacts [N] in
+            world-aligned axes, 6D contacts (force [N], torque [N·m]) in the LOCAL contact frame);
+            filled when a term reads contact forces.
+        contact_force_jacobian: (N, nc_max, ndx + nu) their derivatives [∂λ/∂x, ∂λ/∂u] (calcDiff).
+        contact_row: contact name -> (N,) int64, the first row of that contact in the node's
+            stacked forces, −1 where the contact is not in the node's set.
+        contact_sets: the N nodes' contact sets (tuples of contact names), for messages.
     """
 
     xs: np.ndarray
@@ -47,6 +57,11 @@ class HorizonData:
     frame_slot: dict
     frame_position: np.ndarray
     frame_jacobian: np.ndarray
+    frame_rotation: np.ndarray
+    contact_force: np.ndarray
+    contact_force_jacobian: np.ndarray
+    contact_row: dict
+    contact_sets: list
 
 
 class BatchedResidual:
@@ -62,12 +77,15 @@ class BatchedResidual:
     - ``batch_calc(horizon, mask, references, r)``: r (N, nr) at the nodes with mask (N,);
     - ``batch_calc_diff(horizon, mask, references, values)``: the pattern's values (N, nnz);
     - ``batch_frames``: frame ids whose kinematics it reads from the horizon (default none);
+    - ``batch_frame_rotations``: True if it reads their rotations and the angular Jacobian rows
+      (then every frame's are computed; default False: positions and linear rows only);
     - ``batch_signature()``: what must be equal at every node for one batched term.
 
     Both evaluations call the same compiled rows (:mod:`wbmpc.ocp.kernels.residuals`).
     """
 
     batch_frames: tuple = ()
+    batch_frame_rotations: bool = False
 
     @property
     def reference(self) -> np.ndarray:
