@@ -314,6 +314,29 @@ def test_g1_preset_states_every_tuned_number():
     assert dict(weights.joint_position_by_name)["waist"] > weights.joint_position
 
 
+def test_h1_preset_states_every_tuned_number():
+    import tomllib
+
+    from wbmpc.walking.preset import PRESET_DIR
+
+    with (PRESET_DIR / "h1.toml").open("rb") as stream:
+        data = tomllib.load(stream)
+    skip = {"controller": {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate",
+                           "feedback", "mpc_failure_times", "sequencer_params_from"},
+            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift"}}
+    preset = load_walking_preset("h1")
+    for section in ("planner", "ocp", "controller", "fall", "command"):
+        fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())
+        assert fields <= set(data[section]), (section, sorted(fields - set(data[section])))
+    # the soles' undetermined squeeze is split by the sole-weighted damping, which the KKT backend solves
+    assert preset.ocp.contact_damping > 0 and preset.ocp.contact_damping_moments == "sole"
+    assert preset.ocp.dynamics_backend == "kkt"
+    # the stance (sole centres 0.406 m apart) is inside the lateral step bounds
+    assert preset.planner.w_right_min < preset.planner.pelvis_width < preset.planner.w_right_max
+    assert -preset.planner.w_left_max < preset.planner.pelvis_width < -preset.planner.w_left_min
+    assert dict(preset.ocp.state_weights.joint_position_by_name)["torso"] > preset.ocp.state_weights.joint_position
+
+
 def test_a_robot_without_a_walking_preset_is_refused_at_once(monkeypatch, tmp_path):
     import wbmpc.walking.preset as preset_module
 
