@@ -203,7 +203,8 @@ class DifferentialActionModelContactFwdDynamics:
             data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc, data.a0, self.contact_damping)
             forces = pdata.lambda_c
         elif nc:  # the scaled constraint S Jc a + S a0 = −μ λ̃, λ = S λ̃ (module docstring)
-            data.Jc_scaled = S[:, None] * data.Jc
+            data.Jc_scaled = data.Jc_scaled_all[:nc]
+            np.multiply(S[:, None], data.Jc, out=data.Jc_scaled)
             data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc_scaled, S * data.a0,
                                                self.contact_damping)
             forces = S * pdata.lambda_c
@@ -364,7 +365,8 @@ class DifferentialActionDataContactFwdDynamics:
         self.da0_dx_all = np.zeros((nc_max, ndx))
         self.Jc = self.Jc_all[:0]
         self.a0 = self.a0_all[:0]
-        self.Jc_scaled = self.Jc  # S Jc of a row-scaled damping (kkt backend)
+        self.Jc_scaled_all = np.zeros((nc_max, nv))
+        self.Jc_scaled = self.Jc_scaled_all[:0]  # S Jc of a row-scaled damping (kkt backend)
         self.D = np.zeros((nv + nc_max, ndx))
         self.Minv = np.zeros((nv, nv))
         self.active_contacts = None
