@@ -9,6 +9,7 @@ import dataclasses
 import numpy as np
 import pinocchio as pin
 import pytest
+from robot_extras import needs_h1_extra
 
 from robots import load_robot
 from sequencer.corrections import LipmCorrections
@@ -259,6 +260,11 @@ def test_a_due_swing_foot_is_aimed_below_the_ground():
 # ---------------------------------------------------------------------------------------- presets
 
 
+# The contact damping (0, rigid contacts: the paper's) is a setting of robots whose contacts leave a
+# force undetermined (the H1); Bolt's and the G1's presets predate it and keep its default.
+RIGID_CONTACT_FIELDS = {"contact_damping", "contact_damping_moments"}
+
+
 def test_bolt_preset_states_every_tuned_number_and_takes_overrides():
     import tomllib
 
@@ -270,7 +276,8 @@ def test_bolt_preset_states_every_tuned_number_and_takes_overrides():
     # every field of the tuned sections is written in the file (nothing left to code defaults)
     skip = {"controller": {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate",
                            "feedback", "mpc_failure_times", "sequencer_params_from"},
-            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift", "double_support"}}
+            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift", "double_support"},
+            "ocp": RIGID_CONTACT_FIELDS}
     preset = load_walking_preset("bolt")
     for section in ("planner", "ocp", "controller", "fall", "command"):
         fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())
@@ -295,7 +302,8 @@ def test_g1_preset_states_every_tuned_number():
         data = tomllib.load(stream)
     skip = {"controller": {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate",
                            "feedback", "mpc_failure_times", "sequencer_params_from"},
-            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift"}}
+            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift"},
+            "ocp": RIGID_CONTACT_FIELDS}
     preset = load_walking_preset("g1")
     for section in ("planner", "ocp", "controller", "fall", "command"):
         fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())
@@ -304,6 +312,29 @@ def test_g1_preset_states_every_tuned_number():
     assert preset.planner.double_support > 0 and preset.command.yaw_rate[1] > 0
     weights = preset.ocp.state_weights
     assert dict(weights.joint_position_by_name)["waist"] > weights.joint_position
+
+
+def test_h1_preset_states_every_tuned_number():
+    import tomllib
+
+    from wbmpc.walking.preset import PRESET_DIR
+
+    with (PRESET_DIR / "h1.toml").open("rb") as stream:
+        data = tomllib.load(stream)
+    skip = {"controller": {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate",
+                           "feedback", "mpc_failure_times", "sequencer_params_from"},
+            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift"}}
+    preset = load_walking_preset("h1")
+    for section in ("planner", "ocp", "controller", "fall", "command"):
+        fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())
+        assert fields <= set(data[section]), (section, sorted(fields - set(data[section])))
+    # the soles' undetermined squeeze is split by the sole-weighted damping, which the KKT backend solves
+    assert preset.ocp.contact_damping > 0 and preset.ocp.contact_damping_moments == "sole"
+    assert preset.ocp.dynamics_backend == "kkt"
+    # the stance (sole centres 0.406 m apart) is inside the lateral step bounds
+    assert preset.planner.w_right_min < preset.planner.pelvis_width < preset.planner.w_right_max
+    assert -preset.planner.w_left_max < preset.planner.pelvis_width < -preset.planner.w_left_min
+    assert dict(preset.ocp.state_weights.joint_position_by_name)["torso"] > preset.ocp.state_weights.joint_position
 
 
 def test_a_robot_without_a_walking_preset_is_refused_at_once(monkeypatch, tmp_path):
@@ -336,3 +367,49 @@ def test_a_custom_planners_command_limit_is_checked_before_the_run():
     with pytest.raises(ParameterError, match=r"v_x=0.4"):
         run_scenario("walk", duration=0.1, velocity_command=(0.4, 0.0, 0.0),
                      controller=WalkingController(preset, planner=short))
+
+
+# ------------------------------------------------------------------------------ quasi-static load
+
+
+@pytest.mark.parametrize("robot_name", ["g1", pytest.param("h1", marks=needs_h1_extra)])
+def test_the_quasi_static_load_keeps_each_centre_of_pressure_in_its_sole(robot_name):
+    """Both soles on the ground at the reference posture: the wrenches and torques balance gravity,
+    and each sole's centre of pressure lies inside its sole rectangle (the H1's 2 cm wide soles got
+    5 cm outside with moments weighted like forces)."""
+    from wbmpc_fixtures import alternating_schedule, standing_state
+
+    from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig, quasi_static_controls, quasi_static_load
+
+    robot = load_robot(robot_name)
+    ocp = WalkingOCP(robot, WalkingOCPConfig(evaluation="nodes"), n_nodes=2, dt=0.02)
+    x0 = standing_state(robot)
+    ocp.update(x0, alternating_schedule(0.0, 0.02, 2, t_start=1.0), np.zeros(3))  # both feet in contact
+    tau, wrenches = quasi_static_load(ocp, x0)
+    np.testing.assert_array_equal(tau, quasi_static_controls(ocp, x0))
+    assert sorted(wrenches) == ["left", "right"]
+    model = robot.pinocchio_model
+    data = model.createData()
+    q = x0[: model.nq]
+    gravity = pin.computeGeneralizedGravity(model, data, q)
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    load = np.concatenate([np.zeros(6), tau])
+    half_length, half_width = 0.5 * np.asarray(robot.sole_size)
+    for foot, wrench in wrenches.items():
+        J = pin.getFrameJacobian(model, data, model.getFrameId(robot.foot_frames[foot]), pin.LOCAL)
+        load += J.T @ wrench
+        cop_x, cop_y = wrench[4] / wrench[2], -wrench[3] / wrench[2]  # sole frame [m]
+        assert abs(cop_x) < 0.5 * half_length and abs(cop_y) < 0.5 * half_width, (foot, cop_x, cop_y)
+        assert wrench[2] > 0.3 * ocp.mass * 9.81
+    np.testing.assert_allclose(load, gravity, rtol=0, atol=1e-8 * np.max(np.abs(gravity)))
+
+
+def test_contact_wrench_scales_weigh_moments_by_the_sole():
+    from wbmpc.walking.ocp import contact_wrench_scales
+
+    np.testing.assert_allclose(contact_wrench_scales(100.0, (0.2, 0.1)),
+                               [100.0, 100.0, 100.0, 5.0, 10.0, 100.0 * 0.5 * np.hypot(0.2, 0.1)])
+    np.testing.assert_array_equal(contact_wrench_scales(100.0), np.full(6, 100.0))
+    with pytest.raises(ParameterError, match=r"sole_size=\(0.2, 0.0\) must be \(length > 0, width > 0\)"):
+        contact_wrench_scales(100.0, (0.2, 0.0))

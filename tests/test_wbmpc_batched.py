@@ -8,6 +8,7 @@ import warnings
 import numpy as np
 import pinocchio as pin
 import pytest
+from robot_extras import needs_h1_extra
 from wbmpc_fixtures import alternating_schedule, random_state, standing_state
 
 from robots import load_robot
@@ -372,3 +373,26 @@ def test_the_base_yaw_reference_follows_the_planned_footholds(bolt):
         WalkingOCPConfig(base_yaw_reference="heading")
     with pytest.raises(ParameterError, match="a node has no foot with a planned yaw"):
         foothold_heading(contact[:2], np.full((2, 2), np.nan), np.full((2, 2), np.nan))
+
+
+@needs_h1_extra
+def test_contact_damping_reaches_the_batched_constraint_dynamics():
+    """The batched problem's per-node constraintDynamics calls use the node dynamics' proximal
+    settings: with contact_damping on the H1 (double support, then a step) it evaluates what the
+    node pipeline evaluates, and not what the rigid contacts give."""
+    h1 = load_robot("h1")
+    schedule = alternating_schedule(0.0, 0.02, 10, step_duration=0.4, foot_y=(0.2, -0.2), t_start=0.07)
+    stacked = {}
+    for damping in (1e-3, 0.0):
+        config = WalkingOCPConfig(swing_apex_height=0.08, baumgarte_gains=(0.0, 30.0), contact_damping=damping)
+        ocp = WalkingOCP(h1, config, n_nodes=10, dt=0.02)
+        ocp.update(standing_state(h1), schedule, np.array([0.0, 0.0, 0.97]))
+        assert ocp.evaluation == "batched"
+        nodes, batched = _twin_problems(ocp)
+        rng = np.random.default_rng(2)
+        xs = np.array([random_state(h1, rng, 0.02, 0.1) for _ in range(11)])
+        us = rng.standard_normal((10, ocp.nu))
+        assert batched.calcDiff(xs, us) == pytest.approx(nodes.calc_and_diff(xs, us), rel=1e-13)
+        _assert_same(nodes, batched)
+        stacked[damping] = batched.Fx.copy()
+    assert np.max(np.abs(stacked[1e-3] - stacked[0.0])) > 1e-3 * np.max(np.abs(stacked[0.0]))

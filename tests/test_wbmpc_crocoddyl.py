@@ -9,6 +9,7 @@ import pytest
 
 crocoddyl = pytest.importorskip("crocoddyl", reason="Crocoddyl (test extra) is the oracle of these comparisons")
 
+from robot_extras import needs_h1_extra  # noqa: E402
 from wbmpc_fixtures import alternating_schedule, random_state, standing_state  # noqa: E402
 
 from bench.crocoddyl_mirror import CrocoddylMirror  # noqa: E402
@@ -195,3 +196,37 @@ def test_wrench_cone_has_crocoddyls_rows():
     ours = sorted(zip(map(tuple, np.round(A, 12)), lower, upper))
     theirs = sorted(zip(map(tuple, np.round(cone.A, 12)), cone.lb, cone.ub))
     assert ours == theirs
+
+
+@needs_h1_extra
+@pytest.mark.parametrize("backend", ["pinocchio", "kkt"])
+def test_contact_damping_matches_crocoddyls_jminvjt_damping(backend):
+    """H1 in double support (rank-deficient contact Jacobian) with contact_damping = Crocoddyl's
+    JMinvJt_damping: every node's dynamics, cost and derivatives, with the wrench cone (force
+    derivatives) on, and a few FDDP iterations."""
+    h1 = load_robot("h1")
+    damping = 1e-3
+    config = WalkingOCPConfig(wrench_cone_weight=1e2, contact_force_weight=1e-4, baumgarte_gains=(10.0, 30.0),
+                              contact_damping=damping, dynamics_backend=backend, evaluation="nodes")
+    ocp = WalkingOCP(h1, config, n_nodes=8, dt=0.02)
+    # double support on nodes 0-3, then the right foot swings
+    schedule = alternating_schedule(0.0, 0.02, 8, step_duration=0.4, foot_y=(0.2, -0.2), t_start=0.07)
+    ocp.update(standing_state(h1), schedule, np.array([0.0, 0.0, 0.97]))
+    assert ocp.problem.running_models[1].differential.nc == 12
+    mirror = CrocoddylMirror(ocp.problem)
+    for model in mirror.running_models + [mirror.terminal_model]:
+        model.differential.JMinvJt_damping = damping
+    rng = np.random.default_rng(5)
+    xs = [random_state(h1, rng, 0.02, 0.1) for _ in range(9)]
+    us = [rng.standard_normal(ocp.nu) for _ in range(8)]
+    ocp.problem.calc(xs, us)
+    mirror.problem.calc(xs, us)
+    ocp.problem.calcDiff(xs, us)
+    mirror.problem.calcDiff(xs, us)
+    for k in range(8):
+        for name in ("xnext", "cost", "Fx", "Fu", "Lx", "Lu", "Lxx", "Luu"):
+            assert _rel(getattr(ocp.problem.running_datas[k], name),
+                        getattr(mirror.problem.runningDatas[k], name)) < 1e-9, f"H1 node {k} {name}"
+    ours, theirs, _, _ = _solve_both(ocp, mirror, maxiter=3)
+    assert ours.iter == theirs.iter
+    assert ours.cost == pytest.approx(theirs.cost, rel=1e-8)

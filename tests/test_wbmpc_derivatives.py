@@ -7,6 +7,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from robot_extras import needs_h1_extra
 from wbmpc_fixtures import alternating_schedule, random_state, standing_state
 
 from robots import load_robot
@@ -212,6 +213,8 @@ def test_bad_inputs_raise_clear_errors(bolt):
         WalkingOCP(bolt, WalkingOCPConfig(), n_nodes=0, dt=0.01)
     with pytest.raises(ParameterError, match="control_weight=-1"):
         WalkingOCPConfig(control_weight=-1.0)
+    with pytest.raises(ParameterError, match="contact_damping=-0.001 must be finite and >= 0"):
+        WalkingOCPConfig(contact_damping=-1e-3)
     state = StateMultibody(bolt.pinocchio_model)
     with pytest.raises(ParameterError, match=r"x0 has shape \(3,\)"):
         state.check_state("x0", np.zeros(3))
@@ -306,3 +309,135 @@ def test_flight_node_after_stance_matches_finite_differences(bolt, backend):
     blocks = _tangent_blocks(state)
     _assert_blocks_close(data.Fx, numdiff.Fx, "flight Fx", blocks, blocks)
     _assert_blocks_close(data.Fu, numdiff.Fu, "flight Fu", blocks, WHOLE)
+
+
+DAMPINGS = [("pinocchio", "uniform"), ("kkt", "uniform"), ("kkt", "sole")]
+
+
+def _h1_double_support_node(backend: str, damping: float, moments: str = "uniform"):
+    """Node 1 of an H1 walking OCP in double support (both soles 6D contacts), with the wrench
+    cone on (costs that read the contact forces)."""
+    h1 = load_robot("h1")
+    config = WalkingOCPConfig(wrench_cone_weight=1e2, contact_force_weight=1e-3, baumgarte_gains=(10.0, 20.0),
+                              contact_damping=damping, contact_damping_moments=moments, dynamics_backend=backend,
+                              evaluation="nodes")
+    ocp = WalkingOCP(h1, config, n_nodes=4, dt=0.02)
+    schedule = alternating_schedule(0.0, 0.02, 4, step_duration=0.4, foot_y=(0.2, -0.2), t_start=1.0)
+    ocp.update(standing_state(h1), schedule, np.array([0.0, 0.0, 0.97]))
+    model = ocp.problem.running_models[1]
+    assert model.differential.nc == 12
+    return h1, ocp, model
+
+
+@needs_h1_extra
+@pytest.mark.parametrize("backend, moments", DAMPINGS)
+def test_damped_contact_dynamics_match_finite_differences(backend, moments):
+    """H1 double support, whose stacked contact Jacobian is rank deficient near the posture, with
+    contact_damping 1e-3 (every row, or the moment rows by the sole's lever arms): Fx, Fu, and
+    the gradient of the costs that read the forces."""
+    h1, ocp, model = _h1_double_support_node(backend, 1e-3, moments)
+    rng = np.random.default_rng(4)
+    x = random_state(h1, rng, 0.02, 0.1)
+    u = rng.standard_normal(model.nu)
+    data = model.createData()
+    model.calc(data, x, u)
+    model.calcDiff(data, x, u)
+    numdiff = _dynamics_fd(model, x, u)
+    blocks = _tangent_blocks(ocp.state)
+    _assert_blocks_close(data.Fx, numdiff.Fx, "H1 damped Fx", blocks, blocks)
+    _assert_blocks_close(data.Fu, numdiff.Fu, "H1 damped Fu", blocks, WHOLE)
+    _assert_blocks_close(data.Lx, numdiff.Lx, "H1 damped Lx", WHOLE, WHOLE)
+    _assert_blocks_close(data.Lu, numdiff.Lu, "H1 damped Lu", WHOLE, WHOLE)
+
+
+@needs_h1_extra
+@pytest.mark.parametrize("backend, moments", DAMPINGS)
+def test_contact_damping_is_a_compliant_contact(backend, moments):
+    """With damping μ the contact accelerations give way by μ λ: Jc a + a0 = −μ S⁻² λ (S = 1, or
+    the sole's lever arms on the moment rows), and the dynamics hold, M a + b = τ + Jcᵀ λ; the
+    damped split bounds the internal squeeze the rigid contacts leave undetermined (the H1's
+    soles in double support)."""
+    import pinocchio as pin
+
+    damping = 1e-3
+    h1, ocp, model = _h1_double_support_node(backend, damping, moments)
+    dam = model.differential
+    compliance = np.ones(dam.nc) if dam.row_scales is None else dam.row_scales ** -2
+    assert (dam.row_scales is None) == (moments == "uniform")
+    rng = np.random.default_rng(7)
+    x = random_state(h1, rng, 0.02, 0.1)
+    u = rng.standard_normal(model.nu)
+    forces = {}
+    for mu in (0.0, damping):
+        dam_mu = type(dam)(dam.state, dam.actuation, dam.contacts, dam.costs, dam.active_contacts, backend, mu,
+                           dam.damping_lever_arms)
+        data = dam_mu.createData()
+        dam_mu.calc(data, x, u)
+        a = data.xout
+        lam = np.concatenate([data.contacts[name].force for name in dam_mu.active_contacts])
+        pmodel = h1.pinocchio_model
+        pdata = pmodel.createData()
+        q, v = x[: pmodel.nq], x[pmodel.nq:]
+        pin.forwardKinematics(pmodel, pdata, q, v, a)
+        pin.computeJointJacobians(pmodel, pdata, q)
+        pin.updateFramePlacements(pmodel, pdata)
+        Jc = np.vstack([pin.getFrameJacobian(pmodel, pdata, dam.contacts[n].frame_id, pin.LOCAL)
+                        for n in dam_mu.active_contacts])
+        tau = np.concatenate([np.zeros(6), u])
+        residual = pin.rnea(pmodel, pdata, q, v, a) - tau - Jc.T @ lam
+        assert np.max(np.abs(residual)) < 1e-7 * max(1.0, np.max(np.abs(lam)))
+        # spatial acceleration of each sole, LOCAL, with the Baumgarte terms Kd v + Kp log6(error)
+        acc = []
+        for n in dam_mu.active_contacts:
+            c = dam.contacts[n]
+            kp, kd = c.gains
+            ac = pin.getFrameAcceleration(pmodel, pdata, c.frame_id, pin.LOCAL)
+            vel = pin.getFrameVelocity(pmodel, pdata, c.frame_id, pin.LOCAL)
+            err = pin.log6(c.reference_placement().actInv(pdata.oMf[c.frame_id])).vector
+            acc.append(ac.vector + kd * vel.vector + kp * err)
+        np.testing.assert_allclose(np.concatenate(acc), -mu * compliance * lam, rtol=0,
+                                   atol=1e-6 * max(1.0, np.max(np.abs(lam))))
+        forces[mu] = lam
+    # the left sole's lateral force: the rigid solve splits the squeeze arbitrarily (hundreds of N)
+    assert abs(forces[damping][1]) < 0.5 * abs(forces[0.0][1])
+
+
+@needs_h1_extra
+def test_sole_damping_splits_the_standing_load_as_the_quasi_static_split():
+    """At rest on the posture with the quasi-static torques, the sole-weighted damping splits the
+    load the rigid contacts cannot determine as quasi_static_load does (the same metric), each
+    centre of pressure at its sole's centre; the uniform damping puts it 4 cm outside the 2 cm
+    wide sole."""
+    from wbmpc.walking.ocp import quasi_static_load
+
+    h1 = load_robot("h1")
+    x0 = standing_state(h1)
+    cops = {}
+    for moments, backend in (("sole", "kkt"), ("uniform", "pinocchio")):
+        config = WalkingOCPConfig(baumgarte_gains=(0.0, 30.0), contact_damping=1e-4, contact_damping_moments=moments,
+                                  dynamics_backend=backend, evaluation="nodes")
+        ocp = WalkingOCP(h1, config, n_nodes=2, dt=0.02)
+        ocp.update(x0, alternating_schedule(0.0, 0.02, 2, t_start=1.0, foot_y=(0.2, -0.2)), np.zeros(3))
+        tau, wrenches = quasi_static_load(ocp, x0)
+        dam = ocp.problem.running_models[0].differential
+        data = dam.createData()
+        dam.calc(data, x0, tau)
+        forces = {foot: data.contacts[foot].force for foot in ("left", "right")}
+        cops[moments] = max(abs(f[3] / f[2]) for f in forces.values())  # |lateral CoP| [m]
+        if moments == "sole":  # the same split, up to the compliance (the soles give way by μ λ: 0.1 % of f_z)
+            for foot, wrench in wrenches.items():
+                np.testing.assert_allclose(forces[foot], wrench, rtol=0, atol=2e-3 * wrench[2])
+    assert cops["sole"] < 1e-3 < 0.5 * h1.sole_size[1] < cops["uniform"]
+
+
+def test_sole_damping_is_refused_where_it_cannot_apply(bolt):
+    from wbmpc.errors import ParameterError
+    from wbmpc.ocp.contacts import sole_lever_arms
+
+    with pytest.raises(ParameterError, match="contact_damping_moments='sole' needs dynamics_backend='kkt'"):
+        WalkingOCPConfig(contact_damping_moments="sole")
+    with pytest.raises(ParameterError, match=r"contact_damping_moments='corners' must be one of \('uniform', 'sole'\)"):
+        WalkingOCPConfig(contact_damping_moments="corners")
+    with pytest.raises(ParameterError, match="contact_damping_moments='sole' needs flat feet"):
+        WalkingOCP(bolt, WalkingOCPConfig(contact_damping_moments="sole", dynamics_backend="kkt"), n_nodes=2, dt=0.01)
+    np.testing.assert_allclose(sole_lever_arms((0.2, 0.1)), [0.05, 0.1, 0.5 * np.hypot(0.2, 0.1)])

@@ -214,3 +214,19 @@ class ContactModel6D(_ContactBase):
         """External force on the parent joint (a LOCAL wrench adds no RNEA derivative term)."""
         data.fext = self.joint_placement_frame.act(pin.Force(data.force))
         data.dtau_dq = None
+
+
+def sole_lever_arms(sole_size) -> np.ndarray:
+    """Lever arms (3,) [m] of a rectangular sole about its frame's x (roll), y (pitch) and z (yaw)
+    axes: half the width, half the length and half the diagonal, for ``sole_size`` (length along
+    the sole frame's x, width along its y) [m].
+
+    A wrench (f, m) spread over the sole's four corners with the least sum of squared corner
+    forces weighs m by exactly these arms: the corner forces' Gram matrix is
+    4 diag(1, 1, 1, r_roll², r_pitch², r_yaw²). The quasi-static load split and the "sole"
+    contact damping use them.
+    """
+    length, width = (float(v) for v in sole_size)
+    if not (np.isfinite(length) and np.isfinite(width) and length > 0 and width > 0):
+        raise ParameterError(f"sole_size={tuple(sole_size)} must be (length > 0, width > 0) [m]")
+    return np.array([0.5 * width, 0.5 * length, 0.5 * np.hypot(length, width)])

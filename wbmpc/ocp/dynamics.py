@@ -5,9 +5,29 @@ For the active contacts (stacked Jacobian Jc (nc, nv), drift a0 (nc,)), the acce
 contact forces λ solve the KKT system
 
     [M  Jcᵀ] [ a ]   [τ − b]
-    [Jc  0 ] [−λ ] = [ −a0 ]
+    [Jc −μI] [−λ ] = [ −a0 ]
 
-where M includes the rotor armature (``model.armature``) and b the nonlinear effects.
+where M includes the rotor armature (``model.armature``), b the nonlinear effects and μ ≥ 0 the
+contact damping (``contact_damping``, Crocoddyl's ``JMinvJt_damping``, Pinocchio's
+``ProximalSettings.mu`` with one proximal iteration). μ = 0 is the rigid contact. With μ > 0
+
+    λ = −(Jc M⁻¹ Jcᵀ + μ I)⁻¹ (a0 + Jc M⁻¹ (τ − b)),   Jc a + a0 = −μ λ:
+
+a compliant contact, whose acceleration gives way by μ per unit of force ([m/s² per N] on force
+rows, [rad/s² per N·m] on moment rows), and, where Jc is rank deficient (two flat feet without
+ankle roll: an internal squeeze between them loads no joint), the damped least-squares split of
+the force the rigid contact leaves undetermined (its component along the null space of Jcᵀ is
+−(that component of a0)/μ instead of arbitrary). The derivatives below are those of this
+regularised system (both backends).
+
+``damping_lever_arms`` weighs the damping per row: a 6D contact with lever arms r (3,) [m]
+(:func:`wbmpc.ocp.contacts.sole_lever_arms`) gets μ on its force rows and μ / r² on its moment
+rows, i.e. −μ S⁻² in the KKT matrix with S = diag(1, 1, 1, r): the compliance of a sole made of
+four corner point contacts each damped by 4 μ, whose least-squares split of an undetermined
+force keeps the moments, hence the centres of pressure, small (the sole's metric, not the
+Euclidean one of newtons and newton-metres). It is solved as the uniform damping of the scaled
+constraint S Jc a + S a0 = −μ λ̃, λ = S λ̃, so the "kkt" backend only (Pinocchio's
+``constraintDynamics`` damps every row by one μ).
 
 Two interchangeable backends compute it (they agree to ~1e-13, see the tests):
 
@@ -47,14 +67,36 @@ class DifferentialActionModelContactFwdDynamics:
         active_contacts: names of the contacts enforced at this node (default: all).
         backend: "pinocchio" (constraint dynamics and its derivatives, default) or "kkt"
             (Crocoddyl's formulas); same results.
+        contact_damping: μ of the KKT system above, >= 0 (0: rigid contacts, the default), in
+            [m/s² per N] (force rows) and [rad/s² per N·m] (moment rows).
+        damping_lever_arms: None (every row damped by μ, Crocoddyl's ``JMinvJt_damping``) or
+            contact name -> lever arms (3,) [m], > 0, of 6D contacts whose moment rows get μ / r²
+            (module docstring); needs backend "kkt".
     """
 
     BACKENDS = ("pinocchio", "kkt")
 
     def __init__(self, state: StateMultibody, actuation: ActuationFloatingBase, contacts: dict,
-                 costs: CostModelSum, active_contacts=None, backend: str = "pinocchio"):
+                 costs: CostModelSum, active_contacts=None, backend: str = "pinocchio",
+                 contact_damping: float = 0.0, damping_lever_arms: dict | None = None):
         if backend not in self.BACKENDS:
             raise ParameterError(f"backend={backend!r} is not one of {self.BACKENDS}")
+        if isinstance(contact_damping, bool) or not (np.isfinite(contact_damping) and contact_damping >= 0.0):
+            raise ParameterError(f"contact_damping={contact_damping!r} must be finite and >= 0")
+        self.contact_damping = float(contact_damping)
+        self._damping_row_scales = {}  # contact name -> row scales S (nc,) of the damped KKT system
+        for name, arms in (damping_lever_arms or {}).items():
+            if backend != "kkt":
+                raise ParameterError(f"damping_lever_arms need backend='kkt' (got {backend!r}: Pinocchio's "
+                                     "constraintDynamics damps every row by one mu)")
+            if name not in contacts or contacts[name].nc != 6:
+                raise ParameterError(f"damping_lever_arms: {name!r} is not a 6D contact of this node "
+                                     f"(contacts: {sorted(contacts)})")
+            arms = np.asarray(arms, dtype=float)
+            if arms.shape != (3,) or not np.all(np.isfinite(arms) & (arms > 0)):
+                raise ParameterError(f"damping_lever_arms[{name!r}]={arms.tolist()} must be 3 finite lever arms > 0 [m]")
+            self._damping_row_scales[name] = np.concatenate([np.ones(3), arms])
+        self.damping_lever_arms = {name: s[3:].copy() for name, s in self._damping_row_scales.items()}
         self.backend = backend
         self.state = state
         self.actuation = actuation
@@ -66,7 +108,9 @@ class DifferentialActionModelContactFwdDynamics:
         self._costs_use_force_derivatives = any(
             getattr(item.cost.residual, "uses_contact_forces", False) for item in costs.costs.values())
         self.constraint_models = {name: c.rigid_constraint_model() for name, c in self.contacts.items()}
-        self.proximal_settings = pin.ProximalSettings(1e-12, 0.0, 1)  # mu = 0: the exact KKT solve
+        # one proximal iteration from λ = 0: the damped KKT solve (mu = 0: the exact one); the
+        # derivatives read settings.iter = 1 and differentiate that same solve
+        self.proximal_settings = pin.ProximalSettings(1e-12, self.contact_damping, 1)
         names = list(self.contacts) if active_contacts is None else list(active_contacts)
         self.set_active_contacts(names)
 
@@ -92,6 +136,10 @@ class DifferentialActionModelContactFwdDynamics:
             self._active_rows.append((name, slice(row, row + self.contacts[name].nc)))
             row += self.contacts[name].nc
         self._moving_references = [name for name in self.active_contacts if self.contacts[name].gains[0] != 0.0]
+        scaled = [name for name in self.active_contacts if name in self._damping_row_scales]
+        #: stacked row scales S (nc,) of the active contacts, None when all are 1 (uniform damping)
+        self.row_scales = None if not scaled else np.concatenate(
+            [self._damping_row_scales.get(name, np.ones(self.contacts[name].nc)) for name in self.active_contacts])
 
     def update_moving_references(self) -> None:
         """Move the Baumgarte position reference of every active contact with Kp > 0 to the
@@ -150,9 +198,16 @@ class DifferentialActionModelContactFwdDynamics:
                 data.Jc[row:row + contact.nc] = cdata.Jc
                 data.a0[row:row + contact.nc] = cdata.a0
                 row += contact.nc
-        if nc:
-            data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc, data.a0, 0.0)
+        S = self.row_scales
+        if nc and S is None:
+            data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc, data.a0, self.contact_damping)
             forces = pdata.lambda_c
+        elif nc:  # the scaled constraint S Jc a + S a0 = −μ λ̃, λ = S λ̃ (module docstring)
+            data.Jc_scaled = data.Jc_scaled_all[:nc]
+            np.multiply(S[:, None], data.Jc, out=data.Jc_scaled)
+            data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc_scaled, S * data.a0,
+                                               self.contact_damping)
+            forces = S * pdata.lambda_c
         else:
             # no contact (flight): keep M⁻¹ of this point, RNEA derivatives overwrite data.M
             data.Minv = np.linalg.inv(_symmetric_from_upper(pdata.M))
@@ -227,8 +282,9 @@ class DifferentialActionModelContactFwdDynamics:
             data.fext[contact.joint_id] = cdata.fext
             data.fext_joints.append(contact.joint_id)
         pin.computeRNEADerivatives(model, pdata, q, v, data.xout, data.fext)
-        if nc:
-            Kinv = pin.getKKTContactDynamicMatrixInverse(model, pdata, data.Jc)
+        S = self.row_scales
+        if nc:  # the inverse of the damped KKT matrix forwardDynamics factorised (of S Jc if scaled)
+            Kinv = pin.getKKTContactDynamicMatrixInverse(model, pdata, data.Jc if S is None else data.Jc_scaled)
         else:
             Kinv = data.Minv
         row = 0
@@ -247,13 +303,16 @@ class DifferentialActionModelContactFwdDynamics:
             if extra is not None:
                 D[:nv, :nv] += extra
         D[:nv, nv:] = pdata.dtau_dv
-        D[nv:] = da0_dx
+        D[nv:] = da0_dx if S is None else S[:, None] * da0_dx
         KD = Kinv @ D
         np.negative(KD[:nv], out=data.Fx)
         a_dtau = Kinv[:nv, :nv]
         if nc:
             df_dx = KD[nv:]
             df_du = -Kinv[nv:, 6:nv]
+            if S is not None:  # λ = S λ̃
+                df_dx = S[:, None] * df_dx
+                df_du = S[:, None] * df_du
             row = 0
             for name in self.active_contacts:
                 contact = self.contacts[name]
@@ -306,6 +365,8 @@ class DifferentialActionDataContactFwdDynamics:
         self.da0_dx_all = np.zeros((nc_max, ndx))
         self.Jc = self.Jc_all[:0]
         self.a0 = self.a0_all[:0]
+        self.Jc_scaled_all = np.zeros((nc_max, nv))
+        self.Jc_scaled = self.Jc_scaled_all[:0]  # S Jc of a row-scaled damping (kkt backend)
         self.D = np.zeros((nv + nc_max, ndx))
         self.Minv = np.zeros((nv, nv))
         self.active_contacts = None

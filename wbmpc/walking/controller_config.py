@@ -181,8 +181,8 @@ class WalkingControllerConfig:
             raise ParameterError(f"mpc_time_budget={budget!r} must be None or a number of seconds in (0, 1)")
         if not (np.isfinite(self.computation_delay) and 0.0 <= self.computation_delay <= 0.1):
             raise ParameterError(f"computation_delay={self.computation_delay} s must be in [0, 0.1] s")
-        if not (np.isfinite(self.start_double_support) and 0.0 <= self.start_double_support <= 5.0):
-            raise ParameterError(f"start_double_support={self.start_double_support} s must be in [0, 5] s")
+        if not (np.isfinite(self.start_double_support) and 0.0 <= self.start_double_support <= 60.0):
+            raise ParameterError(f"start_double_support={self.start_double_support} s must be in [0, 60] s")
         if not (np.isfinite(self.velocity_integral_gain) and self.velocity_integral_gain >= 0):
             raise ParameterError(f"velocity_integral_gain={self.velocity_integral_gain} 1/s must be >= 0")
         if not (np.isfinite(self.velocity_filter_time) and self.velocity_filter_time > 0):

@@ -40,7 +40,7 @@ from wbmpc.errors import ParameterError, check_finite
 from wbmpc.ocp.activations import ActivationQuadraticBarrier, ActivationWeightedQuad
 from wbmpc.ocp.actuation import ActuationFloatingBase
 from wbmpc.ocp.batched_problem import BatchedShootingProblem, batched_evaluation_support
-from wbmpc.ocp.contacts import ContactModel3D, ContactModel6D
+from wbmpc.ocp.contacts import ContactModel3D, ContactModel6D, sole_lever_arms
 from wbmpc.ocp.costs import CostModelResidual, CostModelSum
 from wbmpc.ocp.dynamics import DifferentialActionModelContactFwdDynamics
 from wbmpc.ocp.integrator import IntegratedActionModelEuler
@@ -152,6 +152,20 @@ class WalkingOCPConfig:
             while the pelvis lagged by a third of the planned heading (49 deg after 10 s), the
             hips twisting until the fall (docs/closed_loop.md).
         baumgarte_gains: (Kp [1/s²], Kd [1/s]) of the contact constraints.
+        contact_damping: μ >= 0 of the contact dynamics' KKT system (:mod:`wbmpc.ocp.dynamics`,
+            Crocoddyl's ``JMinvJt_damping``), in [m/s² per N] on force rows and [rad/s² per N·m]
+            on moment rows: the contact acceleration gives way by μ λ (a compliant contact; with
+            Kp = 0 a stance foot's velocity error settles at μ λ / Kd), and a force the rigid
+            contacts leave undetermined gets the damped least-squares split. 0 = rigid (default,
+            the paper's). Needed where the stacked contact Jacobian is (near) rank deficient: the
+            H1's two flat soles without ankle roll, whose lateral squeeze loads no joint
+            (docs/ocp.md "Contact damping").
+        contact_damping_moments: how the damping weighs a flat foot's moment rows: "uniform" (μ
+            on every row, Crocoddyl's ``JMinvJt_damping``) or "sole" (μ / r² on the moment rows,
+            r the sole's lever arms, :func:`wbmpc.ocp.contacts.sole_lever_arms`: the sole as four
+            damped corner contacts, whose split of an undetermined force keeps each centre of
+            pressure near its sole's centre; needs dynamics_backend "kkt" and the robot's
+            ``sole_size``).
         dynamics_backend: "pinocchio" (constraintDynamics and its derivatives, fast) or "kkt"
             (Crocoddyl's formulas written out); same results (see :mod:`wbmpc.ocp.dynamics`).
         evaluation: how the horizon is evaluated, same results: "batched" (the Pinocchio calls
@@ -183,6 +197,8 @@ class WalkingOCPConfig:
     swing_orientation_weight: float = 0.0
     base_yaw_reference: str = "fixed"
     baumgarte_gains: tuple[float, float] = (0.0, 50.0)
+    contact_damping: float = 0.0
+    contact_damping_moments: str = "uniform"
     dynamics_backend: str = "pinocchio"
     evaluation: str = "auto"
     max_line_search_trials: int = 10
@@ -208,6 +224,16 @@ class WalkingOCPConfig:
             raise ParameterError(f"friction_coefficient={self.friction_coefficient} must be > 0")
         if len(self.baumgarte_gains) != 2 or min(self.baumgarte_gains) < 0:
             raise ParameterError(f"baumgarte_gains={self.baumgarte_gains} must be (Kp >= 0, Kd >= 0)")
+        if isinstance(self.contact_damping, bool) or not (np.isfinite(self.contact_damping)
+                                                           and self.contact_damping >= 0):
+            raise ParameterError(f"contact_damping={self.contact_damping} must be finite and >= 0 "
+                                 "([m/s² per N], 0 = rigid contacts)")
+        if self.contact_damping_moments not in CONTACT_DAMPING_MOMENTS:
+            raise ParameterError(f"contact_damping_moments={self.contact_damping_moments!r} must be one of "
+                                 f"{CONTACT_DAMPING_MOMENTS}")
+        if self.contact_damping_moments == "sole" and self.dynamics_backend != "kkt":
+            raise ParameterError("contact_damping_moments='sole' needs dynamics_backend='kkt' (Pinocchio's "
+                                 f"constraintDynamics damps every row by one mu), got {self.dynamics_backend!r}")
         if int(self.max_line_search_trials) != self.max_line_search_trials or self.max_line_search_trials < 1:
             raise ParameterError(f"max_line_search_trials={self.max_line_search_trials} must be an integer >= 1")
         if self.dynamics_backend not in ("pinocchio", "kkt"):
@@ -221,6 +247,7 @@ class WalkingOCPConfig:
 
 
 BASE_YAW_REFERENCES = ("fixed", "footholds")
+CONTACT_DAMPING_MOMENTS = ("uniform", "sole")
 
 
 def foothold_heading(in_contact: np.ndarray, contact_yaw: np.ndarray, touchdown_yaw: np.ndarray) -> np.ndarray:
@@ -383,7 +410,7 @@ class WalkingOCP:
                           cfg.friction_cone_weight, active=False)
             flat = self.contact_type == "flat6d"
             if not terminal and cfg.wrench_cone_weight > 0 and flat:
-                length, width = self._sole_size()
+                length, width = self._sole_size("wrench_cone_weight > 0")
                 residual = ResidualWrenchCone(state, foot, cfg.friction_coefficient,
                                               0.5 * cfg.cop_sole_fraction * length, 0.5 * cfg.cop_sole_fraction * width, nu)
                 costs.add(f"{foot}_wrench_cone",
@@ -399,14 +426,23 @@ class WalkingOCP:
             costs.add("com_position",
                       CostModelResidual(ResidualCoMPosition(state, np.zeros(3), nu)), cfg.com_terminal_weight)
         contacts = {foot: self._contact(foot) for foot in self.feet}
+        lever_arms = None
+        if cfg.contact_damping_moments == "sole":
+            if self.contact_type != "flat6d":
+                raise ParameterError(f"contact_damping_moments='sole' needs flat feet (robot {self.robot.name!r} has "
+                                     f"{self.contact_type!r} contacts)")
+            lever_arms = {foot: sole_lever_arms(self._sole_size("contact_damping_moments='sole'"))
+                          for foot in self.feet}
         dam = DifferentialActionModelContactFwdDynamics(state, self.actuation, contacts, costs,
-                                                        backend=cfg.dynamics_backend)
+                                                        backend=cfg.dynamics_backend,
+                                                        contact_damping=cfg.contact_damping,
+                                                        damping_lever_arms=lever_arms)
         return IntegratedActionModelEuler(dam, 0.0 if terminal else self.dt)
 
-    def _sole_size(self) -> tuple[float, float]:
+    def _sole_size(self, needed_by: str) -> tuple[float, float]:
         size = self.robot.sole_size
         if size is None:
-            raise ParameterError(f"wrench_cone_weight > 0 needs the robot's sole_size (robot {self.robot.name!r} has none)")
+            raise ParameterError(f"{needed_by} needs the robot's sole_size (robot {self.robot.name!r} has none)")
         return size
 
     # ------------------------------------------------------------------ update
@@ -518,14 +554,29 @@ class WalkingOCP:
 
 
 def quasi_static_controls(ocp: WalkingOCP, x: np.ndarray) -> np.ndarray:
-    """Torques (nu,) [N·m] holding the configuration of x still on the node-0 stance feet.
+    """Torques (nu,) [N·m] holding the configuration of x still on the node-0 stance feet: the
+    torques of :func:`quasi_static_load`."""
+    return quasi_static_load(ocp, x)[0]
+
+
+def quasi_static_load(ocp: WalkingOCP, x: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Torques (nu,) [N·m] and contact wrenches holding the configuration of x still on the node-0
+    stance feet.
 
     Solves S^T tau + sum_c J_c^T f_c = g(q) (g the generalised gravity, S the actuated rows) for
-    the torques and contact forces of least weighted norm, sum_i (tau_i / tau_max_i)^2 +
-    sum_c ||f_c||^2 / (m g)^2: where the contacts leave freedom (a humanoid's two flat feet: 12
-    wrench components for 6 base equations) the load goes to the contacts and the torques stay
-    within the robot's limits. With as many unknowns as equations (Bolt's two point feet) it is the
-    exact solution, whatever the weights.
+    the torques and contact wrenches of least weighted norm, sum_i (tau_i / tau_max_i)^2 + sum_c
+    sum_k (f_ck / s_k)^2 with s_k = m g for a force and m g times the sole's half size for a flat
+    foot's moment (:func:`contact_wrench_scales`): where the contacts leave freedom (a humanoid's
+    two flat feet: 12 wrench components for 6 base equations) the load goes to the contacts, the
+    torques stay within the robot's limits and each sole's centre of pressure stays near its
+    centre (the moment that puts it at the sole's edge costs as much as the whole weight; with
+    moments scaled like forces the H1 got ±12.5 N·m of roll per sole, a centre of pressure 5 cm
+    outside its 2 cm wide sole). With as many unknowns as equations (Bolt's two point feet, a
+    single flat stance foot) it is the exact solution, whatever the weights.
+
+    Returns:
+        (torques (nu,) [N·m], stance foot -> its contact's force (3,) [N], world-aligned, for a
+        point foot, or wrench (6,) (force [N], moment [N·m]) in the sole frame for a flat foot).
     """
     model = ocp.state.pinocchio
     pdata = model.createData()
@@ -536,11 +587,29 @@ def quasi_static_controls(ocp: WalkingOCP, x: np.ndarray) -> np.ndarray:
     dam = ocp.problem.running_models[0].differential
     columns = [np.vstack([np.zeros((6, ocp.nu)), np.eye(ocp.nu)])]
     scales = [ocp.torque_limit]
+    wrench_scale = contact_wrench_scales(ocp.mass * GRAVITY, ocp.robot.sole_size)
+    rows, row = {}, ocp.nu
     for name in dam.active_contacts:
         contact = dam.contacts[name]
         J = pin.getFrameJacobian(model, pdata, contact.frame_id, pin.LOCAL_WORLD_ALIGNED if contact.nc == 3 else pin.LOCAL)
         columns.append(J[: contact.nc].T)
-        scales.append(np.full(contact.nc, ocp.mass * GRAVITY))
+        scales.append(wrench_scale[: contact.nc])
+        rows[name] = slice(row, row + contact.nc)
+        row += contact.nc
     scale = np.concatenate(scales)
     A = np.hstack(columns) * scale  # unknowns in units of their scale
-    return (scale * (np.linalg.pinv(A) @ gravity))[: ocp.nu]
+    solution = scale * (np.linalg.pinv(A) @ gravity)
+    return solution[: ocp.nu], {name: solution[r] for name, r in rows.items()}
+
+
+def contact_wrench_scales(weight: float, sole_size=None) -> np.ndarray:
+    """Scales (6,) of a contact wrench (f [N], m [N·m]) in the sole frame for
+    :func:`quasi_static_controls`: ``weight`` [N] for the forces; for the moments about the
+    sole's x (roll), y (pitch) and z (yaw) axes ``weight`` times the sole's lever arm about that
+    axis (:func:`wbmpc.ocp.contacts.sole_lever_arms`: half the width, half the length, half the
+    diagonal), the moment that moves the centre of pressure of that load to the sole's edge.
+    ``sole_size`` (length, width) [m] along the sole frame's x and y; None (point feet, or a
+    robot without a sole rectangle): ``weight`` for every component."""
+    if sole_size is None:
+        return np.full(6, float(weight))
+    return float(weight) * np.concatenate([np.ones(3), sole_lever_arms(sole_size)])

@@ -1,0 +1,40 @@
+"""The H1 in closed loop (MuJoCo, 1 kHz Riccati feedback, the library's MPC): it starts from
+standing and steps in place, short (the long runs are in docs/closed_loop.md, "The H1")."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from robot_extras import needs_h1_extra
+
+from sim.runner import run_scenario
+from wbmpc.walking.ocp import SlowPathWarning
+
+# the H1 preset's "sole" contact damping is solved node-wise by the KKT backend (SlowPathWarning, said once per run)
+pytestmark = [needs_h1_extra, pytest.mark.filterwarnings(f"ignore::{SlowPathWarning.__module__}.SlowPathWarning")]
+
+
+@pytest.fixture(scope="module")
+def in_place():
+    return run_scenario("walk", robot="h1", duration=2.0, velocity_command=(0.0, 0.0, 0.0), progress=False)
+
+
+def test_h1_starts_from_standing_and_steps_in_place(in_place):
+    log = in_place
+    assert log.status == "completed", (log.fall_time, log.fall_reason, log.error)
+    switched = log.replans["stance_switched"] > 0
+    assert switched.sum() >= 2  # steps taken, not a stand
+    t = log.ticks["t"]
+    # both feet down until the first stance (start_double_support), once the sole spheres, which
+    # start exactly on the floor, have settled into contact (the first 2 ms)
+    contacts = log.ticks["foot_contact"][(t > 0.01) & (t < 0.55)]
+    assert contacts.all()
+    assert log.replans["mpc_ok"].mean() > 0.95
+    assert np.nanmax(log.replans["stance_slide"]) < 0.01  # the soles stay where they landed
+
+
+def test_h1_stepping_in_place_stays_in_place(in_place):
+    com = in_place.ticks["com"]
+    assert np.max(np.abs(com[-1, :2] - com[0, :2])) < 0.08
+    pelvis_height = in_place.ticks["qpos"][:, 2]
+    assert pelvis_height.min() > 0.85  # it stands at 1.00 m; the fall threshold is 0.60 m
