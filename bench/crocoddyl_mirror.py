@@ -149,7 +149,10 @@ class CrocoddylMirror:
             cost, residual = self._cost(item.cost, nu)
             costs.addCost(name, cost, item.weight, item.active)
             residuals[name] = residual
-        cdam = croc.DifferentialActionModelContactFwdDynamics(self.state, self.actuation, contacts, costs, 0.0, True)
+        if dam._damping_row_scales:  # Crocoddyl damps every row by one JMinvJt_damping
+            raise TypeError("no Crocoddyl twin for a sole-weighted contact damping (contact_damping_moments='sole')")
+        cdam = croc.DifferentialActionModelContactFwdDynamics(self.state, self.actuation, contacts, costs,
+                                                              dam.contact_damping, True)
         iam = croc.IntegratedActionModelEuler(cdam, node.dt)
         iam._wbmpc_residuals = residuals  # keep the references reachable for update()
         return iam

@@ -260,11 +260,6 @@ def test_a_due_swing_foot_is_aimed_below_the_ground():
 # ---------------------------------------------------------------------------------------- presets
 
 
-# The contact damping (0, rigid contacts: the paper's) is a setting of robots whose contacts leave a
-# force undetermined (the H1); Bolt's and the G1's presets predate it and keep its default.
-RIGID_CONTACT_FIELDS = {"contact_damping", "contact_damping_moments"}
-
-
 def test_bolt_preset_states_every_tuned_number_and_takes_overrides():
     import tomllib
 
@@ -276,8 +271,7 @@ def test_bolt_preset_states_every_tuned_number_and_takes_overrides():
     # every field of the tuned sections is written in the file (nothing left to code defaults)
     skip = {"controller": {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate",
                            "feedback", "mpc_failure_times", "sequencer_params_from"},
-            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift", "double_support"},
-            "ocp": RIGID_CONTACT_FIELDS}
+            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift", "double_support"}}
     preset = load_walking_preset("bolt")
     for section in ("planner", "ocp", "controller", "fall", "command"):
         fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())
@@ -302,8 +296,7 @@ def test_g1_preset_states_every_tuned_number():
         data = tomllib.load(stream)
     skip = {"controller": {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate",
                            "feedback", "mpc_failure_times", "sequencer_params_from"},
-            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift"},
-            "ocp": RIGID_CONTACT_FIELDS}
+            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift"}}
     preset = load_walking_preset("g1")
     for section in ("planner", "ocp", "controller", "fall", "command"):
         fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())
