@@ -64,6 +64,14 @@ class HorizonData:
     contact_sets: list
 
 
+def dense_jacobian_pattern(n_rows: int, n_columns: int) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, cols) of a dense block: every one of ``n_rows`` rows has the first ``n_columns``
+    columns of [Rx Ru], row-major (the ``jacobian_pattern`` of a residual whose rows depend on
+    every velocity, or on the whole state and control)."""
+    return (np.repeat(np.arange(n_rows, dtype=np.int64), n_columns),
+            np.tile(np.arange(n_columns, dtype=np.int64), n_rows))
+
+
 class BatchedResidual:
     """A residual that declares its own batched evaluation (what
     :class:`~wbmpc.ocp.batched_problem.BatchedShootingProblem` needs of every running term).

@@ -20,7 +20,13 @@ from wbmpc.ocp.kernels.residuals import (
     linear_force_rows,
     linear_force_rows_many,
 )
-from wbmpc.ocp.residuals.base import BatchedResidual, DataCollector, HorizonData, ResidualData
+from wbmpc.ocp.residuals.base import (
+    BatchedResidual,
+    DataCollector,
+    HorizonData,
+    ResidualData,
+    dense_jacobian_pattern,
+)
 from wbmpc.ocp.state import StateMultibody
 
 
@@ -68,7 +74,7 @@ class ResidualLinearInContactForce(BatchedResidual):
 
     def jacobian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         n = self.state.ndx + self.nu  # ∂f/∂x and ∂f/∂u are dense
-        return np.repeat(np.arange(self.nr, dtype=np.int64), n), np.tile(np.arange(n, dtype=np.int64), self.nr)
+        return dense_jacobian_pattern(self.nr, n)
 
     def _inactive_contact(self, horizon: HorizonData, k: int) -> ParameterError:
         return ParameterError(f"cost on contact {self.contact_name!r} ({type(self).__name__}) is active at running "

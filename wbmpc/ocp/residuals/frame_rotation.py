@@ -13,7 +13,13 @@ from wbmpc.ocp.kernels.residuals import (
     frame_rotation_rows_many,
     jacobian_blocks,
 )
-from wbmpc.ocp.residuals.base import BatchedResidual, DataCollector, HorizonData, ResidualData
+from wbmpc.ocp.residuals.base import (
+    BatchedResidual,
+    DataCollector,
+    HorizonData,
+    ResidualData,
+    dense_jacobian_pattern,
+)
 from wbmpc.ocp.state import StateMultibody
 
 
@@ -76,7 +82,7 @@ class ResidualFrameRotation(BatchedResidual):
     # ----------------------------------------------------------------- batched evaluation
     def jacobian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         nv = self.state.nv
-        return np.repeat(np.arange(3, dtype=np.int64), nv), np.tile(np.arange(nv, dtype=np.int64), 3)
+        return dense_jacobian_pattern(3, nv)
 
     def batch_calc(self, horizon: HorizonData, mask: np.ndarray, references: np.ndarray, r: np.ndarray) -> None:
         rotations = horizon.frame_rotation[:, horizon.frame_slot[self.frame_id]]

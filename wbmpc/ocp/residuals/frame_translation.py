@@ -6,7 +6,13 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.ocp.kernels.residuals import frame_jacobian_rows_many, frame_rows_many, subtract_rows
-from wbmpc.ocp.residuals.base import BatchedResidual, DataCollector, HorizonData, ResidualData
+from wbmpc.ocp.residuals.base import (
+    BatchedResidual,
+    DataCollector,
+    HorizonData,
+    ResidualData,
+    dense_jacobian_pattern,
+)
 from wbmpc.ocp.state import StateMultibody
 
 _XYZ = np.array([0, 1, 2], dtype=np.int64)
@@ -44,7 +50,7 @@ class ResidualFrameTranslation(BatchedResidual):
 
     def jacobian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         nv = self.state.nv
-        return np.repeat(np.arange(3, dtype=np.int64), nv), np.tile(np.arange(nv, dtype=np.int64), 3)
+        return dense_jacobian_pattern(3, nv)
 
     def batch_calc(self, horizon: HorizonData, mask: np.ndarray, references: np.ndarray, r: np.ndarray) -> None:
         frame_rows_many(horizon.frame_position[:, horizon.frame_slot[self.frame_id]], _XYZ, references, mask, r)
