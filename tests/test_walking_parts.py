@@ -260,22 +260,32 @@ def test_a_due_swing_foot_is_aimed_below_the_ground():
 # ---------------------------------------------------------------------------------------- presets
 
 
-def test_bolt_preset_states_every_tuned_number_and_takes_overrides():
+# controller fields that are run options, not tuning (a preset may leave them to their defaults)
+RUN_OPTIONS = {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate", "feedback",
+               "mpc_failure_times", "sequencer_params_from"}
+LIPM_CORRECTIONS = {"swing_drift", "dcm_offset_bias", "stance_drift"}  # initial values, identified online
+
+
+def _assert_preset_states_every_field(robot: str, planner_skip: set[str]):
+    """Every field of the tuned sections is written in ``presets/<robot>.toml`` (nothing left to
+    code defaults) but the run options and ``planner_skip``; returns the loaded preset."""
     import tomllib
 
     from wbmpc.walking.preset import PRESET_DIR
 
-    assert "bolt" in available_walking_presets()
-    with (PRESET_DIR / "bolt.toml").open("rb") as stream:
+    with (PRESET_DIR / f"{robot}.toml").open("rb") as stream:
         data = tomllib.load(stream)
-    # every field of the tuned sections is written in the file (nothing left to code defaults)
-    skip = {"controller": {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate",
-                           "feedback", "mpc_failure_times", "sequencer_params_from"},
-            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift", "double_support"}}
-    preset = load_walking_preset("bolt")
+    skip = {"controller": RUN_OPTIONS, "planner": planner_skip}
+    preset = load_walking_preset(robot)
     for section in ("planner", "ocp", "controller", "fall", "command"):
         fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())
         assert fields <= set(data[section]), (section, sorted(fields - set(data[section])))
+    return preset
+
+
+def test_bolt_preset_states_every_tuned_number_and_takes_overrides():
+    assert "bolt" in available_walking_presets()
+    preset = _assert_preset_states_every_field("bolt", LIPM_CORRECTIONS | {"double_support"})
     assert preset.planner.w_right_max == 0.30 and preset.ocp.foothold_weight == 1e5
     changed = load_walking_preset("bolt", {"planner.l_max": 0.25, "ocp.state_weights.joint_position": 2.0,
                                            "n_nodes": 80, "fall.min_base_height": 0.2})
@@ -288,19 +298,7 @@ def test_bolt_preset_states_every_tuned_number_and_takes_overrides():
 
 
 def test_g1_preset_states_every_tuned_number():
-    import tomllib
-
-    from wbmpc.walking.preset import PRESET_DIR
-
-    with (PRESET_DIR / "g1.toml").open("rb") as stream:
-        data = tomllib.load(stream)
-    skip = {"controller": {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate",
-                           "feedback", "mpc_failure_times", "sequencer_params_from"},
-            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift"}}
-    preset = load_walking_preset("g1")
-    for section in ("planner", "ocp", "controller", "fall", "command"):
-        fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())
-        assert fields <= set(data[section]), (section, sorted(fields - set(data[section])))
+    preset = _assert_preset_states_every_field("g1", LIPM_CORRECTIONS)
     assert preset.ocp.wrench_cone_weight > 0 and preset.controller.start_double_support > 0
     assert preset.planner.double_support > 0 and preset.command.yaw_rate[1] > 0
     weights = preset.ocp.state_weights
@@ -308,19 +306,7 @@ def test_g1_preset_states_every_tuned_number():
 
 
 def test_h1_preset_states_every_tuned_number():
-    import tomllib
-
-    from wbmpc.walking.preset import PRESET_DIR
-
-    with (PRESET_DIR / "h1.toml").open("rb") as stream:
-        data = tomllib.load(stream)
-    skip = {"controller": {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_delay", "interpolate",
-                           "feedback", "mpc_failure_times", "sequencer_params_from"},
-            "planner": {"swing_drift", "dcm_offset_bias", "stance_drift"}}
-    preset = load_walking_preset("h1")
-    for section in ("planner", "ocp", "controller", "fall", "command"):
-        fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())
-        assert fields <= set(data[section]), (section, sorted(fields - set(data[section])))
+    preset = _assert_preset_states_every_field("h1", LIPM_CORRECTIONS)
     # the soles' undetermined squeeze is split by the sole-weighted damping, which the KKT backend solves
     assert preset.ocp.contact_damping > 0 and preset.ocp.contact_damping_moments == "sole"
     assert preset.ocp.dynamics_backend == "kkt"

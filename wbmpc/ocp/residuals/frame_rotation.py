@@ -81,8 +81,7 @@ class ResidualFrameRotation(BatchedResidual):
 
     # ----------------------------------------------------------------- batched evaluation
     def jacobian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        nv = self.state.nv
-        return dense_jacobian_pattern(3, nv)
+        return dense_jacobian_pattern(3, self.state.nv)
 
     def batch_calc(self, horizon: HorizonData, mask: np.ndarray, references: np.ndarray, r: np.ndarray) -> None:
         rotations = horizon.frame_rotation[:, horizon.frame_slot[self.frame_id]]

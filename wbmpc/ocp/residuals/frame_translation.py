@@ -49,8 +49,7 @@ class ResidualFrameTranslation(BatchedResidual):
         return ResidualData(self.nr, self.state.ndx, self.nu)
 
     def jacobian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        nv = self.state.nv
-        return dense_jacobian_pattern(3, nv)
+        return dense_jacobian_pattern(3, self.state.nv)
 
     def batch_calc(self, horizon: HorizonData, mask: np.ndarray, references: np.ndarray, r: np.ndarray) -> None:
         frame_rows_many(horizon.frame_position[:, horizon.frame_slot[self.frame_id]], _XYZ, references, mask, r)
