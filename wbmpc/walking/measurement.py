@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sequencer.obstacles import Obstacle
+
 
 @dataclass(frozen=True)
 class Measurement:
@@ -24,8 +26,12 @@ class Measurement:
             measurement noise, if any.
         foot_in_contact: shape (n_feet,), bool; True where the simulator reports a contact between
             that foot and the ground (order of ``robot.foot_frames``).
+        obstacles: the obstacles the robot's perception has detected so far (world frame; see
+            :mod:`sequencer.obstacles`), empty without perception. Estimated from the sensors'
+            returns and the measured state only, never from the scene's ground truth.
     """
 
     t: float
     x: np.ndarray
     foot_in_contact: np.ndarray
+    obstacles: tuple[Obstacle, ...] = ()
