@@ -12,6 +12,7 @@ stderr naming the parameter, its value and what is allowed, and the exit code 2;
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 
 from wbmpc.cli.arguments import CommandParser, fail
@@ -41,8 +42,22 @@ def build_parser() -> CommandParser:
     return parser
 
 
+def _offscreen_gl_default(argv: list[str]) -> None:
+    """Make EGL MuJoCo's GL backend for ``--render`` on a machine without a display.
+
+    MuJoCo reads ``MUJOCO_GL`` once, when it is first imported, and building the parser already
+    imports it (the scenario and video-path options), so this is decided from the raw arguments
+    before anything else. An explicit ``MUJOCO_GL`` is kept; ``--viewer`` needs the windowed default.
+    """
+    rendering = any(arg == "--render" or arg.startswith("--render=") for arg in argv)
+    headless = not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    if rendering and headless and "--viewer" not in argv:
+        os.environ.setdefault("MUJOCO_GL", "egl")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the ``wbmpc`` command line; returns the process exit code."""
+    _offscreen_gl_default(sys.argv[1:] if argv is None else list(argv))
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

@@ -220,8 +220,6 @@ def _run(args: argparse.Namespace) -> int:
         if reason is not None:
             raise ParameterError(f"--viewer: {reason}")
         on_tick = LiveViewer()
-    if args.render and not args.viewer:  # the viewer needs MuJoCo's default (windowed) GL
-        os.environ.setdefault("MUJOCO_GL", "egl")  # headless offscreen context; read when MuJoCo is imported
     from sim.metrics import paper_comparison
     from sim.runner import run_scenario
 
