@@ -26,42 +26,62 @@ from sequencer.planner import rotate_xy
 
 
 class VelocityIntegral:
-    """Integral action on the forward speed: the planner is given v*_x + k ∫ (v*_x − v̄_x) dt.
+    """Integral action on the walking speed: the planner is given v*_x + k_x ∫ (v*_x − v̄_x) dt
+    and v*_y + k_y ∫ (v*_y − v̄_y) dt.
 
     v̄ is the measured CoM velocity in the heading frame, low-passed with time constant
-    ``filter_time``; the correction is bounded by ``correction_max`` and the integral clamped
-    accordingly (anti-windup). Gain 0 turns it off (the paper's pipeline).
+    ``filter_time``; each correction is bounded by ``correction_max`` and its integral clamped
+    accordingly (anti-windup). A gain of 0 turns that axis off (the paper's pipeline: both off).
+    The lateral axis is separate because a lateral correction shifts the planner's nominal step
+    widths (∓ pelvis width + v_y T): off where the robot walks straight (Bolt), on where a lateral
+    command must be followed (the G1's ALIP planner).
 
     Args:
-        gain: k [1/s], >= 0.
-        correction_max: bound of the correction [m/s].
+        gain: k_x [1/s], >= 0 (forward).
+        correction_max: bound of each correction [m/s].
         filter_time: low-pass time constant [s], > 0.
         period: update period [s] (the replan period).
+        lateral_gain: k_y [1/s], >= 0 (lateral).
     """
 
-    def __init__(self, gain: float, correction_max: float, filter_time: float, period: float) -> None:
-        self.gain, self.correction_max = float(gain), float(correction_max)
+    def __init__(self, gain: float, correction_max: float, filter_time: float, period: float,
+                 lateral_gain: float = 0.0) -> None:
+        self.gains = np.array([gain, lateral_gain], dtype=float)
+        self.correction_max = float(correction_max)
         self._alpha = period / (filter_time + period)
         self.period = float(period)
         self.filtered = np.zeros(2)  # [m/s] heading frame; the robot starts at rest
-        self.integral = 0.0  # [m]
+        self.integrals = np.zeros(2)  # [m] heading frame (forward, lateral)
 
-    def update(self, commanded_v_x: float, velocity_heading_xy: np.ndarray) -> None:
-        """One replan: filter the measured velocity (2,) [m/s, heading frame], integrate the error."""
-        if self.gain <= 0.0:
+    @property
+    def gain(self) -> float:
+        """k_x [1/s]."""
+        return float(self.gains[0])
+
+    def update(self, commanded_v_x: float, velocity_heading_xy: np.ndarray, commanded_v_y: float = 0.0) -> None:
+        """One replan: filter the measured velocity (2,) [m/s, heading frame], integrate the errors."""
+        if not self.gains.any():
             return
         self.filtered += self._alpha * (np.asarray(velocity_heading_xy, dtype=float) - self.filtered)
-        # forward speed only: a lateral correction would shift the planner's nominal step widths
-        self.integral += (commanded_v_x - self.filtered[0]) * self.period
-        bound = self.correction_max / self.gain
-        self.integral = min(max(self.integral, -bound), bound)
+        on = self.gains > 0.0
+        self.integrals[on] += (np.array([commanded_v_x, commanded_v_y])[on] - self.filtered[on]) * self.period
+        bound = self.correction_max / np.where(on, self.gains, 1.0)
+        self.integrals = np.clip(self.integrals, -bound, bound)
+
+    @property
+    def integral(self) -> float:
+        """Forward integral [m]."""
+        return float(self.integrals[0])
+
+    @property
+    def correction_xy(self) -> np.ndarray:
+        """(forward, lateral) speed corrections [m/s] added to the command, heading frame, shape (2,)."""
+        return np.clip(self.gains * self.integrals, -self.correction_max, self.correction_max)
 
     @property
     def correction(self) -> float:
         """Forward-speed correction [m/s] added to the command."""
-        if self.gain <= 0.0:
-            return 0.0
-        return min(max(self.gain * self.integral, -self.correction_max), self.correction_max)
+        return float(self.correction_xy[0])
 
 
 @dataclass(frozen=True)

@@ -67,7 +67,8 @@ class PlanningStage:
         self.stance = StanceTracker(self.feet, config.touchdown_detection)
         self.slide = StanceSlide(config.stance_slide_follow)
         self.velocity_integral = VelocityIntegral(config.velocity_integral_gain, config.velocity_correction_max,
-                                                  config.velocity_filter_time, config.replan_period)
+                                                  config.velocity_filter_time, config.replan_period,
+                                                  config.lateral_velocity_integral_gain)
         self.lipm = None
         if isinstance(planner, DcmFootstepPlanner):
             self.lipm = LipmCorrectionEstimator(
@@ -116,11 +117,12 @@ class PlanningStage:
 
     @property
     def planned_command(self) -> VelocityCommand:
-        """The command handed to the planner: the user's plus the speed integral's correction,
-        within the planner's command range (the correction may not push it outside)."""
+        """The command handed to the planner: the user's plus the speed integral's corrections,
+        within the planner's command range (a correction may not push it outside)."""
         c = self.command
-        low, high = self._range["v_x"]
-        return VelocityCommand(min(max(c.v_x + self.velocity_integral.correction, low), high), c.v_y, c.yaw_rate)
+        dx, dy = self.velocity_integral.correction_xy
+        (low_x, high_x), (low_y, high_y) = self._range["v_x"], self._range["v_y"]
+        return VelocityCommand(min(max(c.v_x + dx, low_x), high_x), min(max(c.v_y + dy, low_y), high_y), c.yaw_rate)
 
     # ------------------------------------------------------------------ every replan
     def update(self, t: float, x: np.ndarray, foot_in_contact: np.ndarray) -> tuple[Any, ReducedState, dict]:
@@ -132,7 +134,8 @@ class PlanningStage:
         q, v = x[: self.nq], x[self.nq:]
         measured = self.reduced_state(q, v)
         stance = self.stance.state
-        self.velocity_integral.update(self.command.v_x, rotate_xy(measured.com_velocity[:2], -stance.yaw))
+        self.velocity_integral.update(self.command.v_x, rotate_xy(measured.com_velocity[:2], -stance.yaw),
+                                      self.command.v_y)
         feet = self.feet_position(q)
         first = self.plan.steps[0] if self.plan is not None and len(self.plan.steps) else None
         stance_index = self.feet.index(stance.foot)
