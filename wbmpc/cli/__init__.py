@@ -47,12 +47,12 @@ def _offscreen_gl_default(argv: list[str]) -> None:
 
     MuJoCo reads ``MUJOCO_GL`` once, when it is first imported, and building the parser already
     imports it (the scenario and video-path options), so this is decided from the raw arguments
-    before anything else. An explicit ``MUJOCO_GL`` is kept; ``--viewer`` needs the windowed default.
+    before anything else. A non-empty ``MUJOCO_GL`` is kept; ``--viewer`` needs the windowed default.
     """
     rendering = any(arg == "--render" or arg.startswith("--render=") for arg in argv)
     headless = not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-    if rendering and headless and "--viewer" not in argv:
-        os.environ.setdefault("MUJOCO_GL", "egl")
+    if rendering and headless and "--viewer" not in argv and not os.environ.get("MUJOCO_GL"):
+        os.environ["MUJOCO_GL"] = "egl"
 
 
 def main(argv: list[str] | None = None) -> int:
