@@ -43,6 +43,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 FLOOR_GEOM_NAME = "floor"
 TRACKING_CAMERA_NAME = "track"
+CAMERA_FRAMING_BASE_HEIGHT = 0.341  # [m] base height the tracking camera's view is framed for (Bolt's)
 ROBOT_COLLISION_BITS = 1  # contype / conaffinity of the feet, floor and terrain
 INTEGRATORS = {
     "euler": mujoco.mjtIntegrator.mjINT_EULER,
@@ -239,8 +240,10 @@ def build_mujoco_spec(
     spec.worldbody.add_light(
         name="sun", pos=[0.0, 0.0, 3.0], dir=[0.0, 0.0, -1.0], diffuse=[0.8, 0.8, 0.8], castshadow=False,
     )
-    # 3/4 front-right view of the robot, relative to the base at the reference posture [m].
-    camera_position, camera_target = np.array([0.7, -0.8, 0.1]), np.array([0.0, 0.0, -0.12])
+    # 3/4 front-right view of the robot, relative to the base at the reference posture [m], framed for a base
+    # standing CAMERA_FRAMING_BASE_HEIGHT high and scaled by the robot's (the G1 2.2x as far, the H1 2.9x).
+    scale = robot.base_height_reference / CAMERA_FRAMING_BASE_HEIGHT
+    camera_position, camera_target = scale * np.array([0.7, -0.8, 0.1]), scale * np.array([0.0, 0.0, -0.12])
     camera = root.add_camera(
         name=TRACKING_CAMERA_NAME, pos=list(camera_position),
         quat=list(_look_at_quaternion(camera_position, camera_target)),

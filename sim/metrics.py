@@ -87,6 +87,16 @@ def max_stance_slide(t: np.ndarray, feet: np.ndarray, replans: dict) -> float:
     return float(np.max(np.linalg.norm(measured - recorded, axis=1)))
 
 
+def velocity_in_heading_frame(ticks: dict[str, np.ndarray]) -> np.ndarray:
+    """The base's horizontal velocity in its heading frame, R(ψ)ᵀ v_xy at each tick [m/s], shape (n, 2):
+    ψ the base yaw (``ticks["x"][:, 3:7]``, Pinocchio quaternion), v the world-frame
+    ``base_velocity_world``; x forward along the base's heading, y to its left (the command's frame)."""
+    yaw = base_yaw(ticks["x"][:, 3:7])
+    c, s = np.cos(yaw), np.sin(yaw)
+    vx, vy = ticks["base_velocity_world"][:, 0], ticks["base_velocity_world"][:, 1]
+    return np.column_stack([c * vx + s * vy, c * vy - s * vx])
+
+
 def path_metrics(path: PlanarPath, position: np.ndarray, yaw: np.ndarray, laps: float = 1.0) -> dict[str, float]:
     """How closely a walk followed ``path`` (definitions in the module docstring).
 
@@ -143,10 +153,8 @@ def compute_metrics(log) -> dict[str, Any]:
         error = np.abs(mean_velocity - command[window][-1, :2])
         metrics["mean_velocity_x"], metrics["mean_velocity_y"] = float(mean_velocity[0]), float(mean_velocity[1])
         metrics["velocity_error_x"], metrics["velocity_error_y"] = float(error[0]), float(error[1])
+        heading_velocity = velocity_in_heading_frame(ticks)[window].mean(axis=0)
         yaw = np.unwrap(base_yaw(ticks["x"][window, 3:7]))
-        c, s = np.cos(yaw), np.sin(yaw)
-        vx, vy = velocity[window, 0], velocity[window, 1]
-        heading_velocity = np.array([np.mean(c * vx + s * vy), np.mean(c * vy - s * vx)])
         heading_error = np.abs(heading_velocity - command[window][-1, :2])
         metrics["mean_velocity_heading_x"], metrics["mean_velocity_heading_y"] = (float(v) for v in heading_velocity)
         metrics["velocity_error_heading_x"], metrics["velocity_error_heading_y"] = (float(e) for e in heading_error)

@@ -3,8 +3,10 @@
 - :func:`plot_lateral`: CoM (purple), DCM (green) and feet (red left, blue right; drawn while in
   contact) along y over time (Figs. 5 and 7), with the planned footholds as dots;
 - :func:`plot_velocity`: base velocity along x and y (blue), its running average (green) and the
-  command (red) over time (Figs. 6 and 8);
+  command (red) over time (Figs. 6 and 8); world axes, or the heading frame (the command's) when
+  the run turns (:data:`TURNING_YAW_SPAN`);
 - :func:`plot_plane`: foot contacts and DCM in the ground plane (as Fig. 3, for the executed walk);
+  a flat-footed robot's footsteps are drawn as its sole rectangles at their yaw (:func:`footsteps`);
 - :func:`plot_path` (runs that follow a path, ``waypoints``): the path (grey, corners as
   squares), the footholds (foot positions in contact) and the CoM trace in the ground plane,
   equal scales, with the path metrics in the title;
@@ -17,10 +19,13 @@ import os
 
 import numpy as np
 
-from sim.metrics import running_average
+from robots.conventions import base_yaw
+from sim.metrics import running_average, velocity_in_heading_frame
 from sim.paths import path_from_parameters
 
 COLORS = {"com": "tab:purple", "dcm": "tab:green", "left": "tab:red", "right": "tab:blue", "command": "tab:red"}
+TURNING_YAW_SPAN = 0.3  # [rad]: a run whose base yaw spans more is drawn in the heading frame
+FOOTSTEP_MIN_CONTACT = 0.05  # [s]: a contact shorter than this is not drawn as a footstep (touchdown bounces)
 
 
 def _pyplot():
@@ -69,18 +74,28 @@ def plot_lateral(log, ax=None, t_range: tuple[float, float] | None = None):
     return ax
 
 
+def turns(log) -> bool:
+    """True when the run's base yaw spans more than :data:`TURNING_YAW_SPAN` (its velocities are then
+    drawn in the heading frame: world axes would mix forward and lateral speed)."""
+    yaw = np.unwrap(base_yaw(log.ticks["x"][:, 3:7])) if len(log.ticks["t"]) else np.zeros(1)
+    return bool(np.ptp(yaw) > TURNING_YAW_SPAN)
+
+
 def plot_velocity(log, axes=None):
-    """Base velocity x and y [m/s] with its running average and the command (paper Figs. 6 and 8)."""
+    """Base velocity x and y [m/s] with its running average and the command (paper Figs. 6 and 8):
+    world axes, or the heading frame for a run that :func:`turns` (the command is in that frame)."""
     plt = _pyplot()
     if axes is None:
         _, axes = plt.subplots(2, 1, figsize=(8, 4), sharex=True)
     t = log.ticks["t"]
+    heading = turns(log)
+    velocity = velocity_in_heading_frame(log.ticks) if heading else log.ticks["base_velocity_world"][:, :2]
     for j, (ax, axis) in enumerate(zip(axes, "xy")):
-        v = log.ticks["base_velocity_world"][:, j]
+        v = velocity[:, j]
         ax.plot(t, v, color="tab:blue", lw=0.6, label=f"base v_{axis}")
         ax.plot(t, running_average(t, v), color="tab:green", label="running average (1 s)")
         ax.plot(t, log.ticks["velocity_command"][:, j], color=COLORS["command"], label="command")
-        ax.set_ylabel(f"v_{axis} [m/s]")
+        ax.set_ylabel(f"v_{axis} [m/s]" + (" (heading)" if heading else ""))
         _mark_events(ax, log)
     axes[0].legend(loc="lower right", fontsize=7, ncol=3)
     axes[-1].set_xlabel("t [s]")
@@ -118,6 +133,59 @@ def plane_limits(x: np.ndarray, y: np.ndarray, aspect: float, margin: float = 0.
     return (centre_x - half_x, centre_x + half_x), (centre_y - half_y, centre_y + half_y), equal
 
 
+def footsteps(log) -> list[tuple[int, np.ndarray, float]]:
+    """The run's footsteps: (foot index, sole centre (x, y) [m], sole yaw [rad]) of every contact that
+    lasted :data:`FOOTSTEP_MIN_CONTACT` or more, taken at the contact's middle tick (world frame;
+    the foot frame's yaw from the logged configuration by Pinocchio's forward kinematics)."""
+    import pinocchio as pin
+
+    from robots import load_robot
+
+    ticks = log.ticks
+    t = ticks["t"]
+    if len(t) < 2:
+        return []
+    robot = load_robot(log.robot)
+    model = robot.pinocchio_model
+    data = model.createData()
+    frames = [model.getFrameId(name) for name in robot.foot_frames.values()]
+    shortest = int(round(FOOTSTEP_MIN_CONTACT / (t[1] - t[0])))
+    steps = []
+    for j, frame in enumerate(frames[: ticks["foot_contact"].shape[1]]):
+        contact = np.concatenate([[False], ticks["foot_contact"][:, j], [False]]).astype(np.int8)
+        starts, ends = np.flatnonzero(np.diff(contact) == 1), np.flatnonzero(np.diff(contact) == -1)
+        for start, end in zip(starts, ends):
+            if end - start < shortest:
+                continue
+            k = (start + end) // 2
+            pin.framesForwardKinematics(model, data, ticks["x"][k, : model.nq])
+            rotation = data.oMf[frame].rotation
+            steps.append((j, ticks["feet"][k, j, :2].copy(), float(np.arctan2(rotation[1, 0], rotation[0, 0]))))
+    return steps
+
+
+def _draw_soles(ax, log, labels: bool) -> bool:
+    """Draw the footsteps as sole rectangles (robots with a ``sole_size``); False when the robot has point feet."""
+    from matplotlib.patches import Polygon
+
+    from robots import load_robot
+
+    size = load_robot(log.robot).sole_size
+    if size is None:
+        return False
+    half = 0.5 * np.array(size)
+    corners = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * half
+    drawn = set()
+    for j, centre, yaw in footsteps(log):
+        c, s = np.cos(yaw), np.sin(yaw)
+        foot = ("left", "right")[j]
+        label = f"{foot} sole" if labels and foot not in drawn else None
+        ax.add_patch(Polygon(centre + corners @ np.array([[c, s], [-s, c]]), closed=True, fill=False,
+                             color=COLORS[foot], lw=0.8, label=label))
+        drawn.add(foot)
+    return True
+
+
 def plot_plane(log, ax=None):
     """Foot contacts and DCM in the ground plane, x-y [m] (limits from the data: :func:`plane_limits`)."""
     plt = _pyplot()
@@ -127,9 +195,11 @@ def plot_plane(log, ax=None):
     ax.plot(ticks["dcm"][:, 0], ticks["dcm"][:, 1], color=COLORS["dcm"], lw=0.8, label="DCM")
     ax.plot(ticks["com"][:, 0], ticks["com"][:, 1], color=COLORS["com"], lw=0.8, label="CoM")
     xs, ys = [ticks["dcm"][:, 0], ticks["com"][:, 0]], [ticks["dcm"][:, 1], ticks["com"][:, 1]]
+    soles = _draw_soles(ax, log, labels=True)
     for j, foot in enumerate(("left", "right")[: ticks["feet"].shape[1]]):
         contact = ticks["foot_contact"][:, j]
-        ax.scatter(ticks["feet"][contact, j, 0], ticks["feet"][contact, j, 1], s=2, color=COLORS[foot], label=foot)
+        ax.scatter(ticks["feet"][contact, j, 0], ticks["feet"][contact, j, 1], s=2 if not soles else 0.5,
+                   color=COLORS[foot], label=None if soles else foot)
         xs.append(ticks["feet"][contact, j, 0])
         ys.append(ticks["feet"][contact, j, 1])
     bbox = ax.get_position()
@@ -164,10 +234,11 @@ def plot_path(log, ax=None):
     corners = path.point_at(path.corners)
     if len(corners):
         ax.scatter(corners[:, 0], corners[:, 1], marker="s", s=25, color="0.4", label="corners")
+    soles = _draw_soles(ax, log, labels=True)
     for j, foot in enumerate(("left", "right")[: ticks["feet"].shape[1]]):
         contact = ticks["foot_contact"][:, j]
-        ax.scatter(ticks["feet"][contact, j, 0], ticks["feet"][contact, j, 1], s=2, color=COLORS[foot],
-                   label=f"{foot} foot (contact)")
+        ax.scatter(ticks["feet"][contact, j, 0], ticks["feet"][contact, j, 1], s=2 if not soles else 0.5,
+                   color=COLORS[foot], label=None if soles else f"{foot} foot (contact)")
     ax.plot(ticks["com"][:, 0], ticks["com"][:, 1], color=COLORS["com"], lw=1.0, label="CoM")
     ax.scatter(*ticks["com"][0, :2], marker="o", s=30, color="k", zorder=3, label="start")
     m = log.metrics
