@@ -1,0 +1,172 @@
+"""Terrain estimate: from scans and the measured base pose, a height map and the obstacles on it.
+
+Pure numpy (plus scipy's graph tools). Each :meth:`TerrainEstimator.update`:
+
+1. projects the scan's returns into the world with the *measured* base pose (``Measurement.x``,
+   never the simulator's state) and drops those closer than ``min_ground_distance`` to the base,
+   horizontally (the robot's own legs and arms: see :mod:`sim.perception.rangefinder`);
+2. accumulates them in the :class:`~sim.perception.heightmap.HeightMap` (memory: the map keeps what
+   the rays saw, so a box stays known once it has left their field of view);
+3. estimates the ground level, the median height of the cells within ``ground_radius`` of the base
+   (twice: the second time without the cells more than ``obstacle_min_height`` above the first);
+4. marks the cells whose mean height is more than ``obstacle_min_height`` above the ground, groups
+   them (cells within ``cluster_gap`` of each other, transitively) and reports each group holding
+   at least ``min_returns`` returns as a :class:`sequencer.obstacles.Obstacle`:
+
+   - its depth axis is the robot's measured heading when the group was first reported (the
+     obstacle's own orientation is not estimated: a box across the path is crossed along it);
+   - near / far edge and width: the extreme positions of its cells' returns above the ground by
+     ``obstacle_min_height`` (the ground level of the previous scan), along and across that axis.
+     The near edge is seen on the box's front face and is sharp; the far edge is the last return
+     on the top, short of the true edge by up to the rays' spacing on the top; the width is what
+     the rays' fan saw (a lower bound of a box wider than the fan);
+   - height: the median of its cells' mean heights, minus the ground level.
+
+   A group is matched to an obstacle already reported when its centroid lies in that obstacle's
+   footprint grown by ``cluster_gap`` (groups matching the same obstacle are merged); the estimate
+   is refined with every scan.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robots.conventions import base_yaw
+from sequencer.obstacles import Obstacle
+from sim.perception.heightmap import HeightMap
+from sim.perception.scan import Scan
+from wbmpc.walking.perception_config import PerceptionConfig
+
+
+@dataclass
+class ObstacleTrack:
+    """One reported obstacle and its history.
+
+    Attributes:
+        first_seen: time it was first reported [s].
+        yaw: its depth axis, the measured base heading at ``first_seen`` [rad], world frame.
+        obstacle: the current estimate.
+        n_returns: returns in its cells [-].
+        n_cells: cells [-].
+    """
+
+    first_seen: float
+    yaw: float
+    obstacle: Obstacle
+    n_returns: int
+    n_cells: int
+
+
+class TerrainEstimator:
+    """The height map and the obstacles found on it (see the module docstring).
+
+    Attributes:
+        map: the :class:`HeightMap`.
+        tracks: the obstacles reported so far, in the order they were first reported.
+        ground: the last ground level [m] (None before the first return).
+        n_updates, n_returns, n_dropped_near: scans processed, returns received, returns dropped
+            as too close to the robot.
+    """
+
+    def __init__(self, config: PerceptionConfig) -> None:
+        self.config = config
+        self.map = HeightMap(config.cell_size)
+        self.tracks: list[ObstacleTrack] = []
+        self.ground: float | None = None
+        self.n_updates = self.n_returns = self.n_dropped_near = 0
+
+    @property
+    def obstacles(self) -> tuple[Obstacle, ...]:
+        """The obstacles reported so far (current estimates), in the order they were first reported."""
+        return tuple(track.obstacle for track in self.tracks)
+
+    def update(self, scan: Scan, x_measured: np.ndarray) -> tuple[Obstacle, ...]:
+        """Add ``scan``, taken at the measured state ``x_measured`` (Pinocchio convention; only the
+        base pose q[0:7] is read), and return the obstacles reported so far."""
+        x = np.asarray(x_measured, dtype=float)
+        self.n_updates += 1
+        points = scan.points_world(x)
+        self.n_returns += len(points)
+        near = np.hypot(points[:, 0] - x[0], points[:, 1] - x[1]) < self.config.min_ground_distance
+        self.n_dropped_near += int(np.count_nonzero(near))
+        ground = 0.0 if self.ground is None else self.ground  # the last scan's level (flat ground at first)
+        self.map.add(points[~near], high_above=ground + self.config.obstacle_min_height)
+        if self.map.n_cells == 0:
+            return self.obstacles
+        self.ground = self._ground_level(x[:2])
+        if self.ground is not None:
+            self._detect(scan.t, float(base_yaw(x[3:7])))
+        return self.obstacles
+
+    def _ground_level(self, base_xy: np.ndarray) -> float | None:
+        heights = self.map.height
+        local = np.hypot(*(self.map.centers() - base_xy).T) <= self.config.ground_radius
+        if not local.any():
+            return self.ground
+        first = float(np.median(heights[local]))
+        low = local & (heights <= first + self.config.obstacle_min_height)
+        return float(np.median(heights[low])) if low.any() else first
+
+    def _detect(self, t: float, heading: float) -> None:
+        config = self.config
+        high = np.flatnonzero(self.map.height - self.ground > config.obstacle_min_height)
+        if len(high) == 0:
+            return
+        groups = _groups(self.map.centers()[high], config.cluster_gap)
+        assigned: dict[int, list[np.ndarray]] = {}
+        new: list[np.ndarray] = []
+        count = self.map.count
+        for group in groups:
+            cells = high[group]
+            centroid = np.average(self.map.centers()[cells], axis=0, weights=count[cells])
+            match = next((k for k, track in enumerate(self.tracks)
+                          if track.obstacle.contains(centroid, margin=config.cluster_gap)), None)
+            if match is None:
+                new.append(cells)
+            else:
+                assigned.setdefault(match, []).append(cells)
+        for k, parts in assigned.items():
+            estimate = self._estimate(np.concatenate(parts), self.tracks[k].yaw)
+            if estimate is not None:
+                track = self.tracks[k]
+                track.obstacle, track.n_returns, track.n_cells = estimate
+        for cells in new:
+            estimate = self._estimate(cells, heading)
+            if estimate is not None:
+                obstacle, n_returns, n_cells = estimate
+                self.tracks.append(ObstacleTrack(t, heading, obstacle, n_returns, n_cells))
+
+    def _estimate(self, cells: np.ndarray, yaw: float) -> tuple[Obstacle, int, int] | None:
+        """The obstacle of ``cells`` (rows of the map) with depth axis ``yaw``, or None below ``min_returns``."""
+        n_returns = int(self.map.count[cells].sum())
+        if n_returns < self.config.min_returns:
+            return None
+        bounds = self.map.high_bounds[cells]
+        seen_high = np.isfinite(bounds[:, 0])
+        bounds = np.where(seen_high[:, None], bounds, self.map.bounds[cells])  # a cell made high by its mean only
+        x_min, x_max, y_min, y_max = bounds.T
+        corners = np.stack([np.column_stack([x_min, y_min]), np.column_stack([x_max, y_min]),
+                            np.column_stack([x_max, y_max]), np.column_stack([x_min, y_max])]).reshape(-1, 2)
+        axes = np.array([[np.cos(yaw), np.sin(yaw)], [-np.sin(yaw), np.cos(yaw)]])
+        local = corners @ axes.T
+        low, high = local.min(axis=0), local.max(axis=0)
+        size = np.maximum(high - low, self.config.cell_size)
+        center = 0.5 * (low + high) @ axes
+        height = float(np.median(self.map.height[cells])) - self.ground
+        return Obstacle(center=center, yaw=yaw, depth=size[0], width=size[1], height=height), n_returns, len(cells)
+
+
+def _groups(points_xy: np.ndarray, gap: float) -> list[np.ndarray]:
+    """Indices of ``points_xy`` (n, 2) grouped by distance: points closer than ``gap`` [m] share a
+    group, transitively (connected components)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    n = len(points_xy)
+    pairs = cKDTree(points_xy).query_pairs(gap, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, labels = connected_components(graph, directed=False)
+    return [np.flatnonzero(labels == label) for label in np.unique(labels)]
