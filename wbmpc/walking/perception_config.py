@@ -88,8 +88,8 @@ class PerceptionConfig:
 
     enabled: bool = True
     mount_position: tuple[float, float, float] = (0.15, 0.0, 0.0)
-    pitch_deg: tuple[float, ...] = (20.0, 25.0, 30.0, 35.0, 40.0, 45.0, 50.0)
-    yaw_deg: tuple[float, ...] = (-20.0, -10.0, 0.0, 10.0, 20.0)
+    pitch_deg: tuple[float, ...] = tuple(20.0 + 2.5 * k for k in range(17))  # 20, 22.5, ..., 60
+    yaw_deg: tuple[float, ...] = (-15.0, -10.0, -5.0, 0.0, 5.0, 10.0, 15.0)
     rate: float = 67.0
     max_range: float = 4.0
     noise_std: float = 0.0
@@ -98,7 +98,7 @@ class PerceptionConfig:
     min_ground_distance: float = 0.6
     cell_size: float = 0.02
     obstacle_min_height: float = 0.04
-    cluster_gap: float = 0.25
+    cluster_gap: float = 0.3
     min_returns: int = 12
     ground_radius: float = 3.0
 
