@@ -256,7 +256,7 @@ class _ClosedLoop:
         self.mj_model = spec.compile()
         self.perception = None
         if perception is not None and perception.enabled:
-            self.perception = PerceptionPipeline(self.mj_model, perception, self.seed)
+            self.perception = PerceptionPipeline(self.mj_model, perception, self.seed, robot)
         self.mj_data = mujoco.MjData(self.mj_model)
         qpos, qvel = pinocchio_to_mujoco_state(robot, np.asarray(robot.q_reference), np.asarray(robot.v_reference))
         self.mj_data.qpos[:] = qpos

@@ -4,7 +4,8 @@ Pure numpy (plus scipy's graph tools). Each :meth:`TerrainEstimator.update`:
 
 1. projects the scan's returns into the world with the *measured* base pose (``Measurement.x``,
    never the simulator's state) and drops those closer than ``min_ground_distance`` to the base,
-   horizontally (the robot's own legs and arms: see :mod:`sim.perception.rangefinder`);
+   horizontally, and those within ``self_filter_radius`` of the robot's leg segments given with
+   the scan (the robot's own legs: see :mod:`sim.perception.rangefinder`);
 2. accumulates them in the :class:`~sim.perception.heightmap.HeightMap` (memory: the map keeps what
    the rays saw, so a box stays known once it has left their field of view);
 3. estimates the ground level, the median height of the cells within ``ground_radius`` of the base
@@ -23,8 +24,9 @@ Pure numpy (plus scipy's graph tools). Each :meth:`TerrainEstimator.update`:
    - height: the median of its cells' mean heights, minus the ground level.
 
    A group is matched to an obstacle already reported when its centroid lies in that obstacle's
-   footprint grown by ``cluster_gap`` (groups matching the same obstacle are merged); the estimate
-   is refined with every scan.
+   footprint grown by ``cluster_gap`` (groups matching the same obstacle are merged, and so are two
+   reported obstacles one of which has its centre in the other's grown footprint); the estimate is
+   refined with every scan.
 """
 
 from __future__ import annotations
@@ -67,7 +69,7 @@ class TerrainEstimator:
         tracks: the obstacles reported so far, in the order they were first reported.
         ground: the last ground level [m] (None before the first return).
         n_updates, n_returns, n_dropped_near: scans processed, returns received, returns dropped
-            as too close to the robot.
+            as too close to the robot (its base or its legs).
     """
 
     def __init__(self, config: PerceptionConfig) -> None:
@@ -82,14 +84,23 @@ class TerrainEstimator:
         """The obstacles reported so far (current estimates), in the order they were first reported."""
         return tuple(track.obstacle for track in self.tracks)
 
-    def update(self, scan: Scan, x_measured: np.ndarray) -> tuple[Obstacle, ...]:
+    def update(self, scan: Scan, x_measured: np.ndarray, robot_segments: np.ndarray | None = None
+               ) -> tuple[Obstacle, ...]:
         """Add ``scan``, taken at the measured state ``x_measured`` (Pinocchio convention; only the
-        base pose q[0:7] is read), and return the obstacles reported so far."""
+        base pose q[0:7] is read), and return the obstacles reported so far.
+
+        Args:
+            robot_segments: the robot's own segments (legs), world frame [m], shape (k, 2, 3) (start and
+                end points), placed by the measured configuration; returns within
+                ``self_filter_radius`` of one are dropped (None: none given).
+        """
         x = np.asarray(x_measured, dtype=float)
         self.n_updates += 1
         points = scan.points_world(x)
         self.n_returns += len(points)
         near = np.hypot(points[:, 0] - x[0], points[:, 1] - x[1]) < self.config.min_ground_distance
+        if robot_segments is not None and len(robot_segments) and self.config.self_filter_radius > 0:
+            near |= segment_distance(points, robot_segments) < self.config.self_filter_radius
         self.n_dropped_near += int(np.count_nonzero(near))
         ground = 0.0 if self.ground is None else self.ground  # the last scan's level (flat ground at first)
         self.map.add(points[~near], high_above=ground + self.config.obstacle_min_height)
@@ -137,6 +148,21 @@ class TerrainEstimator:
             if estimate is not None:
                 obstacle, n_returns, n_cells = estimate
                 self.tracks.append(ObstacleTrack(t, heading, obstacle, n_returns, n_cells))
+        self._merge_overlapping()
+
+    def _merge_overlapping(self) -> None:
+        """Drop a track whose centre lies in the footprint (grown by ``cluster_gap``) of a track with more
+        returns (a part of one box first seen apart, e.g. its front face below a nearer box's shadow);
+        the kept track takes the earlier first report time."""
+        kept: list[ObstacleTrack] = []
+        for track in sorted(self.tracks, key=lambda tr: -tr.n_returns):
+            host = next((k for k in kept if k.obstacle.contains(track.obstacle.center, margin=self.config.cluster_gap)),
+                        None)
+            if host is None:
+                kept.append(track)
+            else:
+                host.first_seen = min(host.first_seen, track.first_seen)
+        self.tracks = sorted(kept, key=lambda tr: tr.first_seen)
 
     def _estimate(self, cells: np.ndarray, yaw: float) -> tuple[Obstacle, int, int] | None:
         """The obstacle of ``cells`` (rows of the map) with depth axis ``yaw``, or None below ``min_returns``."""
@@ -156,6 +182,17 @@ class TerrainEstimator:
         center = 0.5 * (low + high) @ axes
         height = float(np.median(self.map.height[cells])) - self.ground
         return Obstacle(center=center, yaw=yaw, depth=size[0], width=size[1], height=height), n_returns, len(cells)
+
+
+def segment_distance(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
+    """Distance [m] from each of ``points`` (m, 3) to the nearest of ``segments`` (k, 2, 3), shape (m,)."""
+    start, end = segments[:, 0], segments[:, 1]
+    along = end - start  # (k, 3)
+    length2 = np.maximum(np.einsum("kd,kd->k", along, along), 1e-12)
+    relative = points[:, None, :] - start[None]  # (m, k, 3)
+    s = np.clip(np.einsum("mkd,kd->mk", relative, along) / length2, 0.0, 1.0)
+    closest = start[None] + s[..., None] * along[None]
+    return np.min(np.linalg.norm(points[:, None, :] - closest, axis=2), axis=1)
 
 
 def _groups(points_xy: np.ndarray, gap: float) -> list[np.ndarray]:

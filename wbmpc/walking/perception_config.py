@@ -75,8 +75,11 @@ class PerceptionConfig:
 
     Terrain estimate (``sim.perception.terrain``):
         min_ground_distance: returns closer than this to the measured base, horizontally, are
-            dropped [m]: they may be the robot's own legs and arms (a swing foot reaches about 0.4 m
-            ahead of the H1's pelvis), which would read as obstacles.
+            dropped [m]: they may be the robot's own legs (a knee raised to step over a box is hit
+            0.41 m ahead of the H1's pelvis), which would read as obstacles.
+        self_filter_radius: returns closer than this to the robot's legs are dropped [m]: the
+            segments joining the joints of each leg, from the base to the sole, and the sole from
+            heel to toe, placed by the *measured* configuration (0: no such filter).
         cell_size: side of the height map's square cells, world frame [m].
         obstacle_min_height: a cell whose mean return height is this much above the ground level is
             an obstacle cell [m].
@@ -96,6 +99,7 @@ class PerceptionConfig:
     dropout_probability: float = 0.0
     blackouts: tuple[tuple[float, float], ...] = ()
     min_ground_distance: float = 0.6
+    self_filter_radius: float = 0.12
     cell_size: float = 0.02
     obstacle_min_height: float = 0.04
     cluster_gap: float = 0.3
@@ -122,6 +126,8 @@ class PerceptionConfig:
         object.__setattr__(self, "blackouts", _intervals("blackouts", self.blackouts))
         object.__setattr__(self, "min_ground_distance",
                            _number("min_ground_distance", self.min_ground_distance, 0.0, 10.0, "m"))
+        object.__setattr__(self, "self_filter_radius",
+                           _number("self_filter_radius", self.self_filter_radius, 0.0, 1.0, "m"))
         object.__setattr__(self, "cell_size", _number("cell_size", self.cell_size, 0.001, 1.0, "m"))
         object.__setattr__(self, "obstacle_min_height",
                            _number("obstacle_min_height", self.obstacle_min_height, 0.0, 1.0, "m", low_open=True))
