@@ -40,6 +40,8 @@ class HeightMap:
         self._sum_z = np.zeros(_INITIAL_CELLS)
         self._bounds = np.zeros((_INITIAL_CELLS, 4))
         self._high_bounds = np.zeros((_INITIAL_CELLS, 4))
+        self._centers = np.zeros((_INITIAL_CELLS, 2))
+        self.n_high_added = 0  # returns above ``high_above`` added by the last :meth:`add`
 
     # ------------------------------------------------------------------ views of the known cells
     @property
@@ -64,13 +66,14 @@ class HeightMap:
 
     def centers(self) -> np.ndarray:
         """Centres (x, y) of the known cells [m], shape (n, 2)."""
-        return (self.keys + 0.5) * self.cell_size
+        return self._centers[: self.n_cells]
 
     # ------------------------------------------------------------------ updates and queries
     def add(self, points_world: np.ndarray, high_above: float = np.inf) -> None:
         """Accumulate returns ``points_world`` (m, 3) [m] into their cells; those higher than
         ``high_above`` [m] also into the cells' :attr:`high_bounds`."""
         points = np.asarray(points_world, dtype=float).reshape(-1, 3)
+        self.n_high_added = 0
         if len(points) == 0:
             return
         cells = np.floor(points[:, :2] / self.cell_size).astype(np.int64)
@@ -80,6 +83,7 @@ class HeightMap:
         np.add.at(self._count, rows, 1)
         np.add.at(self._sum_z, rows, points[:, 2])
         high = points[:, 2] > high_above
+        self.n_high_added = int(np.count_nonzero(high))
         for column, (coordinate, reduce) in enumerate(((0, np.minimum), (0, np.maximum), (1, np.minimum), (1, np.maximum))):
             reduce.at(self._bounds[:, column], rows, points[:, coordinate])
             reduce.at(self._high_bounds[:, column], rows[high], points[high, coordinate])
@@ -93,6 +97,7 @@ class HeightMap:
         row = self.n_cells
         self._index[(ix, iy)] = row
         self._keys[row] = (ix, iy)
+        self._centers[row] = ((ix + 0.5) * self.cell_size, (iy + 0.5) * self.cell_size)
         self._bounds[row] = self._high_bounds[row] = (np.inf, -np.inf, np.inf, -np.inf)
         self.n_cells += 1
         return row
@@ -104,6 +109,7 @@ class HeightMap:
         self._sum_z = np.concatenate([self._sum_z, np.zeros(size - len(self._sum_z))])
         self._bounds = np.resize(self._bounds, (size, 4))
         self._high_bounds = np.resize(self._high_bounds, (size, 4))
+        self._centers = np.resize(self._centers, (size, 2))
 
     def height_at(self, points_xy) -> np.ndarray:
         """Mean return height [m] of the cells holding ``points_xy`` (..., 2); NaN where unknown."""

@@ -1,6 +1,6 @@
 """Terrain estimate: from scans and the measured base pose, a height map and the obstacles on it.
 
-Pure numpy (plus scipy's graph tools). Each :meth:`TerrainEstimator.update`:
+Pure numpy. Each :meth:`TerrainEstimator.update`:
 
 1. projects the scan's returns into the world with the *measured* base pose (``Measurement.x``,
    never the simulator's state) and drops those closer than ``min_ground_distance`` to the base,
@@ -11,7 +11,7 @@ Pure numpy (plus scipy's graph tools). Each :meth:`TerrainEstimator.update`:
 3. estimates the ground level, the median height of the cells within ``ground_radius`` of the base
    (twice: the second time without the cells more than ``obstacle_min_height`` above the first);
 4. marks the cells whose mean height is more than ``obstacle_min_height`` above the ground, groups
-   them (cells within ``cluster_gap`` of each other, transitively) and reports each group holding
+   them (touching bins of side ``cluster_gap / 2``, transitively: :func:`_groups`) and reports each group holding
    at least ``min_returns`` returns as a :class:`sequencer.obstacles.Obstacle`:
 
    - its depth axis is the robot's measured heading when the group was first reported (the
@@ -40,6 +40,8 @@ from sequencer.obstacles import Obstacle
 from sim.perception.heightmap import HeightMap
 from sim.perception.scan import Scan
 from wbmpc.walking.perception_config import PerceptionConfig
+
+GROUND_CHANGE = 1e-4  # [m], a ground level change that re-estimates the obstacles without new returns on them
 
 
 @dataclass
@@ -106,8 +108,10 @@ class TerrainEstimator:
         self.map.add(points[~near], high_above=ground + self.config.obstacle_min_height)
         if self.map.n_cells == 0:
             return self.obstacles
-        self.ground = self._ground_level(x[:2])
-        if self.ground is not None:
+        previous, self.ground = self.ground, self._ground_level(x[:2])
+        # the obstacles change only with new returns on them or with the ground level
+        changed = previous is None or abs(self.ground - previous) > GROUND_CHANGE
+        if self.ground is not None and (self.map.n_high_added > 0 or changed):
             self._detect(scan.t, float(base_yaw(x[3:7])))
         return self.obstacles
 
@@ -196,14 +200,28 @@ def segment_distance(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
 
 
 def _groups(points_xy: np.ndarray, gap: float) -> list[np.ndarray]:
-    """Indices of ``points_xy`` (n, 2) grouped by distance: points closer than ``gap`` [m] share a
-    group, transitively (connected components)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
-    n = len(points_xy)
-    pairs = cKDTree(points_xy).query_pairs(gap, output_type="ndarray")
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    _, labels = connected_components(graph, directed=False)
-    return [np.flatnonzero(labels == label) for label in np.unique(labels)]
+    """Indices of ``points_xy`` (n, 2) grouped by proximity: the points fall in square bins of side
+    ``gap / 2`` [m], and bins that touch (8-neighbours) share a group, transitively. Two points of one
+    group step by at most ``gap`` from bin to bin (bins' centres); points farther apart than ``gap``
+    with nothing between them are in different groups."""
+    bins = np.floor(np.asarray(points_xy) / (0.5 * gap)).astype(np.int64)
+    unique, inverse = np.unique(bins, axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    index = {(int(i), int(j)): k for k, (i, j) in enumerate(unique)}
+    label = np.full(len(unique), -1)
+    n_groups = 0
+    for start in range(len(unique)):
+        if label[start] >= 0:
+            continue
+        label[start], stack = n_groups, [start]
+        while stack:
+            i, j = unique[stack.pop()]
+            for di in (-1, 0, 1):
+                for dj in (-1, 0, 1):
+                    k = index.get((int(i) + di, int(j) + dj))
+                    if k is not None and label[k] < 0:
+                        label[k] = n_groups
+                        stack.append(k)
+        n_groups += 1
+    point_label = label[inverse]
+    return [np.flatnonzero(point_label == g) for g in range(n_groups)]
