@@ -160,8 +160,8 @@ def run_scenario(
         is_controller_key = {"kp", "kd"}.__contains__
     unknown = sorted(k for k in params if k not in scenario_keys and k not in runner_keys and not is_controller_key(k))
     if unknown:
-        allowed = ("walking preset overrides: controller fields or 'section.field' "
-                   "(sections planner, ocp, controller, fall, command)" if controller == "walking" else
+        allowed = ("walking preset overrides: controller fields or 'section.field' (sections planner, ocp, "
+                   "controller, fall, command, footstep_planner, perception)" if controller == "walking" else
                    "controller ['kd', 'kp']" if controller == "pd" else "no controller options (custom controller)")
         raise ParameterError(
             f"run_scenario({name!r}): unknown parameter(s) {unknown}; allowed: scenario {sorted(scenario_keys)}, "

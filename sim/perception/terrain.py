@@ -10,7 +10,8 @@ Pure numpy. Each :meth:`TerrainEstimator.update`:
    the rays saw, so a box stays known once it has left their field of view);
 3. estimates the ground level, the median height of the cells within ``ground_radius`` of the base
    (twice: the second time without the cells more than ``obstacle_min_height`` above the first);
-4. marks the cells whose mean height is more than ``obstacle_min_height`` above the ground, groups
+4. marks the cells whose mean height is more than ``obstacle_min_height`` above the ground (and
+   that hold at least ``min_cell_returns`` returns), groups
    them (touching bins of side ``cluster_gap / 2``, transitively: :func:`_groups`) and reports each group holding
    at least ``min_returns`` returns as a :class:`sequencer.obstacles.Obstacle`:
 
@@ -21,7 +22,9 @@ Pure numpy. Each :meth:`TerrainEstimator.update`:
      The near edge is seen on the box's front face and is sharp; the far edge is the last return
      on the top, short of the true edge by up to the rays' spacing on the top; the width is what
      the rays' fan saw (a lower bound of a box wider than the fan);
-   - height: the median of its cells' mean heights, minus the ground level.
+   - height: the median of its top cells' mean heights, minus the ground level (top cells: those
+     at least half as high as the group's 90th percentile; the cells of the front face, lower,
+     are left out).
 
    A group is matched to an obstacle already reported when its centroid lies in that obstacle's
    footprint grown by ``cluster_gap`` (groups matching the same obstacle are merged, and so are two
@@ -126,7 +129,8 @@ class TerrainEstimator:
 
     def _detect(self, t: float, heading: float) -> None:
         config = self.config
-        high = np.flatnonzero(self.map.height - self.ground > config.obstacle_min_height)
+        high = np.flatnonzero((self.map.height - self.ground > config.obstacle_min_height)
+                              & (self.map.count >= config.min_cell_returns))
         if len(high) == 0:
             return
         groups = _groups(self.map.centers()[high], config.cluster_gap)
@@ -184,7 +188,9 @@ class TerrainEstimator:
         low, high = local.min(axis=0), local.max(axis=0)
         size = np.maximum(high - low, self.config.cell_size)
         center = 0.5 * (low + high) @ axes
-        height = float(np.median(self.map.height[cells])) - self.ground
+        heights = self.map.height[cells] - self.ground
+        top = heights >= 0.5 * np.percentile(heights, 90)  # the top's cells, not those of the front face below it
+        height = float(np.median(heights[top]))
         return Obstacle(center=center, yaw=yaw, depth=size[0], width=size[1], height=height), n_returns, len(cells)
 
 

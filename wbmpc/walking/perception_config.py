@@ -83,6 +83,9 @@ class PerceptionConfig:
         cell_size: side of the height map's square cells, world frame [m].
         obstacle_min_height: a cell whose mean return height is this much above the ground level is
             an obstacle cell [m].
+        min_cell_returns: returns a cell needs before it can be an obstacle cell [-] (its mean height
+            averages the range noise: with noise a cell of one return above the threshold is
+            likelier noise than an obstacle).
         cluster_gap: obstacle cells closer than this (centre to centre) belong to one obstacle [m].
         min_returns: returns an obstacle needs, summed over its cells, to be reported [-].
         ground_radius: the ground level is the median height of the non-obstacle cells within this
@@ -102,6 +105,7 @@ class PerceptionConfig:
     self_filter_radius: float = 0.12
     cell_size: float = 0.02
     obstacle_min_height: float = 0.04
+    min_cell_returns: int = 2
     cluster_gap: float = 0.3
     min_returns: int = 12
     ground_radius: float = 3.0
@@ -132,8 +136,10 @@ class PerceptionConfig:
         object.__setattr__(self, "obstacle_min_height",
                            _number("obstacle_min_height", self.obstacle_min_height, 0.0, 1.0, "m", low_open=True))
         object.__setattr__(self, "cluster_gap", _number("cluster_gap", self.cluster_gap, 0.0, 5.0, "m", low_open=True))
-        if isinstance(self.min_returns, bool) or not isinstance(self.min_returns, int) or self.min_returns < 1:
-            raise ParameterError(f"perception.min_returns={self.min_returns!r} must be an integer >= 1")
+        for name in ("min_returns", "min_cell_returns"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ParameterError(f"perception.{name}={value!r} must be an integer >= 1")
         object.__setattr__(self, "ground_radius",
                            _number("ground_radius", self.ground_radius, 0.0, 100.0, "m", low_open=True))
         if self.min_ground_distance >= self.max_range:
