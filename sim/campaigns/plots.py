@@ -152,15 +152,16 @@ def plot_obstacle_success(summary: dict[str, Any], path: str | Path) -> str:
         touched = [np.nan if e["touched_rate"] is None else e["touched_rate"] for e in by_variant[variant]]
         ax.plot(x + offset, touched, "kv", markersize=5, label="touched the box" if k == 0 else None)
         for xi, e in zip(x + offset, by_variant[variant]):
-            ax.text(xi, 0.02, str(e["n"]), ha="center", fontsize=7, color="white")
+            ax.text(xi, 0.02, f"n={e['n']}", ha="center", fontsize=7)
     paper = [np.nan if e["paper_success_rate"] is None else e["paper_success_rate"] for e in entries]
     ax.bar(x + (n_bars - 1) / 2 * width, paper, width, color="0.6", label="seed 000 (H1-2, MJPC, Fig. 5.13)")
     ax.set_xticks(x, labels)
     ax.set_xlabel("box height [cm]")
     ax.set_ylabel("step-over success rate")
-    ax.set_ylim(0.0, 1.05)
-    ax.legend(fontsize=8)
-    ax.set_title(f"{summary['campaign']}: success by height (numbers: trials)", fontsize=10)
+    ax.set_ylim(0.0, 1.3)
+    ax.set_yticks(np.linspace(0.0, 1.0, 6))
+    ax.legend(fontsize=8, loc="upper center", ncol=3)
+    ax.set_title(f"{summary['campaign']}: step-over success by box height", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
