@@ -231,3 +231,16 @@ def test_a_tiny_obstacle_campaign_runs_through_the_real_machinery(tmp_path, caps
     assert "obstacle 10 cm, default: success 0.0 % (seed 000: 100.0 %)" in capsys.readouterr().out
     records = ResultStore(out).records()
     assert len(records) == 2 and all(r["success"] is False and r["metrics"]["crossed"] is False for r in records)
+
+
+def test_the_run_table_shows_the_obstacle_outcome_and_the_perception():
+    from wbmpc.cli.walk import format_metrics
+
+    metrics = {"simulated_time": 12.0, "success": False, "crossed": False, "touched": True,
+               "resting_on_obstacle": True, "crossing_time": None, "detected": True, "detection_time": 0.06,
+               "detection_distance": 2.64, "height_error": 2e-4, "near_edge_error": -7e-4}
+    text = format_metrics({"scenario": "obstacle", "seed": 0, "status": "fell", "fall_time": 9.1,
+                           "fall_reason": "base tilt 45.0 deg > max_tilt=45.0 deg", "metrics": metrics})
+    assert "obstacle success             False (crossed False, touched True, resting on it True)" in text
+    assert "detection distance           2.64 m" in text and "height estimate error        0.2 mm" in text
+    assert "crossing time                n/a" in text
