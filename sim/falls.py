@@ -5,6 +5,15 @@ than a foot touches the ground. Ground geoms are those attached to the world bod
 boxes, patches); a contact belongs to a foot when the robot's geom in it is one of that foot's
 collision geoms (``robot.mujoco_foot_geoms``: Bolt's sphere, the G1's sole spheres), so every
 robot's foot geometry is known, whatever its size.
+
+Obstacles (``sim.scenarios.obstacle``): world geoms whose name starts with ``OBSTACLE_GEOM_PREFIX``
+are classified apart (:meth:`ContactSensor.classify_with_obstacles`). A foot on an obstacle is a
+foot in contact (``foot_in_contact``: the controller must know a foot that landed on the box bears
+weight) *and* an obstacle contact; any other part of the robot touching an obstacle (a shank
+against the box's edge) is an obstacle contact, not a fall by itself (the fall detector still
+watches the base height, the tilt and the other ground contacts). The runner logs every obstacle
+contact per tick (``ticks["obstacle_contact"]``), which the obstacle metrics read (``touched``,
+resting on the obstacle at the end).
 """
 
 from __future__ import annotations
@@ -17,6 +26,8 @@ import numpy as np
 
 from robots.mujoco_model import foot_geom_name
 from wbmpc.errors import ParameterError
+
+OBSTACLE_GEOM_PREFIX = "obstacle"  # world geoms named so are obstacles (see the module docstring)
 
 
 @dataclass(frozen=True)
@@ -50,6 +61,8 @@ class ContactSensor:
 
     def __init__(self, model, robot) -> None:
         self.ground_geom_list = (np.asarray(model.geom_bodyid) == 0).tolist()
+        self.obstacle_geom_list = [bool(ground) and model.geom(g).name.startswith(OBSTACLE_GEOM_PREFIX)
+                                   for g, ground in enumerate(self.ground_geom_list)]
         self.n_feet = len(robot.foot_frames)
         self.foot_of_geom: dict[int, int] = {}
         for index, side in enumerate(robot.foot_frames):
@@ -69,9 +82,22 @@ class ContactSensor:
         Returns:
             (foot_in_contact (n_feet,) bool, description of a non-foot ground contact or None).
         """
+        in_contact, other, _ = self.classify_with_obstacles(data)
+        return in_contact, other
+
+    def classify_with_obstacles(self, data) -> tuple[np.ndarray, str | None, np.ndarray]:
+        """:meth:`classify` and the robot's contacts with obstacles.
+
+        Returns:
+            (foot_in_contact (n_feet,) bool, description of a non-foot ground contact that is not an
+            obstacle contact or None, obstacle_contact (n_feet + 1,) bool: each foot on an obstacle,
+            then any other part of the robot touching one).
+        """
         in_contact = np.zeros(self.n_feet, dtype=bool)
+        on_obstacle = np.zeros(self.n_feet + 1, dtype=bool)
         if data.ncon == 0:
-            return in_contact, None
+            return in_contact, None, on_obstacle
+        obstacles = self.obstacle_geom_list
         # plain Python over the few contacts: faster than numpy on arrays this small (1 kHz path)
         contacts = data.contact
         ground = self.ground_geom_list
@@ -83,12 +109,15 @@ class ContactSensor:
                 continue
             robot_geom = g2 if ground1 else g1
             foot = feet.get(robot_geom)
+            obstacle = obstacles[g1 if ground1 else g2]
+            if obstacle:
+                on_obstacle[self.n_feet if foot is None else foot] = True
             if foot is not None:
                 in_contact[foot] = True
-            elif other is None:
+            elif other is None and not obstacle:
                 body = self.model.body(self.model.geom_bodyid[robot_geom]).name
                 other = f"ground contact of body {body!r} at {np.round(point, 3).tolist()} m"
-        return in_contact, other
+        return in_contact, other, on_obstacle
 
 
 def base_tilt(quaternion_xyzw: np.ndarray) -> float:

@@ -26,6 +26,8 @@ Definitions (all times in s, velocities in m/s, world frame):
   corner of the square: the error there says how the turn is shared, not how well the robot
   follows); ``path_progress`` [m]: arc length of the closest point at the end of the run;
   ``path_completion``: ``path_progress`` / (laps x path length) (1 = back at the end point).
+- obstacle crossing (scenario ``obstacle``): ``success``, ``touched``, ``crossing_time``, the
+  perception's detection and errors (:mod:`sim.obstacle_metrics`).
 - ``max_stance_slide``: largest distance between the stance foot and its touchdown point (slips).
 - ``max_torque_ratio``: max |tau_command| / torque limit (> 1 means the limits clipped the command);
   ``saturated_fraction``: fraction of ticks with at least one clipped joint.
@@ -200,6 +202,12 @@ def compute_metrics(log) -> dict[str, Any]:
     path = path_from_parameters(scenario)
     if path is not None:
         metrics.update(path_metrics(path, ticks["x"][:, :2], base_yaw(ticks["x"][:, 3:7]), scenario.get("laps", 1.0)))
+
+    # Obstacle crossing (scenario "obstacle"; definitions in sim.obstacle_metrics).
+    if log.params.get("obstacle_truth"):
+        from sim.obstacle_metrics import obstacle_metrics
+
+        metrics.update(obstacle_metrics(log))
 
     # Foot slip: stance foot away from where it touched down.
     if "feet" in ticks:

@@ -8,7 +8,9 @@ Each tick (``model.opt.timestep``, 1 ms):
 
 1. read MuJoCo's state and convert it to Pinocchio's convention (``robots.conventions``);
 2. compute CoM, DCM and feet (logged for every controller), classify ground contacts, detect a fall;
-3. build the measurement (optionally with Gaussian noise in the tangent space) and ask the scenario
+3. build the measurement (optionally with Gaussian noise in the tangent space; with the walking
+   preset's ``[perception]``, the obstacles the rangefinders have shown so far, scanned at their own
+   rate from the measured pose: :class:`sim.perception.PerceptionPipeline`) and ask the scenario
    for its velocity command, given the measured base pose (x, y, yaw);
 4. every ``controller.replan_period``: pass the scenario's velocity command, call ``replan``;
 5. ``tau = controller.compute(...)``, clipped to the robot's torque limits, written to ``data.ctrl``;
@@ -16,6 +18,11 @@ Each tick (``model.opt.timestep``, 1 ms):
 
 The tick logs grow by chunks of ``LOG_CHUNK_TICKS`` rows as the run goes (no allocation for
 the whole duration up front: a long or open-ended ``duration`` costs memory only for the ticks run).
+
+With perception on, the log's ``params["perception"]`` holds the scan counts and every reported
+obstacle (first report time, last estimate), and ``params["obstacle_truth"]`` the scene's obstacles
+of a scenario that places some (``true_obstacles()``, for the metrics only: the controller never sees
+it); ``ticks["obstacle_contact"]`` records the robot's contacts with obstacles (:mod:`sim.falls`).
 
 The log and ``metrics.json`` are written to ``out`` (when given) in a ``finally`` block, so a fall,
 an exception or Ctrl-C still leaves a complete record of what happened up to that point.
@@ -153,8 +160,8 @@ def run_scenario(
         is_controller_key = {"kp", "kd"}.__contains__
     unknown = sorted(k for k in params if k not in scenario_keys and k not in runner_keys and not is_controller_key(k))
     if unknown:
-        allowed = ("walking preset overrides: controller fields or 'section.field' "
-                   "(sections planner, ocp, controller, fall, command)" if controller == "walking" else
+        allowed = ("walking preset overrides: controller fields or 'section.field' (sections planner, ocp, "
+                   "controller, fall, command, footstep_planner, perception)" if controller == "walking" else
                    "controller ['kd', 'kp']" if controller == "pd" else "no controller options (custom controller)")
         raise ParameterError(
             f"run_scenario({name!r}): unknown parameter(s) {unknown}; allowed: scenario {sorted(scenario_keys)}, "
@@ -241,7 +248,15 @@ class _ClosedLoop:
         self.scenario.setup(robot, controller_command_range(self.controller))
         spec = build_mujoco_spec(robot, link_collisions=True)
         self.scenario.modify_spec(spec, self.rng)
+        perception = None if self.preset is None else self.preset.perception
+        if perception is not None and perception.enabled:
+            from sim.perception import PerceptionPipeline
+
+            PerceptionPipeline.add_to_spec(spec, perception, robot.base_body)
         self.mj_model = spec.compile()
+        self.perception = None
+        if perception is not None and perception.enabled:
+            self.perception = PerceptionPipeline(self.mj_model, perception, self.seed, robot)
         self.mj_data = mujoco.MjData(self.mj_model)
         qpos, qvel = pinocchio_to_mujoco_state(robot, np.asarray(robot.q_reference), np.asarray(robot.v_reference))
         self.mj_data.qpos[:] = qpos
@@ -283,6 +298,7 @@ class _ClosedLoop:
             "com_velocity": np.zeros((n, 3)),
             "feet": np.zeros((n, n_feet, 3)),
             "foot_contact": np.zeros((n, n_feet), dtype=bool),
+            "obstacle_contact": np.zeros((n, n_feet + 1), dtype=bool),
             "base_velocity_world": np.zeros((n, 3)),
             "velocity_command": np.zeros((n, 3)),
         }
@@ -298,7 +314,8 @@ class _ClosedLoop:
     def run(self) -> RunLog:
         log, ticks_done = self.log, 0
         replan_rows: list[dict[str, float]] = []
-        timing = {"simulation": 0.0, "replan": 0.0, "feedback": 0.0, "logging": 0.0, "setup": 0.0, "total": 0.0}
+        timing = {"simulation": 0.0, "replan": 0.0, "feedback": 0.0, "logging": 0.0, "perception": 0.0, "setup": 0.0,
+                  "total": 0.0}
         wall_start = time.perf_counter()
         bar = None
         chunks: list[dict[str, np.ndarray]] = []  # the tick logs, LOG_CHUNK_TICKS rows each
@@ -333,8 +350,15 @@ class _ClosedLoop:
                 com_velocity = self.data.vcom[0]
                 pin.updateFramePlacements(self.model, self.data)
                 feet = np.array([self.data.oMf[f].translation for f in self.frame_ids])
-                foot_contact, other_contact = self.contacts.classify(data)
-                measurement = Measurement(t, self._measure_noise(q, v), foot_contact)
+                foot_contact, other_contact, obstacle_contact = self.contacts.classify_with_obstacles(data)
+                x_measured = self._measure_noise(q, v)
+                obstacles, perception_time = (), 0.0
+                if self.perception is not None:
+                    tic_perception = time.perf_counter()
+                    obstacles = self.perception.step(i, t, model, data, x_measured)
+                    perception_time = time.perf_counter() - tic_perception
+                    timing["perception"] += perception_time
+                measurement = Measurement(t, x_measured, foot_contact, obstacles)
                 pose = (measurement.x[0], measurement.x[1], float(base_yaw(measurement.x[3:7])))
                 command = self.scenario.velocity_command(t, pose)
                 ticks["t"][r] = t
@@ -346,10 +370,11 @@ class _ClosedLoop:
                 ticks["com_velocity"][r] = com_velocity
                 ticks["feet"][r] = feet
                 ticks["foot_contact"][r] = foot_contact
+                ticks["obstacle_contact"][r] = obstacle_contact
                 ticks["base_velocity_world"][r] = data.qvel[:3]
                 ticks["velocity_command"][r] = command
                 ticks_done = i + 1
-                timing["logging"] += time.perf_counter() - tic
+                timing["logging"] += time.perf_counter() - tic - perception_time
 
                 reason = detect_fall(self.criteria, q, other_contact)
                 if reason is not None and log.fall_time is None:
@@ -424,6 +449,13 @@ class _ClosedLoop:
         log.timing = timing
         if getattr(self, "robot", None) is not None:
             log.params["torque_limit"] = np.asarray(self.robot.torque_limit).tolist()
+        if getattr(self, "perception", None) is not None:
+            log.params["perception"] = self.perception.summary()
+        true_obstacles = getattr(self.scenario, "true_obstacles", None)
+        if true_obstacles is not None and getattr(self, "robot", None) is not None:
+            from sim.perception.pipeline import obstacle_record
+
+            log.params["obstacle_truth"] = [obstacle_record(o) for o in true_obstacles()]
         try:
             log.metrics = compute_metrics(log)
         except Exception as err:  # metrics must never hide the run's own outcome

@@ -3,7 +3,8 @@
 - :func:`plot_force_maps`: success rate over the push-force grid (Fx from -F to F, Fy from 0 to F,
   world frame [N]) per variant, as in Fig. 6 of the ALIP paper, plus the difference map;
 - :func:`plot_success_by_phase`: success rate per gait phase of the push, per variant;
-- :func:`plot_success_by_axis`: success rate along other grid axes (terrain density...).
+- :func:`plot_success_by_axis`: success rate along other grid axes (terrain density...);
+- :func:`plot_obstacle_success`: step-over success by box height, beside the seed-000 thesis's.
 """
 
 from __future__ import annotations
@@ -126,6 +127,41 @@ def plot_success_by_axis(summary: dict[str, Any], axes_names: list[str], path: s
         ax.set_ylim(0.0, 1.05)
         ax.legend(fontsize=8)
     fig.suptitle(f"campaign {summary['campaign']}", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return str(path)
+
+
+def plot_obstacle_success(summary: dict[str, Any], path: str | Path) -> str:
+    """Step-over success rate by box height [cm], one bar per variant, beside the seed-000 thesis's
+    (H1-2, Fig. 5.13), with the touched rate as a dot and the trial counts."""
+    plt = _pyplot()
+    by_variant = summary["obstacle"]
+    variants = list(by_variant)
+    entries = by_variant[variants[0]]
+    labels = [f"{100 * e['height']:.0f}" for e in entries]
+    n_bars = len(variants) + 1
+    width = 0.8 / n_bars
+    fig, ax = plt.subplots(figsize=(6.4, 3.8))
+    x = np.arange(len(labels))
+    for k, variant in enumerate(variants):
+        offset = (k - (n_bars - 1) / 2) * width
+        rates = [np.nan if e["success_rate"] is None else e["success_rate"] for e in by_variant[variant]]
+        ax.bar(x + offset, rates, width, label=f"ours ({variant})" if len(variants) > 1 else "ours")
+        touched = [np.nan if e["touched_rate"] is None else e["touched_rate"] for e in by_variant[variant]]
+        ax.plot(x + offset, touched, "kv", markersize=5, label="touched the box" if k == 0 else None)
+        for xi, e in zip(x + offset, by_variant[variant]):
+            ax.text(xi, 0.02, f"n={e['n']}", ha="center", fontsize=7)
+    paper = [np.nan if e["paper_success_rate"] is None else e["paper_success_rate"] for e in entries]
+    ax.bar(x + (n_bars - 1) / 2 * width, paper, width, color="0.6", label="seed 000 (H1-2, MJPC, Fig. 5.13)")
+    ax.set_xticks(x, labels)
+    ax.set_xlabel("box height [cm]")
+    ax.set_ylabel("step-over success rate")
+    ax.set_ylim(0.0, 1.3)
+    ax.set_yticks(np.linspace(0.0, 1.0, 6))
+    ax.legend(fontsize=8, loc="upper center", ncol=3)
+    ax.set_title(f"{summary['campaign']}: step-over success by box height", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -11,6 +11,12 @@ the push actually hit is measured from the controller's stance switches; it drif
 and differently per variant (a step-timing variant changes the gait itself), so the report also
 bins success by the measured phase (``phase_measured``).
 
+Obstacle campaigns (scenario ``obstacle``, ``wbmpc campaign obstacles``): a trial succeeds when its
+run completes and the robot crossed the box (``sim.obstacle_metrics``: base and both feet beyond
+the far edge, no fall, nothing resting on the box); ``obstacle`` reports per height the success,
+touch, fall and detection rates, the mean crossing time and height-estimate error, beside the
+seed-000 thesis's success rates (``PAPER_OBSTACLE_SUCCESS``, H1-2, 20 trials per height).
+
 Variant comparison (e.g. adaptive against fixed step timing): on the pairs of trials that share a
 point and a seed, both recorded,
 
@@ -36,6 +42,8 @@ from sim.campaigns.trial import make_trials
 PAPER_TIMING_GAIN = 0.36  # ALIP paper: adaptive step timing, +36 % successful push recoveries (G1)
 MAX_ERROR_KINDS = 5
 MEASURED_PHASE_BINS = 5  # bins of the measured push phase over [0, 1)
+# The seed-000 thesis (Unitree H1-2, MJPC): step-over success by obstacle height [m], Fig. 5.13, 20 trials each
+PAPER_OBSTACLE_SUCCESS = {0.1: 1.00, 0.2: 0.85, 0.3: 0.60, 0.4: 0.05}
 
 
 def _stats(records: list[dict[str, Any]]) -> dict[str, Any]:
@@ -172,9 +180,40 @@ def summarize(spec: CampaignSpec, records: list[dict[str, Any]]) -> dict[str, An
             )
         summary["comparisons"] = comparisons
 
+    if spec.scenario == "obstacle" and "height" in spec.grid:
+        summary["obstacle"] = _obstacle_summary(spec, rows)
+
     errors = Counter(r["error"] for _, r in rows if r["status"] == "error")
     summary["errors"] = [{"error": text, "count": count} for text, count in errors.most_common(MAX_ERROR_KINDS)]
     return summary
+
+
+def _mean(values: list[Any]) -> float | None:
+    values = [float(v) for v in values if v is not None]
+    return float(np.mean(values)) if values else None
+
+
+def _obstacle_summary(spec: CampaignSpec, rows) -> dict[str, Any]:
+    """Per variant and box height: success, touched, fell and detected rates, mean crossing time [s],
+    mean |height estimate error| [m], and the seed-000 thesis's success rate (None where it has none)."""
+    out: dict[str, Any] = {}
+    for variant in spec.variants:
+        entries = []
+        for height in spec.grid["height"]:
+            selected = [r for t, r in rows if t.variant == variant and t.params.get("height") == height]
+            metrics = [r.get("metrics", {}) for r in selected]
+            n = len(selected)
+            rate = {key: sum(bool(m.get(key)) for m in metrics) / n if n else None for key in ("touched", "detected")}
+            errors = [abs(m["height_error"]) for m in metrics if m.get("height_error") is not None]
+            entries.append({
+                "height": height, **_stats(selected),
+                "touched_rate": rate["touched"], "detected_rate": rate["detected"],
+                "crossing_time_mean": _mean([m.get("crossing_time") for m in metrics]),
+                "height_error_abs_mean": _mean(errors),
+                "paper_success_rate": PAPER_OBSTACLE_SUCCESS.get(round(float(height), 3)),
+            })
+        out[variant] = entries
+    return out
 
 
 def format_summary(summary: dict[str, Any]) -> str:
@@ -230,6 +269,14 @@ def format_summary(summary: dict[str, Any]) -> str:
         if c["paper_relative_change"] is not None:
             line += f" (ALIP paper, G1, other controller: {100 * c['paper_relative_change']:+.0f} %)"
         lines.append(line)
+    for variant, entries in summary.get("obstacle", {}).items():
+        for e in entries:
+            paper = "" if e["paper_success_rate"] is None else f" (seed 000: {pct(e['paper_success_rate']).strip()})"
+            lines.append(
+                f"  obstacle {100 * e['height']:.0f} cm, {variant}: success {pct(e['success_rate']).strip()}{paper}, "
+                f"touched {pct(e['touched_rate']).strip()}, fell {e['n_fell']}/{e['n']}, detected "
+                f"{pct(e['detected_rate']).strip()}"
+            )
     for e in summary.get("errors", []):
         lines.append(f"  error x{e['count']}: {e['error']}")
     for path in summary.get("files", []):
@@ -241,7 +288,8 @@ def write_report(directory: str | Path, plots: bool = True) -> dict[str, Any]:
     """Summarize the campaign stored in ``directory``: write ``summary.json`` and the figures.
 
     Figures: ``force_map.png`` (success heatmap over the force grid, one panel per variant, plus
-    the difference when there are two), ``phase.png`` (success rate per gait phase) and
+    the difference when there are two), ``phase.png`` (success rate per gait phase),
+    ``obstacle_success.png`` (obstacle campaigns: success by box height beside seed 000's) and
     ``axes.png`` (success rate along each other grid axis), each when the grid has the axes.
 
     Returns:
@@ -261,6 +309,8 @@ def write_report(directory: str | Path, plots: bool = True) -> dict[str, Any]:
             files.append(campaign_plots.plot_force_maps(summary, directory / "force_map.png"))
         if "phase" in summary:
             files.append(campaign_plots.plot_success_by_phase(summary, directory / "phase.png"))
+        if "obstacle" in summary:
+            files.append(campaign_plots.plot_obstacle_success(summary, directory / "obstacle_success.png"))
         other_axes = [a for a in summary["axes"] if a not in ("force_x", "force_y", "phase")]
         if other_axes:
             files.append(campaign_plots.plot_success_by_axis(summary, other_axes, directory / "axes.png"))

@@ -69,6 +69,8 @@ PUSH_AFTER = 3.0  # [s], ten nominal steps of 0.3 s: walking is steady by then
 PUSH_RECOVERY_TIME = 2.5  # [s] of walking after the latest push ends, to count as recovered
 TERRAIN_SEEDS = 10
 TERRAIN_DURATION = 10.0  # [s]
+OBSTACLE_HEIGHTS = (0.1, 0.2, 0.3, 0.4)  # [m], the seed-000 thesis's (Fig. 5.13)
+OBSTACLE_TRIALS = 20  # seeds per height (the thesis's 20 trials)
 
 
 @dataclass
@@ -373,11 +375,52 @@ def terrain(
     )
 
 
-BUILTIN_CAMPAIGNS = {"push-map": push_map, "terrain": terrain}
+def obstacles(
+    heights: tuple[float, ...] = OBSTACLE_HEIGHTS,
+    trials: int = OBSTACLE_TRIALS,
+    controller: str = "walking",
+    duration: float | None = None,
+    params: dict[str, Any] | None = None,
+    robot: str = "h1",
+) -> CampaignSpec:
+    """Obstacle step-over trials (issue 15; the seed-000 thesis's Fig. 5.13): a box of each height across
+    the path, ``trials`` seeds per height (each seed draws the box's distance, depth and friction).
+
+    Args:
+        heights: box heights [m] (each within the scenario's range, ``sim.scenarios.obstacle.HEIGHT_RANGE``).
+        trials: seeds per height (0..trials-1).
+        controller: "walking" or "pd".
+        duration: simulated time per trial [s]; None = the scenario's default.
+        params: extra shared parameters (scenario, runner or controller options, e.g. ``speed``).
+        robot: registered robot name (its walking preset should enable ``[perception]``).
+    """
+    from sim.scenarios.obstacle import HEIGHT_RANGE
+
+    if not (isinstance(trials, int) and not isinstance(trials, bool) and trials >= 1):
+        raise ParameterError(f"trials={trials!r} must be an integer >= 1")
+    heights = [float(h) for h in heights]
+    if not heights:
+        raise ParameterError("heights=[] must hold at least one box height [m]")
+    for height in heights:
+        if not (math.isfinite(height) and HEIGHT_RANGE[0] <= height <= HEIGHT_RANGE[1]):
+            raise ParameterError(f"height={height} m must be in [{HEIGHT_RANGE[0]}, {HEIGHT_RANGE[1]}] m")
+    return CampaignSpec(
+        name="obstacles",
+        scenario="obstacle",
+        controller=controller,
+        duration=duration,
+        robot=robot,
+        params=dict(params or {}),
+        grid={"height": heights},
+        seeds=list(range(trials)),
+    )
+
+
+BUILTIN_CAMPAIGNS = {"push-map": push_map, "terrain": terrain, "obstacles": obstacles}
 
 
 def builtin_campaign(name: str, **options: Any) -> CampaignSpec:
-    """A built-in campaign by name ("push-map", "terrain") with its options."""
+    """A built-in campaign by name ("push-map", "terrain", "obstacles") with its options."""
     if name not in BUILTIN_CAMPAIGNS:
         raise ParameterError(f"campaign={name!r} is not built in (available: {sorted(BUILTIN_CAMPAIGNS)})")
     return BUILTIN_CAMPAIGNS[name](**options)

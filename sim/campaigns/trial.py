@@ -329,7 +329,7 @@ def run_trial(trial: Trial) -> dict[str, Any]:
             t_nom = nominal_step_period(trial.robot, trial.scenario, trial.arguments)
             metrics["push_phase_measured"] = measured_gait_phase(log.replans, push_time, t_nom)
         record.update(
-            success=log.status == "completed",
+            success=log.status == "completed" and bool(metrics.get("success", True)),
             status=log.status,
             fall_time=log.fall_time,
             fall_reason=log.fall_reason,

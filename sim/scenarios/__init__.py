@@ -1,6 +1,6 @@
 """Registered closed-loop scenarios, one per experiment of the paper (see ``sim.scenarios.base``)."""
 
-from sim.scenarios import push, slip, terrain, transition, walk, waypoints  # noqa: F401  (registration)
+from sim.scenarios import obstacle, push, slip, terrain, transition, walk, waypoints  # noqa: F401  (registration)
 from sim.scenarios.base import (
     Scenario,
     available_scenarios,

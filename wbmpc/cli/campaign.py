@@ -6,6 +6,7 @@
     wbmpc campaign push-map --robot g1 --planner alip --set speed=0.0    # the G1 in place, the ALIP planner
     wbmpc campaign push-map --out runs/push-map --resume                 # after a kill: go on
     wbmpc campaign terrain --seeds 20 --backend ray                      # terrain seeds on Ray
+    wbmpc campaign obstacles --robot h1 --heights 0.1 0.2 0.3 0.4 --trials 20   # step-over success by height
     wbmpc campaign run my_campaign.toml --backend ray --address auto     # a campaign file, on a cluster
     wbmpc campaign report runs/push-map                                  # summary.json + figures
 
@@ -23,6 +24,8 @@ from wbmpc.cli.output import print_json
 def register(subparsers) -> None:
     from sim.campaigns.backends import BACKENDS
     from sim.campaigns.spec import (
+        OBSTACLE_HEIGHTS,
+        OBSTACLE_TRIALS,
         PUSH_AFTER,
         PUSH_FORCE_MAX,
         PUSH_FORCE_STEPS_X,
@@ -36,7 +39,8 @@ def register(subparsers) -> None:
     from wbmpc.cli.arguments import COUNT, DURATION, NON_NEGATIVE, PHASE, POSITIVE, output_directory
     from wbmpc.cli.walk import _parse_assignment, add_planner_arguments, add_robot_argument
 
-    campaign = subparsers.add_parser("campaign", help="campaigns of closed-loop trials (push maps, terrain), local or Ray")
+    campaign = subparsers.add_parser("campaign", help="campaigns of closed-loop trials (push maps, terrain, obstacles), "
+                                                              "local or Ray")
     commands = campaign.add_subparsers(dest="campaign_command", metavar="CAMPAIGN", required=True)
 
     def add_run_options(parser: argparse.ArgumentParser) -> None:
@@ -51,8 +55,8 @@ def register(subparsers) -> None:
         parser.add_argument("--no-plots", action="store_true", help="write summary.json only")
         parser.add_argument("--json", action="store_true", help="print the run and the summary as JSON")
 
-    def add_trial_options(parser: argparse.ArgumentParser, duration_default) -> None:
-        add_robot_argument(parser)
+    def add_trial_options(parser: argparse.ArgumentParser, duration_default, robot_default: str = "bolt") -> None:
+        add_robot_argument(parser, default=robot_default)
         parser.add_argument("--controller", choices=("walking", "pd"), default="walking")
         add_planner_arguments(parser)
         parser.add_argument("--duration", type=DURATION, default=duration_default, help="simulated time per trial [s]")
@@ -88,6 +92,16 @@ def register(subparsers) -> None:
     add_trial_options(terrain, TERRAIN_DURATION)
     add_run_options(terrain)
     terrain.set_defaults(func=_run_builtin, campaign="terrain")
+
+    obstacles = commands.add_parser("obstacles", help="step over a box across the path, by height (issue 15, seed 000 "
+                                                      "Fig. 5.13)")
+    obstacles.add_argument("--heights", type=POSITIVE, nargs="+", default=list(OBSTACLE_HEIGHTS),
+                           help="box heights [m] (default 0.1 0.2 0.3 0.4)")
+    obstacles.add_argument("--trials", type=COUNT, default=OBSTACLE_TRIALS,
+                           help=f"seeds per height: box distance, depth, friction (default {OBSTACLE_TRIALS})")
+    add_trial_options(obstacles, None, robot_default="h1")
+    add_run_options(obstacles)
+    obstacles.set_defaults(func=_run_builtin, campaign="obstacles")
 
     from_file = commands.add_parser("run", help="run a campaign file (TOML, see sim.campaigns.spec)")
     from_file.add_argument("file", help="campaign file")
@@ -127,6 +141,16 @@ def _spec_from_args(args: argparse.Namespace):
             controller=args.controller,
             robot=args.robot,
             push_after=args.push_after,
+            duration=args.duration,
+            params=params,
+        )
+    if args.campaign == "obstacles":
+        return builtin_campaign(
+            "obstacles",
+            heights=tuple(args.heights),
+            trials=args.trials,
+            controller=args.controller,
+            robot=args.robot,
             duration=args.duration,
             params=params,
         )

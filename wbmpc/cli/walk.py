@@ -7,6 +7,7 @@
     wbmpc run waypoints --robot g1 --path square --set speed=0.2 --out runs/g1_square
     wbmpc walk --viewer                       # MuJoCo's viewer, live (needs a display)
     wbmpc walk --robot g1 --vx 0 --planner alip   # the ALIP step-to-step NMPC plans the steps
+    wbmpc run obstacle --robot h1 --height 0.2 --seed 3   # a box across the path, seen by the rangefinders
 
 Scenario parameters have their own options where common (``--force``...); any other parameter of
 the scenario, runner or controller is passed with ``--set NAME=VALUE``. ``--vx`` (alias
@@ -125,6 +126,7 @@ def register(subparsers) -> None:
     run.add_argument("--direction", type=FINITE, default=None, help="push: direction in the plane from +x [deg]")
     run.add_argument("--push-time", type=NON_NEGATIVE, default=None, metavar="T", help="push: start of the push [s]")
     run.add_argument("--path", default=None, metavar="NAME", help="waypoints: the path to follow (circle, square)")
+    run.add_argument("--height", type=FINITE, default=None, metavar="H", help="obstacle: box height [m]")
     add_run_arguments(run)
     run.set_defaults(func=_run)
 
@@ -150,7 +152,7 @@ def params_from_args(args: argparse.Namespace) -> dict:
     for option, name in (
         ("delay_nodes", "delay_nodes"), ("noise_q", "noise_q"), ("noise_v", "noise_v"),
         ("computation_delay", "computation_delay"), ("force", "force"), ("direction", "direction"),
-        ("push_time", "push_time"), ("path", "path"),
+        ("push_time", "push_time"), ("path", "path"), ("height", "height"),
     ):
         value = getattr(args, option, None)
         if value is not None:
@@ -295,6 +297,16 @@ def format_metrics(summary: dict) -> str:
             row("MPC cycle median", m["mpc_cycle_time_median"], "ms", 1e3, ".2f")
     if "steps" in m:
         lines.append(f"  {'steps':<28} {m['steps']}")
+    if "crossed" in m:  # scenario "obstacle" (sim.obstacle_metrics)
+        lines.append(f"  {'obstacle success':<28} {m['success']} (crossed {m['crossed']}, touched {m['touched']}, "
+                     f"resting on it {m['resting_on_obstacle']})")
+        row("crossing time", m.get("crossing_time"), "s", fmt=".2f")
+        if "detected" in m:
+            lines.append(f"  {'obstacle detected':<28} {m['detected']}")
+            row("detection time", m.get("detection_time"), "s", fmt=".2f")
+            row("detection distance", m.get("detection_distance"), "m", fmt=".2f")
+            row("height estimate error", m.get("height_error"), "mm", 1e3, ".1f")
+            row("near edge estimate error", m.get("near_edge_error"), "mm", 1e3, ".1f")
     row("real-time factor", m.get("real_time_factor"), "x", fmt=".2f")  # of the loop, setup excluded
     row("setup (models, cold solve)", m.get("setup_time"), "s", fmt=".2f")
     for path in summary.get("files", []):

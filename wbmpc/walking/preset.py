@@ -1,7 +1,7 @@
 """Walking presets: every tuned number of a robot's walking pipeline, in one TOML file per robot.
 
-``wbmpc/walking/presets/<robot>.toml`` has five sections, each loaded into a validated dataclass, and an
-optional sixth:
+``wbmpc/walking/presets/<robot>.toml`` has five sections, each loaded into a validated dataclass, and two
+optional ones:
 
 - ``[planner]``: the DCM step QP (:class:`sequencer.SequencerParams`);
 - ``[ocp]`` (and ``[ocp.state_weights]``): the whole-body OCP (:class:`~wbmpc.walking.ocp.WalkingOCPConfig`);
@@ -12,7 +12,11 @@ optional sixth:
 - ``[footstep_planner]`` (optional): which footstep planner the controller runs
   (:class:`FootstepPlannerChoice`): ``kind = "dcm"`` (default, the ``[planner]`` section) or ``"alip"``
   (the ALIP step-to-step NMPC of :mod:`sequencer.alip`, its parameters from a named ALIP preset with the
-  fields of a ``[footstep_planner.alip]`` sub-table over them).
+  fields of a ``[footstep_planner.alip]`` sub-table over them);
+- ``[perception]`` (optional): the rangefinder array and terrain estimate that report obstacles in
+  ``Measurement.obstacles`` (:class:`~wbmpc.walking.perception_config.PerceptionConfig`); a preset without
+  it has no perception (``WalkingPreset.perception`` is None) unless an override addresses
+  ``perception.*`` (the fields it does not set are the class's defaults, the H1's).
 
 Overrides address a value as ``"section.name"`` (``"planner.l_max"``, ``"ocp.state_weights.joint_position"``),
 a bare name addresses ``[controller]``; a whole section can be replaced by a dataclass instance
@@ -40,11 +44,12 @@ from wbmpc.config import read_toml
 from wbmpc.errors import ParameterError
 from wbmpc.walking.controller_config import WalkingControllerConfig
 from wbmpc.walking.ocp import StateWeights, WalkingOCPConfig
+from wbmpc.walking.perception_config import PerceptionConfig
 
 PRESET_DIR = Path(__file__).resolve().parent / "presets"
 
 SECTIONS = ("planner", "ocp", "controller", "fall", "command")
-OPTIONAL_SECTIONS = ("footstep_planner",)
+OPTIONAL_SECTIONS = ("footstep_planner", "perception")
 ALL_SECTIONS = SECTIONS + OPTIONAL_SECTIONS
 PLANNER_KINDS = ("dcm", "alip")
 ALIP_SOLVERS = ("sqp", "ipopt")
@@ -195,6 +200,7 @@ class WalkingPreset:
     command: CommandRange
     source: str = ""
     footstep_planner: FootstepPlannerChoice = FootstepPlannerChoice()
+    perception: PerceptionConfig | None = None
 
     @property
     def planner_params(self) -> SequencerParams | AlipParams:
@@ -321,11 +327,21 @@ def load_walking_preset(robot: str, overrides: Mapping[str, Any] | None = None,
                              f"{list(OPTIONAL_SECTIONS)} (missing {missing}, unknown {extra})")
     tables = {section: _as_table(data[section]) for section in SECTIONS}
     tables["footstep_planner"] = {"alip": {}, **_as_table(data.get("footstep_planner", {}))}
+    tables["perception"] = _as_table(data.get("perception", {}))
+    has_perception = "perception" in data
     for key, value in (overrides or {}).items():
         _apply_override(tables, key, value)
+        has_perception = has_perception or key.split(".", 1)[0] == "perception"
     sections = {section: _BUILDERS[section](tables[section]) for section in SECTIONS}
     footstep_planner = _footstep_planner_from_table(tables["footstep_planner"], robot, sections["planner"])
-    return WalkingPreset(robot=robot, source=str(path), footstep_planner=footstep_planner, **sections)
+    perception = _perception_from_table(tables["perception"]) if has_perception else None
+    return WalkingPreset(robot=robot, source=str(path), footstep_planner=footstep_planner, perception=perception,
+                         **sections)
+
+
+def _perception_from_table(table: Mapping[str, Any]) -> PerceptionConfig:
+    table = {key: _tuples(value) for key, value in table.items()}
+    return _build(PerceptionConfig, table, "perception")
 
 
 def preset_override_keys() -> set[str]:

@@ -1,0 +1,88 @@
+"""Metrics of an obstacle run (scenario ``obstacle``): did the robot cross the box, touch it, fall,
+and how well did its perception see the box.
+
+Definitions (world frame, the box of ``params["obstacle_truth"]``, crossed along its depth axis):
+
+- ``crossed``: at the end of the run the base and both feet (sole centres) are beyond the box's far
+  edge; ``crossing_time`` [s]: the first tick at which they all were (None: never);
+- ``resting_on_obstacle``: a foot or any other part of the robot (shank) touches the box at the
+  last tick (``ticks["obstacle_contact"]``, :mod:`sim.falls`);
+- ``touched``: any robot-box contact during the run; ``first_touch_time`` [s];
+- ``fell``: the run ended in a fall (the runner's fall detector);
+- ``success``: crossed, not fallen, not resting on the box, and the run completed (no error);
+- perception (when on): ``detected``, ``detection_time`` [s] (first report),
+  ``detection_distance`` [m] (the box's near edge ahead of the base, true position, at that time),
+  and the last estimate's errors, estimate minus truth [m]: ``height_error``,
+  ``near_edge_error``, ``far_edge_error`` (along the box's depth axis from the start, so > 0 is
+  farther), ``width_estimate`` [m]; ``perception_scans``, ``perception_rate`` [Hz].
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from sequencer.obstacles import Obstacle
+
+
+def obstacle_from_record(record: dict[str, Any]) -> Obstacle:
+    """An :class:`Obstacle` from :func:`sim.perception.pipeline.obstacle_record`'s plain data."""
+    return Obstacle(center=np.asarray(record["center"], dtype=float), yaw=float(record["yaw"]),
+                    depth=float(record["depth"]), width=float(record["width"]), height=float(record["height"]))
+
+
+def obstacle_metrics(log) -> dict[str, Any]:
+    """The metrics of the module docstring for a :class:`sim.log.RunLog` whose params hold
+    ``obstacle_truth`` (empty dict otherwise)."""
+    truths = log.params.get("obstacle_truth") or []
+    ticks = log.ticks
+    if not truths or len(ticks.get("t", ())) == 0:
+        return {}
+    truth = obstacle_from_record(truths[0])
+    t = ticks["t"]
+    axis = truth.axes[0]
+    far = float(truth.center @ axis + 0.5 * truth.depth)  # far edge along the depth axis [m]
+    near = far - truth.depth
+    base = ticks["x"][:, :2] @ axis
+    feet = ticks["feet"][:, :, :2] @ axis  # (n, n_feet)
+    beyond = (base > far) & np.all(feet > far, axis=1)
+    contact = ticks.get("obstacle_contact", np.zeros((len(t), 1), dtype=bool))
+    touching = np.any(contact, axis=1)
+    crossed = bool(beyond[-1])
+    resting = bool(touching[-1])
+    fell = log.status == "fell"
+    metrics: dict[str, Any] = {
+        "obstacle_height": truth.height,
+        "obstacle_depth": truth.depth,
+        "obstacle_near_edge": near,
+        "crossed": crossed,
+        "crossing_time": float(t[np.argmax(beyond)]) if beyond.any() else None,
+        "touched": bool(touching.any()),
+        "first_touch_time": float(t[np.argmax(touching)]) if touching.any() else None,
+        "resting_on_obstacle": resting,
+        "success": crossed and not fell and not resting and log.status == "completed",
+    }
+    perception = log.params.get("perception")
+    if perception is None:
+        return metrics
+    metrics["perception_scans"] = perception["n_scans"]
+    metrics["perception_rate"] = perception["rate"]
+    detections = [obstacle_from_record(d) for d in perception["detections"]]
+    metrics["detected"] = bool(detections)
+    if not detections:
+        return metrics
+    k = int(np.argmin([np.linalg.norm(d.center - truth.center) for d in detections]))
+    estimate, first_seen = detections[k], perception["detections"][k]["first_seen"]
+    i = min(int(np.searchsorted(t, first_seen)), len(t) - 1)
+    estimated_far = float(estimate.center @ axis + 0.5 * abs(estimate.axes[0] @ axis) * estimate.depth)
+    estimated_near = float(estimate.center @ axis - 0.5 * abs(estimate.axes[0] @ axis) * estimate.depth)
+    metrics.update(
+        detection_time=float(first_seen),
+        detection_distance=float(near - base[i]),
+        height_error=float(estimate.height - truth.height),
+        near_edge_error=estimated_near - near,
+        far_edge_error=estimated_far - far,
+        width_estimate=float(estimate.width),
+    )
+    return metrics

@@ -1,0 +1,253 @@
+"""Rangefinder perception (sim.perception): the configuration, the array's geometry, the height map, and
+the estimate against the true scene on random box layouts (the H1's rangefinders in MuJoCo, the robot
+moved kinematically toward the boxes: no controller, so the figures are the perception's own)."""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+
+import mujoco
+import numpy as np
+import pytest
+from robot_extras import needs_h1_extra
+
+from robots.conventions import pinocchio_to_mujoco_state
+from sim.perception import HeightMap, PerceptionPipeline, quaternion_z_to, ray_directions_base
+from wbmpc.errors import ParameterError
+from wbmpc.walking.perception_config import PerceptionConfig
+from wbmpc.walking.preset import PRESET_DIR, load_walking_preset
+
+SCAN_DT = 0.015  # [s] between scans (67 Hz)
+WALK_SPEED = 0.5  # [m/s] of the kinematic approach
+
+
+# ---------------------------------------------------------------------------------------- configuration
+
+
+def test_h1_preset_states_every_perception_field_and_the_others_have_none():
+    with (PRESET_DIR / "h1.toml").open("rb") as stream:
+        stated = set(tomllib.load(stream)["perception"])
+    assert {f.name for f in dataclasses.fields(PerceptionConfig)} <= stated
+    h1 = load_walking_preset("h1").perception
+    assert h1.enabled and h1.n_rays == len(h1.pitch_deg) * len(h1.yaw_deg) == 119 and h1.rate == 67.0
+    assert load_walking_preset("g1").perception is None  # no [perception]: Measurement.obstacles stays ()
+    noisy = load_walking_preset("g1", {"perception.noise_std": 0.01}).perception  # an override turns it on
+    assert noisy.noise_std == 0.01 and noisy.enabled
+    assert load_walking_preset("h1", {"perception.enabled": False}).perception.enabled is False
+
+
+@pytest.mark.parametrize(("override", "message"), [
+    ({"rate": 0.0}, r"perception.rate=0.0 Hz must be in \(0.0, 1000.0\] Hz"),
+    ({"pitch_deg": [10.0, 95.0]}, r"perception.pitch_deg=.* must be a non-empty list of angles in \[0.0, 90.0\] deg"),
+    ({"dropout_probability": 1.5}, r"perception.dropout_probability=1.5 - must be in \[0.0, 1.0\]"),
+    ({"blackouts": [[2.0, 1.0]]}, r"perception.blackouts: \[2.0, 1.0\] must be finite times with 0 <= start < end"),
+    ({"mount_position": [0.1, 0.0]}, r"perception.mount_position=.* must be 3 finite numbers"),
+    ({"min_returns": 0}, r"perception.min_returns=0 must be an integer >= 1"),
+    ({"min_ground_distance": 5.0}, r"perception.min_ground_distance=5.0 m must be below max_range=4.0 m"),
+])
+def test_bad_perception_values_are_refused_in_one_line(override, message):
+    key, value = next(iter(override.items()))
+    with pytest.raises(ParameterError, match=message) as error:
+        load_walking_preset("h1", {f"perception.{key}": value})
+    assert "\n" not in str(error.value)
+    with pytest.raises(ParameterError, match=r"\[perception\] has no field \['ratez'\]"):
+        load_walking_preset("h1", {"perception.ratez": 3.0})
+
+
+def test_each_site_looks_along_its_ray():
+    config = PerceptionConfig()
+    directions = ray_directions_base(config.ray_angles_deg())
+    assert directions.shape == (config.n_rays, 3)
+    np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1.0)
+    pitch, yaw = np.deg2rad(config.ray_angles_deg()[-1])  # the last ray: 60 deg down, 15 deg left
+    np.testing.assert_allclose(directions[-1], [np.cos(pitch) * np.cos(yaw), np.cos(pitch) * np.sin(yaw), -np.sin(pitch)])
+    for direction in [*directions, [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]:
+        rotation = np.zeros(9)
+        mujoco.mju_quat2Mat(rotation, quaternion_z_to(direction))
+        np.testing.assert_allclose(rotation.reshape(3, 3)[:, 2], direction, atol=1e-12)
+
+
+def test_height_map_keeps_cell_statistics_and_the_bounds_of_high_returns():
+    grid = HeightMap(0.1)
+    grid.add(np.array([[0.01, 0.01, 0.0], [0.05, 0.02, 0.2], [0.31, 0.0, 0.1]]), high_above=0.1)
+    grid.add(np.array([[0.09, 0.08, 0.4]]), high_above=0.1)
+    assert grid.n_cells == 2 and grid.count.tolist() == [3, 1]
+    np.testing.assert_allclose(grid.height, [0.2, 0.1])
+    np.testing.assert_allclose(grid.bounds[0], [0.01, 0.09, 0.01, 0.08])
+    np.testing.assert_allclose(grid.high_bounds[0], [0.05, 0.09, 0.02, 0.08])  # the ground return left out
+    assert np.all(np.isinf(grid.high_bounds[1]))  # 0.1 is not above 0.1
+    np.testing.assert_allclose(grid.height_at([[0.05, 0.05], [0.35, 0.05], [5.0, 5.0]]), [0.2, 0.1, np.nan])
+    np.testing.assert_allclose(grid.profile([0.05, 0.05], 0.0, [0.0, 0.3, 0.1]), [0.2, 0.1, np.nan])
+    many = HeightMap(0.01)
+    many.add(np.column_stack([np.arange(3000) * 0.01 + 0.005, np.zeros(3000), np.ones(3000)]))  # grows its buffers
+    assert many.n_cells == 3000 and np.all(many.height == 1.0)
+
+
+# ---------------------------------------------------------------------------------------- against the scene
+
+
+@pytest.fixture(scope="module")
+def h1():
+    from robots import load_robot
+
+    return load_robot("h1")
+
+
+def scene(h1, config, boxes, perceivable=True):
+    """The H1's MuJoCo model with ``config``'s rangefinders and ``boxes`` (rows: near edge x, depth,
+    width, height, lateral offset [m]); returns (model, data)."""
+    from robots.mujoco_model import add_box_geom, build_mujoco_spec
+
+    spec = build_mujoco_spec(h1, link_collisions=True)
+    PerceptionPipeline.add_to_spec(spec, config, h1.base_body)
+    for k, (near, depth, width, height, offset) in enumerate(boxes):
+        add_box_geom(spec, f"obstacle_{k}", np.array([near + 0.5 * depth, offset, 0.5 * height]),
+                     0.5 * np.array([depth, width, height]), rgba=(0.8, 0.4, 0.2, 1.0 if perceivable else 0.0))
+    model = spec.compile()
+    return model, mujoco.MjData(model)
+
+
+def approach(h1, model, data, config, stop_x, seed=0, q=None):
+    """Scan every SCAN_DT while the standing H1 slides along x at WALK_SPEED up to base x = ``stop_x``;
+    returns the pipeline and the base x of its scans."""
+    pipeline = PerceptionPipeline(model, config, seed, h1)
+    q = np.array(h1.q_reference if q is None else q, dtype=float)
+    xs = np.arange(0.0, stop_x + 1e-9, WALK_SPEED * SCAN_DT)
+    for k, x in enumerate(xs):
+        q[0] = x
+        data.qpos[:], _ = pinocchio_to_mujoco_state(h1, q, np.zeros(h1.nv))
+        pipeline.step(0, k * SCAN_DT, model, data, np.concatenate([q, np.zeros(h1.nv)]))
+    return pipeline, xs
+
+
+def random_layout(rng):
+    """One box across the path: near edge 1.8-2.8 m ahead, depth 0.1-0.3 m, width 0.8-1.5 m, height
+    0.1-0.4 m, centre 0-0.1 m off the path."""
+    return np.array([[rng.uniform(1.8, 2.8), rng.uniform(0.1, 0.3), rng.uniform(0.8, 1.5), rng.uniform(0.1, 0.4),
+                      rng.uniform(-0.1, 0.1)]])
+
+
+def estimate_errors(pipeline, box):
+    """(height, near edge, far edge) errors of the reported obstacle [m], estimate minus truth."""
+    (obstacle,) = pipeline.estimator.obstacles
+    near, depth, _, height, _ = box
+    along = obstacle.center[0], 0.5 * obstacle.depth
+    return obstacle.height - height, along[0] - along[1] - near, along[0] + along[1] - (near + depth)
+
+
+@needs_h1_extra
+def test_a_box_is_reported_within_1_cm_at_1_m_without_noise_on_random_layouts(h1):
+    """Issue 15's target: the height estimate within 1 cm on the top at 1 m without noise; measured
+    (docs/perception.md) on 6 layouts: height within 0.6 mm, near edge 0.5 mm, far edge 0.5 mm."""
+    config = load_walking_preset("h1").perception
+    rng = np.random.default_rng(15)
+    for _ in range(6):
+        box = random_layout(rng)[0]
+        model, data = scene(h1, config, [box])
+        pipeline, xs = approach(h1, model, data, config, stop_x=box[0] - 1.0)  # the near edge 1 m ahead
+        height_error, near_error, far_error = estimate_errors(pipeline, box)
+        assert abs(height_error) <= 0.01 and abs(height_error) < 2e-3
+        assert abs(near_error) < 3e-3 and abs(far_error) < 0.01
+        track = pipeline.estimator.tracks[0]
+        first = xs[int(round(track.first_seen / SCAN_DT))]
+        assert box[0] - first > 2.0 or first < 0.05  # first reported more than 2 m ahead, or at once when nearer
+        assert abs(track.obstacle.center[1] - box[4]) < 0.05  # the fan's lateral extent, centred on the path
+
+
+@needs_h1_extra
+def test_with_range_noise_the_box_is_still_reported_and_the_errors_stay_within_their_measured_bounds(h1):
+    """1 cm range noise (seeded): height within 1 cm, the edges pushed outward (the extremes of noisy
+    returns) by at most 5 cm: the reported box is larger, not shorter (docs/perception.md)."""
+    config = dataclasses.replace(load_walking_preset("h1").perception, noise_std=0.01)
+    rng = np.random.default_rng(16)
+    for seed in range(4):
+        box = random_layout(rng)[0]
+        model, data = scene(h1, config, [box])
+        pipeline, _ = approach(h1, model, data, config, stop_x=box[0] - 1.0, seed=seed)
+        height_error, near_error, far_error = estimate_errors(pipeline, box)
+        assert abs(height_error) < 0.01
+        assert -0.05 < near_error < 0.005 and -0.005 < far_error < 0.05
+
+
+@needs_h1_extra
+def test_two_boxes_are_two_obstacles_and_the_nearer_one_stays_known_out_of_view(h1):
+    config = load_walking_preset("h1").perception
+    boxes = np.array([[1.6, 0.15, 1.2, 0.15, 0.0], [2.9, 0.2, 1.2, 0.3, 0.0]])
+    model, data = scene(h1, config, boxes)
+    pipeline, _ = approach(h1, model, data, config, stop_x=1.45)  # the first box under the rays' blind zone
+    obstacles = sorted(pipeline.estimator.obstacles, key=lambda o: o.center[0])
+    assert len(obstacles) == 2
+    for obstacle, (near, _depth, _, height, _) in zip(obstacles, boxes):
+        assert abs(obstacle.height - height) < 0.01
+        assert abs(obstacle.interval_along([0.0, 0.0], 0.0)[0] - near) < 0.01
+    assert obstacles[0].interval_along([1.45, 0.0], 0.0)[0] < 0.2  # 0.15 m ahead: seen only from memory
+
+
+@needs_h1_extra
+@pytest.mark.parametrize(("joints", "beyond_min_ground_distance"), [
+    ({"left_hip_pitch": -1.2, "left_knee": 1.25, "left_hip_roll": -0.3}, False),  # knee raised, hit 0.41 m ahead
+    ({"left_hip_pitch": -1.4, "left_knee": 1.25, "left_hip_roll": -0.3}, True),  # its foot hit 0.62 m ahead
+])
+def test_the_robots_own_leg_in_the_rays_is_not_an_obstacle(h1, joints, beyond_min_ground_distance):
+    """Leg poses the rays hit (found over a grid of poses, docs/perception.md): the returns near the base
+    or near the leg (placed by the measured configuration) are dropped. Without both filters the leg
+    reads as an obstacle."""
+    config = load_walking_preset("h1").perception
+    q = np.array(h1.q_reference)
+    for name, angle in joints.items():
+        q[7 + h1.actuated_joint_names.index(name)] = angle
+    model, data = scene(h1, config, [])
+    pipeline, _ = approach(h1, model, data, config, stop_x=0.2, q=q)
+    assert pipeline.estimator.n_dropped_near > 0 and pipeline.estimator.obstacles == ()
+    unfiltered = dataclasses.replace(config, min_ground_distance=0.0, self_filter_radius=0.0)
+    model, data = scene(h1, unfiltered, [])
+    pipeline, _ = approach(h1, model, data, unfiltered, stop_x=0.2, q=q)
+    assert len(pipeline.estimator.obstacles) == 1  # the leg
+    distance_only = dataclasses.replace(config, self_filter_radius=0.0)
+    model, data = scene(h1, distance_only, [])
+    pipeline, _ = approach(h1, model, data, distance_only, stop_x=0.2, q=q)
+    assert len(pipeline.estimator.obstacles) == int(beyond_min_ground_distance)  # what the self filter adds
+
+
+@needs_h1_extra
+def test_faults_blackout_dropouts_and_an_unseen_box(h1):
+    config = load_walking_preset("h1").perception
+    box = [2.2, 0.2, 1.2, 0.2, 0.0]
+    # every ray lost after 1.5 s: the box, reported before, stays reported; the scans are empty
+    blackout = dataclasses.replace(config, blackouts=((1.5, 100.0),))
+    model, data = scene(h1, blackout, [box])
+    pipeline, xs = approach(h1, model, data, blackout, stop_x=1.2)
+    assert pipeline.n_empty_scans == sum(k * SCAN_DT >= 1.5 for k in range(len(xs))) > 0
+    assert len(pipeline.estimator.obstacles) == 1 and pipeline.sensor.last.n_returns == 0
+    # every ray lost at every scan: nothing is reported, nothing breaks
+    dead = dataclasses.replace(config, dropout_probability=1.0)
+    model, data = scene(h1, dead, [box])
+    pipeline, _ = approach(h1, model, data, dead, stop_x=1.2)
+    assert pipeline.estimator.obstacles == () and pipeline.estimator.ground is None
+    # 30 % of the rays lost (seeded): the box is still reported, its height within 1 cm
+    lossy = dataclasses.replace(config, dropout_probability=0.3)
+    model, data = scene(h1, lossy, [box])
+    pipeline, _ = approach(h1, model, data, lossy, stop_x=1.2)
+    assert len(pipeline.estimator.obstacles) == 1 and abs(pipeline.estimator.obstacles[0].height - 0.2) < 0.01
+    # a box the rays do not see (alpha 0): a missed detection
+    model, data = scene(h1, config, [box], perceivable=False)
+    pipeline, _ = approach(h1, model, data, config, stop_x=1.2)
+    assert pipeline.estimator.obstacles == ()
+
+
+@needs_h1_extra
+def test_the_array_scans_at_its_rate_and_with_sensors_off_between_scans(h1):
+    config = load_walking_preset("h1").perception
+    model, data = scene(h1, config, [])
+    pipeline = PerceptionPipeline(model, config, seed=0)
+    assert pipeline.sensor.period_ticks == 15 and pipeline.sensor.rate == pytest.approx(66.67, abs=0.01)
+    assert model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_SENSOR)  # mj_step computes no ray
+    x = np.concatenate([h1.q_reference, np.zeros(h1.nv)])
+    data.qpos[:], _ = pinocchio_to_mujoco_state(h1, h1.q_reference, np.zeros(h1.nv))
+    for tick in range(46):
+        pipeline.step(tick, tick * 1e-3, model, data, x)
+    assert pipeline.sensor.n_scans == 4  # ticks 0, 15, 30, 45
+    scan = pipeline.sensor.last
+    assert scan.n_returns == config.n_rays and scan.t == pytest.approx(0.045)
+    np.testing.assert_allclose(scan.points_world(x)[:, 2], 0.0, atol=1e-9)  # the floor
