@@ -113,14 +113,22 @@ def test_speed_integral_acts_on_the_forward_speed_with_anti_windup():
     assert integral.correction_xy[1] == 0.0  # no lateral gain: the sideways drift above is not corrected
 
 
+def test_speed_integral_does_not_wind_up_on_a_ramp_the_robot_follows():
+    integral = VelocityIntegral(gain=0.5, correction_max=0.3, filter_time=1.0, period=0.02, lateral_gain=0.5)
+    for k in range(100):  # a 2 s ramp to (0.3, 0.1) m/s, followed exactly: the filter's lag is no error
+        command = min(1.0, k / 100.0) * np.array([0.3, 0.1])
+        integral.update(command[0], command, commanded_v_y=command[1])
+    assert np.allclose(integral.correction_xy, 0.0, atol=1e-12)
+
+
 def test_lateral_speed_integral_corrects_the_lateral_speed_only_when_its_gain_is_on():
     integral = VelocityIntegral(gain=0.0, correction_max=0.2, filter_time=0.5, period=0.02, lateral_gain=0.5)
     for _ in range(500):  # 10 s at 0.18 m/s sideways for 0.15 asked: the correction goes negative
         integral.update(0.0, np.array([0.0, 0.18]), commanded_v_y=0.15)
     dx, dy = integral.correction_xy
     assert dx == 0.0
-    # k ∫ (0.15 - v̄) dt with v̄ = 0.18 (1 - exp(-t / 0.5 s)): k (-0.03 * 10 + 0.18 * 0.5)
-    assert dy == pytest.approx(0.5 * (-0.03 * 10.0 + 0.18 * 0.5), rel=0.05)
+    # k ∫ (v̄* - v̄) dt, command and speed through the same filter: k (0.15 - 0.18) (t - τ (1 - exp(-t / τ)))
+    assert dy == pytest.approx(0.5 * -0.03 * (10.0 - 0.5), rel=0.05)
     for _ in range(2000):  # winding up: held at the bound
         integral.update(0.0, np.array([0.0, 0.5]), commanded_v_y=0.15)
     assert integral.correction_xy[1] == pytest.approx(-0.2)

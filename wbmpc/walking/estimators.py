@@ -30,8 +30,11 @@ class VelocityIntegral:
     and v*_y + k_y ∫ (v*_y − v̄_y) dt.
 
     v̄ is the measured CoM velocity in the heading frame, low-passed with time constant
-    ``filter_time``; each correction is bounded by ``correction_max`` and its integral clamped
-    accordingly (anti-windup). A gain of 0 turns that axis off (the paper's pipeline: both off).
+    ``filter_time``; the command v* is low-passed by the same filter before it is compared, so that
+    the filter's own lag behind a changing command (a start ramp) is not integrated as an error: with
+    the raw command, the G1's 2 s ramp to 0.3 m/s wound the integral up and the walk overshot to
+    0.47 m/s (0.5 m/s: a fall at 3.9 s). Each correction is bounded by ``correction_max`` and its
+    integral clamped accordingly (anti-windup). A gain of 0 turns that axis off (the paper's pipeline: both off).
     The lateral axis is separate because a lateral correction shifts the planner's nominal step
     widths (∓ pelvis width + v_y T): off where the robot walks straight (Bolt), on where a lateral
     command must be followed (the G1's ALIP planner).
@@ -51,6 +54,7 @@ class VelocityIntegral:
         self._alpha = period / (filter_time + period)
         self.period = float(period)
         self.filtered = np.zeros(2)  # [m/s] heading frame; the robot starts at rest
+        self.filtered_command = np.zeros(2)  # [m/s] heading frame, the command through the same filter
         self.integrals = np.zeros(2)  # [m] heading frame (forward, lateral)
 
     @property
@@ -63,8 +67,9 @@ class VelocityIntegral:
         if not self.gains.any():
             return
         self.filtered += self._alpha * (np.asarray(velocity_heading_xy, dtype=float) - self.filtered)
+        self.filtered_command += self._alpha * (np.array([commanded_v_x, commanded_v_y]) - self.filtered_command)
         on = self.gains > 0.0
-        self.integrals[on] += (np.array([commanded_v_x, commanded_v_y])[on] - self.filtered[on]) * self.period
+        self.integrals[on] += (self.filtered_command[on] - self.filtered[on]) * self.period
         bound = self.correction_max / np.where(on, self.gains, 1.0)
         self.integrals = np.clip(self.integrals, -bound, bound)
 
