@@ -18,6 +18,10 @@ world frame):
    constant curvature (on a circle of radius R it turns at speed / R with no steady heading
    error). The speed is multiplied by max(0, cos(heading error)): at a corner the robot turns
    first and walks on as its heading comes round, instead of walking sideways until it has turned;
+   and, when that yaw rate is beyond the robot's range, by the share of it the robot can turn
+   (limit / |yaw_rate|): a robot that cannot turn as fast as the path asks walks it slower instead
+   of falling behind in heading (the G1, limited to 0.3 rad/s, lagged the 1 m circle by 0.2 rad
+   while its speed overshot after the start);
 4. **frame and range**: the world velocity rotated into the heading frame (yaw), then
    :func:`fit_command` keeps it within the robot's command range: (v_x, v_y) scaled down together
    (the direction of travel kept, slower), the yaw rate clipped.
@@ -109,6 +113,11 @@ class PathFollower:
             heading_error = float(wrap_angle(heading - yaw))
             yaw_rate = self.heading_gain * heading_error
             speed *= max(0.0, math.cos(heading_error))
+            if self.command_range is not None:
+                low, high = self.command_range["yaw_rate"]
+                limit = high if yaw_rate > 0.0 else -low
+                if abs(yaw_rate) > limit > 0.0:
+                    speed *= limit / abs(yaw_rate)
         to_target = target - position
         distance = float(np.hypot(*to_target))
         velocity_world = speed * to_target / distance if distance > 0.0 else np.zeros(2)

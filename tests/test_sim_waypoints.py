@@ -135,12 +135,24 @@ def test_follower_goes_round_the_circle_heading_along_it_and_stops_at_the_end():
 def test_follower_turns_the_square_corners_within_the_yaw_rate_range():
     square = make_path("square")
     follower = PathFollower(square, speed=0.25, look_ahead=0.3, heading_gain=1.0, command_range=G1_RANGE)
-    trajectory = walk_kinematically(follower, duration=45.0)
+    trajectory = walk_kinematically(follower, duration=50.0)  # slower at the corners: turning at 0.3 rad/s at most
     assert np.all(np.abs(trajectory[:, 5]) <= 0.3 + 1e-12) and np.all(np.abs(trajectory[:, 4]) <= 0.15 + 1e-12)
     metrics = path_metrics(square, trajectory[:, :2], trajectory[:, 2])
     assert metrics["path_completion"] == pytest.approx(1.0, abs=0.01)
     assert metrics["path_deviation_max"] < 0.15  # cuts the corners by the look-ahead's pull
     assert metrics["heading_error_max"] < 0.3  # the turn is over by HEADING_CORNER_MARGIN past a corner
+
+
+def test_follower_walks_slower_round_a_curve_tighter_than_its_yaw_rate_allows():
+    # 0.25 m/s round 0.5 m asks 0.5 rad/s of a robot limited to 0.3: it walks at ~0.15 m/s and keeps its heading
+    tight = make_path("circle", radius=0.5)
+    follower = PathFollower(tight, speed=0.25, look_ahead=0.3, heading_gain=1.0, command_range=G1_RANGE)
+    trajectory = walk_kinematically(follower, duration=40.0)
+    metrics = path_metrics(tight, trajectory[:, :2], trajectory[:, 2])
+    assert metrics["path_completion"] == pytest.approx(1.0, abs=0.01)
+    assert metrics["heading_error_max"] < 0.1 and metrics["path_deviation_max"] < 0.06
+    steady = slice(500, 1500)  # 5-15 s, on the circle
+    assert np.all(np.hypot(trajectory[steady, 3], trajectory[steady, 4]) < 0.2)
 
 
 # ---------------------------------------------------------------------- metrics
