@@ -71,6 +71,7 @@ class DcmFootstepPlanner:
     """
 
     feet: tuple[str, ...] = FEET
+    avoids_obstacles = True  # plan(obstacles=...) keeps the footholds off them (sequencer.footholds)
 
     def __init__(self, params: SequencerParams, backend: str = "exact", corrections: LipmCorrections | None = None,
                  clamp_elapsed: bool = True) -> None:
@@ -127,7 +128,8 @@ class DcmFootstepPlanner:
         self.params.check_velocity(command.v_x, command.v_y)
 
     # ------------------------------------------------------------------ planning
-    def plan(self, t: float, stance: StanceState, measured: ReducedState, command: VelocityCommand) -> FootstepPlan:
+    def plan(self, t: float, stance: StanceState, measured: ReducedState, command: VelocityCommand,
+             obstacles=()) -> FootstepPlan:
         """Footsteps from time ``t`` [s] until a touchdown at or after t + params.horizon.
 
         Uses the stance's foot, position, yaw (the heading ψ_0) and start time, the measured DCM
@@ -143,8 +145,15 @@ class DcmFootstepPlanner:
         first step would be a wide catch step (0.16 m wider on the G1) and the walk would drift
         sideways by as much.
 
+        ``obstacles`` (:class:`sequencer.obstacles.Obstacle` s, world frame): every step's foothold, its whole
+        sole rectangle (``params.sole_*``), lands outside their footprints grown by ``params.obstacle_margin``,
+        before or beyond them (:mod:`sequencer.footholds`); a step whose swing passes over one carries its
+        :class:`~sequencer.footholds.Crossing` (from ``stance.swing_liftoff`` for the swing in progress). Empty:
+        the plan without obstacles, bit for bit.
+
         Raises:
             ParameterError: bad input, or a command outside :meth:`command_range` (clip it first).
+            sequencer.footholds.FootholdInfeasible: no foothold outside an obstacle within a step's bounds.
             sequencer.step_qp.StepQPError: the step QP failed (``clamp_elapsed=False`` and a late
                 touchdown, or a backend failure); a control loop keeps its last plan.
         """
@@ -162,7 +171,7 @@ class DcmFootstepPlanner:
         return self.sequencer.plan(
             t, stance.foot, stance.position, dcm, stance.t_start, self.clamp_elapsed,
             stance_yaw=stance.yaw, yaw_rate=command.yaw_rate, velocity=(command.v_x, command.v_y),
-            corrections=self.corrections,
+            corrections=self.corrections, obstacles=obstacles, liftoff=stance.swing_liftoff,
         )
 
     def stance_start_dcm(self, stance: StanceState, command: VelocityCommand) -> np.ndarray:
