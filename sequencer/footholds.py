@@ -7,7 +7,7 @@ rectangle* (``sole_front`` ahead of the foot frame, ``sole_rear`` behind it, ``s
 each side, along the step's heading) overlaps the footprint grown by ``obstacle_margin`` on every
 side. In the heading frame that region is bounded by the box (:func:`forbidden_box`)::
 
-    a < ℓ < b  and  c < w < d,   a = near - margin - sole_front,  b = far + margin + sole_rear,
+    a < ℓ < b  and  c < w < d,   a = near - margin - approach - sole_front,  b = far + margin + sole_rear,
                                  c = right - margin - sole_half_width,  d = left + margin + sole_half_width
 
 with near/far/right/left the extents, in the heading frame relative to p_0, of the grown footprint's
@@ -22,9 +22,10 @@ bound of the QP. The choice is made per step, by the planner, not by the QP:
 2. else, along the heading, the step goes *beyond* the obstacle (ℓ >= b, the far side seen from
    p_0; ℓ <= a walking backwards) when the obstacle lies in the direction of travel (the sign of the
    nominal step; stepping in place crosses nothing), one step can reach it and the DCM can carry that
-   step (its offset at touchdown within ``obstacle_offset_tolerance`` of the nominal one): b <= max(l_max, obstacle_step_length_max), the crossing step's
-   own length bound, with the duration T >= max(t_min, obstacle_step_duration_min) (a crossing
-   swing lifts higher and takes longer); otherwise it stays *before* it (ℓ <= a: the last step
+   step (its offset at touchdown within ``obstacle_offset_tolerance`` of the nominal one):
+   b <= max(l_max, obstacle_step_length_max), the crossing step's own length bound, with the
+   duration T >= max(t_min, obstacle_step_duration_min) (a crossing swing lifts higher and takes
+   longer); otherwise it stays *before* it (ℓ <= a: the last step
    before the obstacle, its toe ``obstacle_margin`` before the near edge at most). That last step
    aims at the DCM offset the crossing step needs (a point-foot LIPM cannot make a step four times
    the nominal one from the nominal offset: from 4.7 cm the H1's DCM needs 0.76 s to travel a 0.48 m
@@ -75,6 +76,8 @@ class FootholdGeometry:
             planner uses max(t_min, this)).
         sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m].
         sole_half_width: the sole's half width [m].
+        approach_margin: the near side (facing the stance, along the heading) grown by this much more [m]:
+            a walking robot's foot overshoots a short step (the H1's by 6 cm), and lands no shorter than planned.
         offset_tolerance: a step crosses only if its DCM offset at touchdown, along the heading, is within
             this of the nominal one [m] (else the robot takes one more step before the obstacle, aiming at
             the offset the crossing needs).
@@ -87,6 +90,7 @@ class FootholdGeometry:
     sole_rear: float = 0.0
     sole_half_width: float = 0.0
     offset_tolerance: float = math.inf
+    approach_margin: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -145,8 +149,13 @@ def forbidden_box(obstacle: Obstacle, p0, yaw: float, geometry: FootholdGeometry
                              width_bounds[1] + geometry.sole_half_width)
         if polygon.shape[0] == 0:
             return (math.inf, math.inf, math.inf, math.inf)
-    return (float(polygon[:, 0].min()) - geometry.sole_front, float(polygon[:, 0].max()) + geometry.sole_rear,
-            float(polygon[:, 1].min()) - geometry.sole_half_width, float(polygon[:, 1].max()) + geometry.sole_half_width)
+    a, b = float(polygon[:, 0].min()) - geometry.sole_front, float(polygon[:, 0].max()) + geometry.sole_rear
+    if a + b > 0.0:  # the near side is the one facing the stance
+        a -= geometry.approach_margin
+    else:
+        b += geometry.approach_margin
+    return (a, b, float(polygon[:, 1].min()) - geometry.sole_half_width,
+            float(polygon[:, 1].max()) + geometry.sole_half_width)
 
 
 def _clip_slab(polygon: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -182,7 +191,8 @@ def sole_corners(center_xy, yaw: float, geometry: FootholdGeometry) -> np.ndarra
 
 def rectangles_overlap(corners, other) -> np.ndarray:
     """True where rectangle ``corners`` (..., 4, 2) and the rectangle ``other`` (4, 2) overlap with a positive
-    area (separating axes: the four edge normals; rectangles that only touch do not overlap)."""
+    area (separating axes: the four edge normals; rectangles that only touch do not overlap). A rectangle of
+    zero size (a point foot) overlaps when it lies strictly inside the other one."""
     corners = np.asarray(corners, dtype=float)
     other = np.asarray(other, dtype=float)
     overlap = np.ones(corners.shape[:-2], dtype=bool)
@@ -192,7 +202,9 @@ def rectangles_overlap(corners, other) -> np.ndarray:
             axis = np.stack((-axis[..., 1], axis[..., 0]), axis=-1)[..., None, :]
             mine = np.sum(corners * axis, axis=-1)
             theirs = np.sum(other * axis, axis=-1)
-            overlap &= (mine.max(axis=-1) > theirs.min(axis=-1) + 1e-9) & (theirs.max(axis=-1) > mine.min(axis=-1) + 1e-9)
+            separated = (mine.max(axis=-1) <= theirs.min(axis=-1) + 1e-9) | (theirs.max(axis=-1) <= mine.min(axis=-1) + 1e-9)
+            degenerate = np.linalg.norm(axis[..., 0, :], axis=-1) < 1e-12  # a point foot's zero-length edges
+            overlap &= ~separated | degenerate
     return overlap
 
 

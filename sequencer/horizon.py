@@ -531,7 +531,8 @@ class FootstepSequencer:
                 chosen, changed = constraints.choose(
                     p0, yaw, (*problem.length_bounds, *problem.width_bounds, problem.time_bounds[0]),
                     self._candidate(problem, solution, to_heading, rotate),
-                    lambda bounds, aim, problem=problem: self._solve_bounded(problem, bounds, aim, to_heading, rotate),
+                    lambda bounds, aim, problem=problem, to_heading=to_heading: self._solve_bounded(
+                        problem, bounds, aim, to_heading, rotate),
                     liftoff if not steps else (steps[-2].position if len(steps) >= 2 else first_stance),
                     gait.step_length, float(problem.b_nominal[0]))
                 if changed:

@@ -69,6 +69,8 @@ class SequencerParams:
             does not vanish with the step (docs/closed_loop.md). Initial value only, as swing_drift.
         obstacle_margin: obstacles' footprints grown by this on every side for the footholds [m], >= 0
             (:mod:`sequencer.footholds`: no sole lands within it of an obstacle).
+        obstacle_approach_margin: the obstacle's near side (facing the stance along the heading) grown by this
+            much more for the footholds [m], >= 0: the last step before it is the one a foot overshoots.
         obstacle_step_length_max: length bound [m], > 0, of a step that goes beyond an obstacle (the planner
             uses max(l_max, this): the crossing step may be longer than a walking one).
         obstacle_step_duration_min: duration lower bound [s] of a step whose swing passes over an obstacle
@@ -105,6 +107,7 @@ class SequencerParams:
     dcm_offset_bias: float = 0.0
     stance_drift: float = 0.0
     obstacle_margin: float = 0.05
+    obstacle_approach_margin: float = 0.0
     obstacle_step_length_max: float = 0.3
     obstacle_step_duration_min: float = 0.0
     obstacle_offset_tolerance: float = 0.03
@@ -149,7 +152,8 @@ class SequencerParams:
             )
         if not 0.0 <= self.double_support < self.t_min:
             raise ParameterError(f"double_support={self.double_support} s must be in [0, t_min={self.t_min} s)")
-        for name in ("obstacle_margin", "obstacle_offset_tolerance", "sole_front", "sole_rear", "sole_half_width"):
+        for name in ("obstacle_margin", "obstacle_approach_margin", "obstacle_offset_tolerance", "sole_front",
+                     "sole_rear", "sole_half_width"):
             if getattr(self, name) < 0:
                 raise ParameterError(f"{name}={getattr(self, name)} m must be >= 0")
         if not self.obstacle_step_length_max > 0:
@@ -193,7 +197,7 @@ class SequencerParams:
         (:class:`sequencer.footholds.FootholdGeometry`; effective crossing bounds: max with l_max, t_min)."""
         return FootholdGeometry(self.obstacle_margin, max(self.l_max, self.obstacle_step_length_max),
                                 max(self.t_min, self.obstacle_step_duration_min), self.sole_front, self.sole_rear,
-                                self.sole_half_width, self.obstacle_offset_tolerance)
+                                self.sole_half_width, self.obstacle_offset_tolerance, self.obstacle_approach_margin)
 
     # ------------------------------------------------------------------ velocity commands
     def velocity_range(self) -> dict[str, tuple[float, float]]:

@@ -21,7 +21,7 @@ import numpy as np
 
 from robots.mujoco_model import add_box_geom
 from sequencer.obstacles import Obstacle
-from sim.scenarios.base import Scenario, _REGISTRY, register
+from sim.scenarios.base import _REGISTRY, Scenario, register
 from wbmpc.walking.controller import WalkingController
 
 BOX_GEOM = "step_over_box"

@@ -267,10 +267,11 @@ LIPM_CORRECTIONS = {"swing_drift", "dcm_offset_bias", "stance_drift"}  # initial
 # obstacle negotiation (sequencer.footholds, the OCP's clearance terms, wbmpc.walking.negotiation): tuned for the
 # H1 only; Bolt's and the G1's presets keep the defaults (no negotiation: negotiation_lookahead = 0)
 OBSTACLE_FIELDS = {
-    "planner": {"obstacle_margin", "obstacle_step_length_max", "obstacle_step_duration_min", "obstacle_offset_tolerance", "sole_front",
-                "sole_rear", "sole_half_width"},
+    "planner": {"obstacle_margin", "obstacle_approach_margin", "obstacle_step_length_max",
+                "obstacle_step_duration_min", "obstacle_offset_tolerance", "sole_front", "sole_rear", "sole_half_width"},
     "ocp": {"obstacle_clearance_weight", "obstacle_sole_points", "obstacle_shank_frames", "obstacle_clearance_margin",
-            "obstacle_shank_margin", "obstacle_footprint_margin", "obstacle_apex_margin", "obstacle_apex_height_max"},
+            "obstacle_shank_margin", "obstacle_footprint_margin", "obstacle_apex_margin", "obstacle_apex_height_max",
+            "obstacle_foothold_weight"},
     "controller": {"negotiation_lookahead", "negotiation_corridor", "negotiation_release", "negotiation_speed_max"},
 }
 
