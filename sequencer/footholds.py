@@ -251,14 +251,16 @@ class FootholdConstraints:
 
     def choose(self, p0, yaw: float, bounds: StepBounds, nominal: StepCandidate,
                solve: Callable[[StepBounds, float | None], StepCandidate], liftoff, step_length_nominal: float,
-               offset_nominal: float) -> tuple[StepCandidate, bool]:
+               offset_nominal: float, cross: bool | None = None) -> tuple[StepCandidate, bool]:
         """The step of stance ``p0`` (world (x, y) [m]) in the heading frame ``yaw`` [rad] whose foothold
         avoids every obstacle: (candidate, changed). ``nominal`` is the QP's solution with its nominal
         ``bounds``; ``solve(bounds, aim)`` solves the same QP with other bounds (and, unless ``aim`` is None,
         the DCM offset b_x [m] it aims at along the heading instead of ``offset_nominal``); ``liftoff`` is where the swinging
         foot lifted off (world (x, y) [m], None: unknown), for the crossing duration; the sign of
         ``step_length_nominal`` [m] (the nominal step along the heading) is the direction of travel: only
-        an obstacle in that direction is crossed (0: stepping in place crosses none).
+        an obstacle in that direction is crossed (0: stepping in place crosses none). ``cross`` keeps a decision
+        already made (the swing in progress: True crosses when one step reaches beyond, whatever the DCM;
+        False stays before); None decides.
 
         Raises:
             FootholdInfeasible: no candidate side is feasible within the bounds.
@@ -279,9 +281,12 @@ class FootholdConstraints:
                 continue
             along, beside = self._options(hit, bounds, step_length_nominal, offset_nominal)
             if along and along[0][2]:  # cross, unless the DCM cannot carry it: then one more step before
-                crossing = solve(*along[0][:2])
-                sign = 1.0 if step_length_nominal > 0.0 else -1.0
-                late = sign * (offset_nominal - crossing.hx) > self.geometry.offset_tolerance
+                if cross is None:
+                    crossing = solve(*along[0][:2])
+                    sign = 1.0 if step_length_nominal > 0.0 else -1.0
+                    late = sign * (offset_nominal - crossing.hx) > self.geometry.offset_tolerance
+                else:
+                    late = not cross
                 along = along[1:2] if late and len(along) > 1 else along[:1]
             options = along + beside
             if not options:

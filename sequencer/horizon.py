@@ -353,6 +353,7 @@ class FootstepSequencer:
         corrections: LipmCorrections | None = None,
         obstacles=(),
         liftoff=None,
+        first_crossing: bool | None = None,
     ) -> FootstepPlan:
         """Run Algorithm 1 from the measured state.
 
@@ -374,6 +375,8 @@ class FootstepSequencer:
                 the before/beyond choice per step); empty: the plan without obstacles, bit for bit.
             liftoff: world (x, y) [m] where the swinging foot lifted off (None: unknown; the first step's
                 swing is then not marked as a crossing, nor lengthened).
+            first_crossing: the before/beyond decision of the first step kept (True: it crosses when one step
+                reaches beyond; False: it stays before), None: decided now (see :mod:`sequencer.footholds`).
 
         Returns:
             FootstepPlan whose last step lands at or after t + horizon.
@@ -421,10 +424,10 @@ class FootstepSequencer:
                 )
         if self.backend_name == "exact":
             steps = self._plan_exact(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate,
-                                     gait.step_length, per_stance, constraints, liftoff)
+                                     gait.step_length, per_stance, constraints, liftoff, first_crossing)
         else:
             steps = self._plan_backend(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate, gait,
-                                       constraints, liftoff)
+                                       constraints, liftoff, first_crossing)
         if constraints is not None:
             steps = self._mark_crossings(steps, p0, liftoff, constraints)
         return FootstepPlan(
@@ -434,7 +437,8 @@ class FootstepSequencer:
         )
 
     def _plan_exact(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, l_nom, per_stance,
-                    constraints: FootholdConstraints | None = None, liftoff=None) -> list[PlannedStep]:
+                    constraints: FootholdConstraints | None = None, liftoff=None,
+                    first_crossing: bool | None = None) -> list[PlannedStep]:
         params = self.params
         omega = self._omega
         a1, a2, a3 = params.alpha1, params.alpha2, params.alpha3
@@ -486,7 +490,8 @@ class FootstepSequencer:
                                         bits, 0.0, math.log(gamma) / omega)
                 chosen, changed = constraints.choose(
                     (p0x, p0y), yaw, (l_min, l_max, w_lo, w_hi, params.t_min), nominal, solve,
-                    liftoff if not steps else (vectors[-2][:2] if len(steps) >= 2 else p0_first), l_nom, bnx)
+                    liftoff if not steps else (vectors[-2][:2] if len(steps) >= 2 else p0_first), l_nom, bnx,
+                    None if steps else first_crossing)
                 if changed:
                     px, py = p0x + (c * chosen.dx - s * chosen.dy), p0y + (s * chosen.dx + c * chosen.dy)
                     bx, by = c * chosen.hx - s * chosen.hy, s * chosen.hx + c * chosen.hy
@@ -508,7 +513,8 @@ class FootstepSequencer:
         ]
 
     def _plan_backend(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, gait,
-                      constraints: FootholdConstraints | None = None, liftoff=None) -> list[PlannedStep]:
+                      constraints: FootholdConstraints | None = None, liftoff=None,
+                      first_crossing: bool | None = None) -> list[PlannedStep]:
         t_end = t + self.params.horizon
         rotate = yaw != 0.0 or yaw_rate != 0.0
         steps = []
@@ -534,7 +540,7 @@ class FootstepSequencer:
                     lambda bounds, aim, problem=problem, to_heading=to_heading: self._solve_bounded(
                         problem, bounds, aim, to_heading, rotate),
                     liftoff if not steps else (steps[-2].position if len(steps) >= 2 else first_stance),
-                    gait.step_length, float(problem.b_nominal[0]))
+                    gait.step_length, float(problem.b_nominal[0]), None if steps else first_crossing)
                 if changed:
                     position = p0 + to_heading.T @ np.array((chosen.dx, chosen.dy))
                     offset = to_heading.T @ np.array((chosen.hx, chosen.hy))
