@@ -97,18 +97,3 @@ class Obstacle:
         if margin < 0.0:
             raise ParameterError(f"margin={margin} m must be >= 0")
         return Obstacle(self.center, self.yaw, self.depth + 2.0 * margin, self.width + 2.0 * margin, self.height)
-
-    def segment_interval(self, start_xy, end_xy, margin: float = 0.0) -> tuple[float, float] | None:
-        """Fractions (s_in, s_out) in [0, 1] of the straight segment ``start_xy`` -> ``end_xy`` (world
-        (x, y) [m]) that lie over the footprint grown by ``margin`` [m]; None when it misses it. A
-        segment of zero length counts as its point."""
-        start = np.asarray(start_xy, dtype=float)
-        delta = np.asarray(end_xy, dtype=float) - start
-        length = float(math.hypot(delta[0], delta[1]))
-        region = self.grown(margin) if margin > 0.0 else self
-        if length < 1e-12:
-            return (0.0, 1.0) if bool(region.contains(start)) else None
-        near, far = region.interval_along(start, math.atan2(delta[1], delta[0]))
-        if not math.isfinite(near) or far < 0.0 or near > length:
-            return None
-        return (max(near, 0.0) / length, min(far, length) / length)

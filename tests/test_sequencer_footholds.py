@@ -145,8 +145,7 @@ def test_obstacle_helpers_and_bad_input():
     box = Obstacle(np.array([1.0, 0.0]), 0.0, 0.2, 1.0, 0.1)
     grown = box.grown(0.05)
     assert (grown.depth, grown.width, grown.height) == pytest.approx((0.3, 1.1, 0.1))
-    assert box.segment_interval((0.0, 0.0), (2.0, 0.0)) == pytest.approx((0.45, 0.55))
-    assert box.segment_interval((0.0, 0.8), (2.0, 0.8)) is None
+    assert grown.contains((0.86, 0.54)) and not box.contains((0.86, 0.54))
     with pytest.raises(ParameterError, match="margin=-0.1 m must be >= 0"):
         box.grown(-0.1)
     with pytest.raises(ParameterError, match="obstacle_step_length_max=0.0 m must be > 0"):
