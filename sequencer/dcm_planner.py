@@ -71,6 +71,7 @@ class DcmFootstepPlanner:
     """
 
     feet: tuple[str, ...] = FEET
+    avoids_obstacles = True  # plan(obstacles=...) keeps the footholds off them (sequencer.footholds)
 
     def __init__(self, params: SequencerParams, backend: str = "exact", corrections: LipmCorrections | None = None,
                  clamp_elapsed: bool = True) -> None:
@@ -82,6 +83,7 @@ class DcmFootstepPlanner:
         self.params = params
         self.corrections = LipmCorrections.from_params(params) if corrections is None else corrections
         self.clamp_elapsed = clamp_elapsed
+        self._swing_decision: tuple | None = None  # (stance foot, t_start, crossing?) of the swing in progress
 
     # ------------------------------------------------------------------ model
     @property
@@ -127,7 +129,8 @@ class DcmFootstepPlanner:
         self.params.check_velocity(command.v_x, command.v_y)
 
     # ------------------------------------------------------------------ planning
-    def plan(self, t: float, stance: StanceState, measured: ReducedState, command: VelocityCommand) -> FootstepPlan:
+    def plan(self, t: float, stance: StanceState, measured: ReducedState, command: VelocityCommand,
+             obstacles=()) -> FootstepPlan:
         """Footsteps from time ``t`` [s] until a touchdown at or after t + params.horizon.
 
         Uses the stance's foot, position, yaw (the heading ψ_0) and start time, the measured DCM
@@ -143,8 +146,16 @@ class DcmFootstepPlanner:
         first step would be a wide catch step (0.16 m wider on the G1) and the walk would drift
         sideways by as much.
 
+        ``obstacles`` (:class:`sequencer.obstacles.Obstacle` s, world frame): every step's foothold, its whole
+        sole rectangle (``params.sole_*``), lands outside their footprints grown by ``params.obstacle_margin``,
+        before or beyond them (:mod:`sequencer.footholds`); a step whose swing passes over one carries its
+        :class:`~sequencer.footholds.Crossing` (from ``stance.swing_liftoff`` for the swing in progress). The
+        swing in progress keeps the before/beyond decision of the first plan after its lift-off (the end of the
+        double support). Empty: the plan without obstacles, bit for bit.
+
         Raises:
             ParameterError: bad input, or a command outside :meth:`command_range` (clip it first).
+            sequencer.footholds.FootholdInfeasible: no foothold outside an obstacle within a step's bounds.
             sequencer.step_qp.StepQPError: the step QP failed (``clamp_elapsed=False`` and a late
                 touchdown, or a backend failure); a control loop keeps its last plan.
         """
@@ -159,11 +170,20 @@ class DcmFootstepPlanner:
         if t < stance.t_start:  # start from standing (see above)
             dcm = self.stance_start_dcm(stance, command)
             t = stance.t_start
-        return self.sequencer.plan(
+        # the swing in progress keeps the before/beyond decision it lifted off with: flipped mid-swing (the
+        # measured DCM crossing the tolerance), the H1's foot, low and before the box, was sent beyond it
+        key = (stance.foot, stance.t_start)
+        swinging = len(obstacles) > 0 and t >= stance.t_start + self.params.double_support
+        kept = self._swing_decision[2] if swinging and self._swing_decision is not None \
+            and self._swing_decision[:2] == key else None
+        plan = self.sequencer.plan(
             t, stance.foot, stance.position, dcm, stance.t_start, self.clamp_elapsed,
             stance_yaw=stance.yaw, yaw_rate=command.yaw_rate, velocity=(command.v_x, command.v_y),
-            corrections=self.corrections,
+            corrections=self.corrections, obstacles=obstacles, liftoff=stance.swing_liftoff, first_crossing=kept,
         )
+        if swinging and kept is None:
+            self._swing_decision = (*key, plan.steps[0].crossing is not None)
+        return plan
 
     def stance_start_dcm(self, stance: StanceState, command: VelocityCommand) -> np.ndarray:
         """The DCM (world (x, y) [m]) the nominal gait of ``command`` has when a stance on

@@ -31,6 +31,7 @@ common cause (the foot has not landed by T_max) by planning as if the elapsed ti
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -38,6 +39,7 @@ import numpy as np
 
 from sequencer.backends import make_backend
 from sequencer.corrections import LipmCorrections
+from sequencer.footholds import Crossing, FootholdConstraints, StepCandidate, crossing_of
 from sequencer.nominal import FEET, NominalGait, other_foot
 from sequencer.params import SequencerParams
 from sequencer.step_qp import CONSTRAINT_NAMES, InfeasibleStep, StepProblem, solve_exact_scalars
@@ -64,6 +66,9 @@ class PlannedStep:
             stance this touchdown starts (the pendulum's pivot is position + cop_offset), or None: the
             foothold itself (the DCM planner, point feet). The ALIP planner's ankle torque τ is such a
             constant CoP shift (c_x = -τ_y / (m g), c_y = τ_x / (m g)), so its CoM reference stays exact.
+        crossing: the obstacle this step's swing passes over (a :class:`sequencer.footholds.Crossing`: the
+            obstacle, the lift-off point and the part of the path over it), or None: the whole-body OCP lifts
+            a crossing swing over the obstacle (``docs/sequencer.md``, "Obstacles").
     """
 
     foot: str
@@ -75,6 +80,7 @@ class PlannedStep:
     active: tuple[str, ...] = ()
     yaw: float = 0.0
     cop_offset: np.ndarray | None = None
+    crossing: Crossing | None = None
 
     @property
     def duration(self) -> float:
@@ -345,6 +351,9 @@ class FootstepSequencer:
         yaw_rate: float = 0.0,
         velocity=None,
         corrections: LipmCorrections | None = None,
+        obstacles=(),
+        liftoff=None,
+        first_crossing: bool | None = None,
     ) -> FootstepPlan:
         """Run Algorithm 1 from the measured state.
 
@@ -362,6 +371,12 @@ class FootstepSequencer:
                 ψ_k, ψ_{k+1} = ψ_k + r T_k.
             velocity: (v_x, v_y) [m/s] in the heading frame; None = ``params.v_x``, ``params.v_y``.
             corrections: live LIPM corrections; None = ``params.swing_drift``, ``params.dcm_offset_bias``.
+            obstacles: :class:`sequencer.obstacles.Obstacle` s the footholds avoid (:mod:`sequencer.footholds`,
+                the before/beyond choice per step); empty: the plan without obstacles, bit for bit.
+            liftoff: world (x, y) [m] where the swinging foot lifted off (None: unknown; the first step's
+                swing is then not marked as a crossing, nor lengthened).
+            first_crossing: the before/beyond decision of the first step kept (True: it crosses when one step
+                reaches beyond; False: it stays before), None: decided now (see :mod:`sequencer.footholds`).
 
         Returns:
             FootstepPlan whose last step lands at or after t + horizon.
@@ -390,6 +405,13 @@ class FootstepSequencer:
             raise ParameterError(f"stance_yaw={stance_yaw} rad and yaw_rate={yaw_rate} rad/s must be finite")
         gait, per_stance = self._gait_tables(velocity, corrections)
         params = self.params
+        constraints = None
+        if len(obstacles):
+            constraints = FootholdConstraints(obstacles, params.foothold_geometry(), params.t_max, self._omega)
+            if liftoff is not None:
+                liftoff = np.asarray(liftoff, dtype=float)
+                if liftoff.shape != (2,) or not np.all(np.isfinite(liftoff)):
+                    raise ParameterError(f"liftoff={liftoff!r} must be a finite (x, y) pair [m] or None")
         if elapsed > params.t_max:
             if clamp_elapsed:
                 elapsed = params.t_max
@@ -402,16 +424,21 @@ class FootstepSequencer:
                 )
         if self.backend_name == "exact":
             steps = self._plan_exact(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate,
-                                     gait.step_length, per_stance)
+                                     gait.step_length, per_stance, constraints, liftoff, first_crossing)
         else:
-            steps = self._plan_backend(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate, gait)
+            steps = self._plan_backend(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate, gait,
+                                       constraints, liftoff, first_crossing)
+        if constraints is not None:
+            steps = self._mark_crossings(steps, p0, liftoff, constraints)
         return FootstepPlan(
             t0=t, stance_foot=stance_foot, stance_position=p0.copy(), dcm_measured=dcm.copy(), omega=self._omega,
             steps=tuple(steps), t_stance_start=t_stance_start, horizon=params.horizon, com_height=params.z_c,
             stance_yaw=stance_yaw, double_support=params.double_support, feet=FEET,
         )
 
-    def _plan_exact(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, l_nom, per_stance) -> list[PlannedStep]:
+    def _plan_exact(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, l_nom, per_stance,
+                    constraints: FootholdConstraints | None = None, liftoff=None,
+                    first_crossing: bool | None = None) -> list[PlannedStep]:
         params = self.params
         omega = self._omega
         a1, a2, a3 = params.alpha1, params.alpha2, params.alpha3
@@ -420,6 +447,7 @@ class FootstepSequencer:
         t_end = t + params.horizon
         rotate = yaw != 0.0 or yaw_rate != 0.0  # else the world frame is every stance's heading frame
         p0x, p0y = float(p0[0]), float(p0[1])
+        p0_first = (p0x, p0y)
         zx, zy = float(dcm[0]), float(dcm[1])
         steps, vectors = [], []  # (foot, touchdown, stance start, active bits, yaw), (p_T, b_T, zeta_T)
         for _ in range(self._max_steps):
@@ -444,6 +472,30 @@ class FootstepSequencer:
                     p0x, p0y, ax, ay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny,
                     l_min, l_max, w_lo, w_hi, g_lo, g_hi,
                 )
+            if constraints is not None:  # footholds outside the obstacles (sequencer.footholds)
+                c, s = math.cos(yaw), math.sin(yaw)
+                hax, hay = c * ax + s * ay, c * ay - s * ax  # the DCM growth in the heading frame
+
+                def solve(bounds, aim, hax=hax, hay=hay, w_nom=w_nom, bnx=bnx, bny=bny, elapsed=elapsed):
+                    low = math.exp(omega * max(bounds[4], elapsed))
+                    bnx = bnx if aim is None else aim
+                    dx, dy, g, hx, hy, b = solve_exact_scalars(
+                        0.0, 0.0, hax, hay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny, *bounds[:4], low, g_hi)
+                    cost = a1 * ((dx - l_nom) ** 2 + (dy - w_nom) ** 2) + a2 * (g - gamma_nom) ** 2 \
+                        + a3 * ((hx - bnx) ** 2 + (hy - bny) ** 2)
+                    return StepCandidate(dx, dy, g, hx, hy, b, cost, math.log(g) / omega)
+
+                rx, ry = px - p0x, py - p0y
+                nominal = StepCandidate(c * rx + s * ry, c * ry - s * rx, gamma, c * bx + s * by, c * by - s * bx,
+                                        bits, 0.0, math.log(gamma) / omega)
+                chosen, changed = constraints.choose(
+                    (p0x, p0y), yaw, (l_min, l_max, w_lo, w_hi, params.t_min), nominal, solve,
+                    liftoff if not steps else (vectors[-2][:2] if len(steps) >= 2 else p0_first), l_nom, bnx,
+                    None if steps else first_crossing)
+                if changed:
+                    px, py = p0x + (c * chosen.dx - s * chosen.dy), p0y + (s * chosen.dx + c * chosen.dy)
+                    bx, by = c * chosen.hx - s * chosen.hy, s * chosen.hx + c * chosen.hy
+                    gamma, bits = chosen.gamma, chosen.bits
             duration = math.log(gamma) / omega
             touchdown = stance_start + duration
             yaw = yaw + yaw_rate * duration
@@ -460,30 +512,78 @@ class FootstepSequencer:
             for k, (landing, touchdown, start, bits, yaw) in enumerate(steps)
         ]
 
-    def _plan_backend(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, gait) -> list[PlannedStep]:
+    def _plan_backend(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, gait,
+                      constraints: FootholdConstraints | None = None, liftoff=None,
+                      first_crossing: bool | None = None) -> list[PlannedStep]:
         t_end = t + self.params.horizon
         rotate = yaw != 0.0 or yaw_rate != 0.0
         steps = []
+        first_stance = p0
         for _ in range(self._max_steps):
+            c, s = math.cos(yaw), math.sin(yaw)
+            to_heading = np.array(((c, s), (-s, c)))
             if rotate:  # the QP in the stance's heading frame: p0 and the DCM rotated by -yaw
-                c, s = math.cos(yaw), math.sin(yaw)
-                to_heading = np.array(((c, s), (-s, c)))
-                solution = self.backend.solve(self.problem(stance, to_heading @ p0, to_heading @ dcm, elapsed, gait))
+                problem = self.problem(stance, to_heading @ p0, to_heading @ dcm, elapsed, gait)
+                solution = self.backend.solve(problem)
                 position = to_heading.T @ solution.step_position
                 offset = to_heading.T @ solution.dcm_offset
             else:
-                solution = self.backend.solve(self.problem(stance, p0, dcm, elapsed, gait))
+                problem = self.problem(stance, p0, dcm, elapsed, gait)
+                solution = self.backend.solve(problem)
                 position = solution.step_position.copy()
                 offset = solution.dcm_offset.copy()
-            touchdown = stance_start + solution.duration
-            yaw = yaw + yaw_rate * solution.duration
+            duration, active = solution.duration, tuple(solution.active_names)
+            if constraints is not None:  # footholds outside the obstacles (sequencer.footholds)
+                chosen, changed = constraints.choose(
+                    p0, yaw, (*problem.length_bounds, *problem.width_bounds, problem.time_bounds[0]),
+                    self._candidate(problem, solution, to_heading, rotate),
+                    lambda bounds, aim, problem=problem, to_heading=to_heading: self._solve_bounded(
+                        problem, bounds, aim, to_heading, rotate),
+                    liftoff if not steps else (steps[-2].position if len(steps) >= 2 else first_stance),
+                    gait.step_length, float(problem.b_nominal[0]), None if steps else first_crossing)
+                if changed:
+                    position = p0 + to_heading.T @ np.array((chosen.dx, chosen.dy))
+                    offset = to_heading.T @ np.array((chosen.hx, chosen.hy))
+                    duration = chosen.duration
+                    active = _ACTIVE_NAMES[chosen.bits]
+            touchdown = stance_start + duration
+            yaw = yaw + yaw_rate * duration
             landing = other_foot(stance)
             dcm = position + offset
-            steps.append(
-                PlannedStep(landing, position, touchdown, offset, dcm.copy(), stance_start,
-                            tuple(solution.active_names), yaw)
-            )
+            steps.append(PlannedStep(landing, position, touchdown, offset, dcm.copy(), stance_start, active, yaw))
             if touchdown >= t_end:
                 break
             stance, p0, stance_start, elapsed = landing, position, touchdown, 0.0
         return steps
+
+    def _solve_bounded(self, problem: StepProblem, bounds, aim, to_heading: np.ndarray, rotate: bool) -> StepCandidate:
+        """The backend's solution of ``problem`` with the step bounds (ℓ_min, ℓ_max, w_min, w_max, T_min) and,
+        unless ``aim`` is None, the nominal DCM offset b_x = aim [m] (heading frame)."""
+        bounded = dataclasses.replace(problem, length_bounds=(bounds[0], bounds[1]), width_bounds=(bounds[2], bounds[3]),
+                                      time_bounds=(bounds[4], problem.time_bounds[1]))
+        if aim is not None:
+            bounded = dataclasses.replace(bounded, b_nominal=np.array((aim, problem.b_nominal[1])))
+        return self._candidate(bounded, self.backend.solve(bounded), to_heading, rotate)
+
+    @staticmethod
+    def _candidate(problem: StepProblem, solution, to_heading: np.ndarray, rotate: bool) -> StepCandidate:
+        """A backend's solution as a heading-frame :class:`StepCandidate` (the QP is in that frame when ``rotate``)."""
+        step = solution.step_position - problem.p0
+        offset = solution.dcm_offset
+        if not rotate:
+            step, offset = to_heading @ step, to_heading @ offset
+        bits = int(sum(1 << i for i, on in enumerate(solution.active) if on))
+        return StepCandidate(float(step[0]), float(step[1]), float(solution.x[2]), float(offset[0]), float(offset[1]),
+                             bits, float(solution.objective), float(solution.duration))
+
+    @staticmethod
+    def _mark_crossings(steps: list[PlannedStep], p0, liftoff, constraints: FootholdConstraints) -> list[PlannedStep]:
+        """Each step with the :class:`Crossing` of its swing (lift-off: ``liftoff`` for the first step, the
+        current stance for the second, the foothold two steps back after that; the sole's heading: the
+        foothold's yaw)."""
+        marked = []
+        for k, step in enumerate(steps):
+            start = liftoff if k == 0 else (p0 if k == 1 else steps[k - 2].position)
+            crossing = crossing_of(constraints.obstacles, start, step.position, step.yaw, constraints.geometry)
+            marked.append(step if crossing is None else dataclasses.replace(step, crossing=crossing))
+        return marked

@@ -90,3 +90,10 @@ class Obstacle:
         if near > far:
             return (math.inf, math.inf)
         return (float(near), float(far))
+
+    def grown(self, margin: float) -> "Obstacle":
+        """The same box with its footprint grown by ``margin`` [m] >= 0 on every side (height kept)."""
+        margin = _finite_scalar("margin", margin)
+        if margin < 0.0:
+            raise ParameterError(f"margin={margin} m must be >= 0")
+        return Obstacle(self.center, self.yaw, self.depth + 2.0 * margin, self.width + 2.0 * margin, self.height)

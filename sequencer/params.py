@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from sequencer.corrections import check_dcm_offset_bias, check_stance_drift, check_swing_drift
+from sequencer.footholds import FootholdGeometry
 from sequencer.nominal import FEET, NominalGait, aimed_dcm_offset, nominal_gait, nominal_step_width, stance_sign
 from wbmpc.config import dataclass_from_table, named_preset, read_toml
 from wbmpc.errors import ParameterError
@@ -66,6 +67,20 @@ class SequencerParams:
             the step length (0 = the paper's LIPM): b_x = ((1 - kappa) l_nom - d) / (E - 1). Bolt's
             DCM gains 5.5-8.5 mm per stance stepping in place and ~24 mm at 0.33 m/s: a drift that
             does not vanish with the step (docs/closed_loop.md). Initial value only, as swing_drift.
+        obstacle_margin: obstacles' footprints grown by this on every side for the footholds [m], >= 0
+            (:mod:`sequencer.footholds`: no sole lands within it of an obstacle).
+        obstacle_approach_margin: the obstacle's near side (facing the stance along the heading) grown by this
+            much more for the footholds [m], >= 0: the last step before it is the one a foot overshoots.
+        obstacle_step_length_max: length bound [m], > 0, of a step that goes beyond an obstacle (the planner
+            uses max(l_max, this): the crossing step may be longer than a walking one).
+        obstacle_step_duration_min: duration lower bound [s] of a step whose swing passes over an obstacle
+            (the planner uses max(t_min, this)), <= t_max.
+        obstacle_offset_tolerance: a step crosses an obstacle only if its DCM offset at touchdown is at most
+            this much behind the nominal one, along the heading [m], >= 0 (else one more step before it,
+            aiming at the offset the crossing needs; :mod:`sequencer.footholds`).
+        sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m],
+            >= 0 (0: a point foot); sole_half_width: its half width [m], >= 0. The footholds keep the whole
+            sole rectangle outside the grown footprints.
         name: label of the parameter set (for reports only).
     """
 
@@ -91,6 +106,14 @@ class SequencerParams:
     swing_drift: float = 0.0
     dcm_offset_bias: float = 0.0
     stance_drift: float = 0.0
+    obstacle_margin: float = 0.05
+    obstacle_approach_margin: float = 0.0
+    obstacle_step_length_max: float = 0.3
+    obstacle_step_duration_min: float = 0.0
+    obstacle_offset_tolerance: float = 0.03
+    sole_front: float = 0.0
+    sole_rear: float = 0.0
+    sole_half_width: float = 0.0
     name: str = "custom"
 
     # ------------------------------------------------------------------ validation
@@ -129,6 +152,15 @@ class SequencerParams:
             )
         if not 0.0 <= self.double_support < self.t_min:
             raise ParameterError(f"double_support={self.double_support} s must be in [0, t_min={self.t_min} s)")
+        for name in ("obstacle_margin", "obstacle_approach_margin", "obstacle_offset_tolerance", "sole_front",
+                     "sole_rear", "sole_half_width"):
+            if getattr(self, name) < 0:
+                raise ParameterError(f"{name}={getattr(self, name)} m must be >= 0")
+        if not self.obstacle_step_length_max > 0:
+            raise ParameterError(f"obstacle_step_length_max={self.obstacle_step_length_max} m must be > 0")
+        if not 0.0 <= self.obstacle_step_duration_min <= self.t_max:
+            raise ParameterError(f"obstacle_step_duration_min={self.obstacle_step_duration_min} s must be in "
+                                 f"[0, t_max={self.t_max} s]")
         self.check_velocity(self.v_x, self.v_y)
 
     # ------------------------------------------------------------------ derived values
@@ -159,6 +191,13 @@ class SequencerParams:
             self.omega, self.l_nom, self.pelvis_width, self.v_y, self.t_nom, stance_foot, self.swing_drift,
             self.dcm_offset_bias, self.stance_drift,
         )
+
+    def foothold_geometry(self) -> FootholdGeometry:
+        """The obstacle margins, the crossing step's bounds and the sole of these parameters
+        (:class:`sequencer.footholds.FootholdGeometry`; effective crossing bounds: max with l_max, t_min)."""
+        return FootholdGeometry(self.obstacle_margin, max(self.l_max, self.obstacle_step_length_max),
+                                max(self.t_min, self.obstacle_step_duration_min), self.sole_front, self.sole_rear,
+                                self.sole_half_width, self.obstacle_offset_tolerance, self.obstacle_approach_margin)
 
     # ------------------------------------------------------------------ velocity commands
     def velocity_range(self) -> dict[str, tuple[float, float]]:

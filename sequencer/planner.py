@@ -96,15 +96,20 @@ class StanceState:
         position: world (x, y) of the stance foothold [m], shape (2,).
         yaw: world yaw of the stance foot's heading frame [rad].
         t_start: time at which this stance began [s].
+        swing_liftoff: world (x, y) [m] where the swinging foot lifted off (its last foothold), or None
+            (unknown): a planner given obstacles tells from it whether the swing in progress passes over one.
     """
 
     foot: str
     position: np.ndarray
     yaw: float
     t_start: float
+    swing_liftoff: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "position", _finite_vector("stance position", self.position, 2))
+        if self.swing_liftoff is not None:
+            object.__setattr__(self, "swing_liftoff", _finite_vector("swing_liftoff", self.swing_liftoff, 2))
         object.__setattr__(self, "yaw", _finite_scalar("stance yaw", self.yaw))
         object.__setattr__(self, "t_start", _finite_scalar("t_start", self.t_start))
 
@@ -158,6 +163,9 @@ class FootstepPlanner(Protocol):
             height reference of the whole-body OCP).
         double_support: duration of the double-support phase that follows each touchdown [s]
             (0 for point feet); the contact schedule keeps both feet on the ground for it.
+        avoids_obstacles: (optional, False when absent) whether :meth:`plan` keeps the footholds off the
+            ``obstacles`` it is given (else it raises ParameterError when given any); a controller that
+            negotiates obstacles needs it.
     """
 
     feet: tuple[str, ...]
@@ -166,8 +174,12 @@ class FootstepPlanner(Protocol):
     double_support: float
 
     def plan(self, t: float, stance: StanceState, measured: ReducedState,
-             command: VelocityCommand) -> "FootstepPlan":  # noqa: F821 (sequencer.horizon)
+             command: VelocityCommand, obstacles=()) -> "FootstepPlan":  # noqa: F821 (sequencer.horizon)
         """Footsteps from time ``t`` [s] until at least the planner's horizon.
+
+        ``obstacles``: the :class:`sequencer.obstacles.Obstacle` s the footholds must avoid (world frame);
+        empty: the plan without obstacles. A planner that cannot avoid them raises ParameterError when
+        given some (never a silent ignore).
 
         Raises:
             ParameterError: bad input (names the argument and value).

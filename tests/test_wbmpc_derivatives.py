@@ -441,3 +441,71 @@ def test_sole_damping_is_refused_where_it_cannot_apply(bolt):
     with pytest.raises(ParameterError, match="contact_damping_moments='sole' needs flat feet"):
         WalkingOCP(bolt, WalkingOCPConfig(contact_damping_moments="sole", dynamics_backend="kkt"), n_nodes=2, dt=0.01)
     np.testing.assert_allclose(sole_lever_arms((0.2, 0.1)), [0.05, 0.1, 0.5 * np.hypot(0.2, 0.1)])
+
+
+def _h1_crossing(n_nodes: int = 12):
+    """The H1 preset's OCP (node-wise) over a right swing that passes over a 10 cm box: (robot, ocp, schedule,
+    crossings), the box under the middle of the swing's straight path."""
+    from sequencer.obstacles import Obstacle
+    from wbmpc.walking.preset import load_walking_preset
+    from wbmpc.walking.reference import CrossingSchedule
+
+    h1 = load_robot("h1")
+    config = dataclasses.replace(load_walking_preset("h1").ocp, evaluation="nodes", baumgarte_gains=(10.0, 30.0))
+    ocp = WalkingOCP(h1, config, n_nodes=n_nodes, dt=0.02)
+    schedule = alternating_schedule(0.0, 0.02, n_nodes, step_duration=0.2, foot_y=(0.2, -0.2), step_length=0.5)
+    box = Obstacle(np.array([0.25, 0.0]), 0.0, 0.1, 1.0, 0.1)
+    swinging = ~schedule.in_contact
+    index = np.where(swinging, 0, -1)
+    liftoff = np.array([[-0.5, 0.2], [-0.25, -0.2]])  # each foot's lift-off, 0.5 m behind its touchdown
+    phase = np.nan_to_num(schedule.swing_phase)[..., None]
+    path = np.where(swinging[..., None], liftoff[None] + phase * (schedule.touchdown_position - liftoff[None]), np.nan)
+    crossings = CrossingSchedule((box,), index, path, np.where(swinging, 0.0, np.nan), schedule.feet)
+    return h1, ocp, schedule, crossings
+
+
+@needs_h1_extra
+def test_h1_obstacle_clearance_residual_jacobians_match_finite_differences():
+    """The clearance terms of a crossing swing (sole toe and heel points, knee frame): their Jacobians through
+    the point offsets against finite differences, each at a node where it is active."""
+    h1, ocp, schedule, crossings = _h1_crossing()
+    ocp.update(standing_state(h1), schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
+    kinds = _check_every_residual(h1, ocp.problem, np.random.default_rng(13))
+    assert kinds >= {"clearance_sole0", "clearance_sole1", "clearance_shank", "height"}, kinds
+
+
+@needs_h1_extra
+def test_h1_crossing_swing_raises_the_apex_and_turns_the_clearance_on_only_over_the_box():
+    h1, ocp, schedule, crossings = _h1_crossing()
+    x0 = standing_state(h1)
+    ocp.update(x0, schedule, np.array([0.1, 0.0, 0.97]))  # no crossing: every clearance term off
+    costs = [model.differential.costs.costs for model in ocp.problem.running_models]
+    assert not any(item.active for node in costs for name, item in node.items() if "clearance" in name)
+    plain_heights = [node["right_height"].cost.residual.reference for node in costs]
+    ocp.update(x0, schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
+    config = ocp.config
+    for k, node in enumerate(costs):
+        swinging = not schedule.in_contact[k, 1]
+        toe = node["right_clearance_sole0"]
+        # the toe's straight-path position over the box grown by the footprint margin, its reference the top + margin
+        toe_x = crossings.path_xy[k, 1, 0] + config.obstacle_sole_points[0][0]
+        over = swinging and abs(toe_x - 0.25) <= 0.05 + config.obstacle_footprint_margin
+        assert toe.active == over, k
+        if over:
+            assert toe.cost.residual.reference == pytest.approx(0.1 + config.obstacle_clearance_margin)
+        assert node["right_clearance_shank"].active == swinging
+        if swinging and 0.0 < schedule.swing_phase[k, 1] < 1.0:  # the apex is raised: the reference higher
+            assert node["right_height"].cost.residual.reference > plain_heights[k]
+    # one-sided: no cost above the reference, a quadratic one below
+    model = ocp.problem.running_models[0].differential
+    data = model.createData()
+    shank, u = model.costs.costs["right_clearance_shank"], np.zeros(ocp.nu)
+    assert shank.active  # the right foot swings from node 0
+
+    def cost(reference, active=True):
+        shank.cost.residual.reference, shank.active = reference, active
+        model.calc(data, x0, u)
+        return data.cost
+
+    assert cost(-1.0) == cost(-1.0, active=False)  # the knee far above a reference 1 m below the ground
+    assert cost(2.0) > cost(2.0, active=False) + 1.0  # a reference above the knee

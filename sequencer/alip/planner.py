@@ -52,6 +52,8 @@ class AlipFootstepPlanner:
     #: that can measure it hands it over (:class:`wbmpc.walking.planning.PlanningStage`)
     uses_angular_momentum: bool = True
 
+    avoids_obstacles = False  # plan(obstacles=...) raises ParameterError
+
     def __init__(self, params: AlipParams, solver: str = "sqp", warm_start: bool = True) -> None:
         if not isinstance(params, AlipParams):
             raise ParameterError(f"params must be an AlipParams, got {type(params).__name__}")
@@ -136,8 +138,12 @@ class AlipFootstepPlanner:
         """Solve eq. (11) for ``instance`` (raises AlipSolverError)."""
         return self.solver.solve(instance, warm)
 
-    def plan(self, t: float, stance: StanceState, measured: ReducedState, command: VelocityCommand) -> FootstepPlan:
+    def plan(self, t: float, stance: StanceState, measured: ReducedState, command: VelocityCommand,
+             obstacles=()) -> FootstepPlan:
         """Footsteps from ``t`` [s]: the NMPC's K steps, then nominal ones until t + params.horizon.
+
+        ``obstacles``: the ALIP NMPC has no foothold constraints for obstacles: given any, it raises
+        ParameterError (the DCM planner, :mod:`sequencer.footholds`, steps over them).
 
         A stance that has not begun (``t < stance.t_start``) is a start from standing, as for the DCM planner
         (:meth:`sequencer.dcm_planner.DcmFootstepPlanner.plan`): both feet stay on the ground until
@@ -147,9 +153,12 @@ class AlipFootstepPlanner:
         whole-body OCP moves the centre of pressure over the double support to bring the robot there.
 
         Raises:
-            ParameterError: bad input or a command outside :meth:`command_range`.
+            ParameterError: bad input, a command outside :meth:`command_range`, or obstacles.
             AlipSolverError: the NMPC failed; a control loop keeps its last plan.
         """
+        if len(obstacles):
+            raise ParameterError(f"obstacles: the ALIP planner cannot avoid obstacles (given {len(obstacles)}); "
+                                 "use the DCM planner (footstep_planner.kind = 'dcm')")
         instance = self.instance(t, stance, measured, command)
         key = (stance.foot, stance.t_start)
         warm = None

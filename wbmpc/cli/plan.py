@@ -51,6 +51,14 @@ _HELP = {
     "swing_drift": "kappa: DCM gain over the LIPM per unit of step length (0 = the paper's LIPM) [-]",
     "dcm_offset_bias": "measured minus planned sagittal DCM offset at touchdown, aimed off (0 = none) [m]",
     "stance_drift": "forward DCM gain beyond the LIPM over a stance, whatever the step length (0 = none) [m]",
+    "obstacle_margin": "obstacles' footprints grown by this for the footholds [m]",
+    "obstacle_approach_margin": "an obstacle's near side grown by this much more [m]",
+    "obstacle_step_length_max": "length bound of a step beyond an obstacle (with l_max) [m]",
+    "obstacle_step_duration_min": "duration lower bound of a step over an obstacle (with t_min) [s]",
+    "obstacle_offset_tolerance": "a step crosses only with its DCM offset this close to the nominal one [m]",
+    "sole_front": "sole extent ahead of the foot frame [m]",
+    "sole_rear": "sole extent behind the foot frame [m]",
+    "sole_half_width": "sole half width [m]",
 }
 
 

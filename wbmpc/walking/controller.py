@@ -144,6 +144,12 @@ class WalkingController:
         return self.planning.plan
 
     @property
+    def negotiation_switches(self) -> list[tuple[float, int]]:
+        """(time [s], mode code) of every walking/negotiation switch of the run
+        (:mod:`wbmpc.walking.negotiation`: 0 walking, 1 negotiation)."""
+        return [] if self.planning is None else list(self.planning.negotiation.switches)
+
+    @property
     def stance(self):
         """The stance tracker (current stance foot, position, yaw, start time)."""
         return self.planning.stance
@@ -160,18 +166,20 @@ class WalkingController:
         cfg = self.config
         x = measurement.x
         tic = time.perf_counter()
-        plan, measured, record = self.planning.update(t, x, measurement.foot_in_contact)
+        plan, measured, record = self.planning.update(t, x, measurement.foot_in_contact, measurement.obstacles)
         self.timers.sequencer += record["sequencer_time"]
         tic = time.perf_counter()
         reference = self.reference_stage.sample(plan, t, measured.com[:2], measurement.foot_in_contact)
         if cfg.touchdown_detection == "contact":
             record["touchdown_wait"] = reference.touchdown_wait
+        record["crossing_nodes"] = 0.0 if reference.crossings is None else float(np.sum(reference.crossings.index >= 0))
         injected = bool(self._pending_failures) and t >= self._pending_failures[0] - 1e-9
         if injected:
             self._pending_failures.pop(0)
             ok, status, iterations, cost, solve_time = False, "injected_failure", 0, np.nan, 0.0
         else:
-            solution = self.mpc.update(t, x, reference.schedule, reference.com_terminal, reference.touchdown_depth)
+            solution = self.mpc.update(t, x, reference.schedule, reference.com_terminal, reference.touchdown_depth,
+                                       reference.crossings)
             ok, status = bool(solution.ok), str(solution.status)
             record["mpc_prepared_used"] = float(getattr(self.mpc.problem, "prepared_used", 0))
             record["mpc_rollouts"] = float(getattr(self.mpc.solver, "rollouts", np.nan))

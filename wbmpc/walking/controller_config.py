@@ -137,6 +137,16 @@ class WalkingControllerConfig:
         planner_backend: QP backend of the DCM planner: "exact" (closed-form solution of the same
             QP, verified against OSQP in the sequencer tests, fastest), "osqp" (the paper's) or
             "proxqp".
+        negotiation_lookahead: obstacle negotiation (:mod:`wbmpc.walking.negotiation`): the controller
+            switches from walking to negotiation when a perceived obstacle (``Measurement.obstacles``) has
+            its near edge within this distance [m] ahead of the CoM along the stance heading, inside the
+            corridor below; it then hands those obstacles to the footstep planner and the OCP. 0 = never.
+        negotiation_corridor: half width [m] of the corridor about the CoM line along the heading in which an
+            obstacle counts (the feet and the swing reach this far sideways).
+        negotiation_release: back to walking once both feet are this far [m] beyond the far edge of every
+            obstacle of the negotiation (along the heading).
+        negotiation_speed_max: forward command bound [m/s] while negotiating (the approach and crossing
+            speed; inf = the walking command).
     """
 
     n_nodes: int = 100
@@ -168,6 +178,10 @@ class WalkingControllerConfig:
     mpc_failure_times: tuple[float, ...] = ()
     sequencer_params_from: tuple[float, Any] | None = None
     planner_backend: str = "exact"
+    negotiation_lookahead: float = 0.0
+    negotiation_corridor: float = 0.3
+    negotiation_release: float = 0.05
+    negotiation_speed_max: float = float("inf")
 
     def __post_init__(self) -> None:
         for name in ("mpc_prepare", "interpolate", "feedback"):
@@ -220,6 +234,13 @@ class WalkingControllerConfig:
             value = getattr(self, name)
             if not (np.isfinite(value) and 0.0 <= value <= high):
                 raise ParameterError(f"{name}={value} m must be in [0, {high}] m")
+        for name, high in (("negotiation_lookahead", 10.0), ("negotiation_corridor", 5.0),
+                           ("negotiation_release", 1.0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not (np.isfinite(value) and 0.0 <= value <= high):
+                raise ParameterError(f"{name}={value!r} m must be in [0, {high}] m")
+        if isinstance(self.negotiation_speed_max, bool) or not self.negotiation_speed_max > 0:
+            raise ParameterError(f"negotiation_speed_max={self.negotiation_speed_max!r} m/s must be > 0 (inf: none)")
         if self.planner_backend not in ("exact", "osqp", "proxqp"):
             raise ParameterError(f"planner_backend={self.planner_backend!r} must be 'exact', 'osqp' or 'proxqp'")
         if self.first_stance_foot not in ("left", "right"):

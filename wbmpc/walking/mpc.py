@@ -61,12 +61,13 @@ class WalkingMPC:
         self.receding.last_good = solution
 
     def update(self, t: float, x_measured, schedule, com_terminal_reference,
-               touchdown_depth: float = 0.0) -> MPCSolution:
+               touchdown_depth: float = 0.0, crossings=None) -> MPCSolution:
         """Write the schedule and the terminal CoM reference (3,) [m, world] into the OCP, then
         re-solve from the measured state; never raises (failures come back with ok=False).
-        ``touchdown_depth`` [m]: see :meth:`~wbmpc.walking.ocp.WalkingOCP.update`."""
+        ``touchdown_depth`` [m], ``crossings`` (swings over obstacles): see
+        :meth:`~wbmpc.walking.ocp.WalkingOCP.update`."""
         return self.receding.update(
-            t, x_measured, lambda x: self.ocp.update(x, schedule, com_terminal_reference, touchdown_depth)
+            t, x_measured, lambda x: self.ocp.update(x, schedule, com_terminal_reference, touchdown_depth, crossings)
         )
 
     def prepare(self, deadline: float | None = None) -> int:

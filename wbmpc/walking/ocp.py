@@ -21,6 +21,13 @@ Per running node k (time t0 + k dt), with the feet in contact given by the sched
   default: footholds emerge, the paper's choice), ``{foot}_contact_force`` (regularise the
   stance forces towards m g / n_stance) and ``{foot}_friction_cone`` (point feet).
 
+- optional obstacle clearance (``obstacle_clearance_weight`` > 0): ``{foot}_clearance_sole{i}`` keeps
+  the swing sole's points ``obstacle_sole_points`` (toe and heel) and ``{foot}_clearance_shank`` the
+  shank frame (``obstacle_shank_frames``, the knee) above an obstacle's top plus a margin while a
+  crossing swing passes over it (:class:`~wbmpc.ocp.residuals.ResidualFramePointHeight` under a
+  one-sided barrier: no cost above), and a crossing swing's apex H of eq. (19) is raised above the
+  obstacle (:meth:`WalkingOCP.update`, ``clearance``; docs/ocp.md "Obstacle clearance").
+
 The terminal node has the state costs (state regularisation, swing-foot height) and
 ``com_position``, eq. (23), towards the caller's reference (eq. 24).
 
@@ -50,6 +57,7 @@ from wbmpc.ocp.residuals import (
     ResidualContactForce,
     ResidualControl,
     ResidualFrameHeight,
+    ResidualFramePointHeight,
     ResidualFrameRotation,
     ResidualFrameTranslation,
     ResidualFrameVelocity,
@@ -173,6 +181,24 @@ class WalkingOCPConfig:
             "nodes" (every node model's calc/calcDiff, the reference pipeline), or "auto"
             (default: batched when the problem's terms allow it, else nodes with a
             :class:`SlowPathWarning` naming the term that cannot be batched).
+        obstacle_clearance_weight: weight of the one-sided clearance barriers of a crossing swing
+            (``{foot}_clearance_sole{i}``, ``{foot}_clearance_shank``); 0 = the terms are absent (the
+            problem is the one without obstacles).
+        obstacle_sole_points: points of the swing sole kept above the obstacle, (x, y, z) [m] in the foot
+            frame (the toe and the heel).
+        obstacle_shank_frames: (foot, frame name) pairs: the shank frame of each foot (its knee) kept
+            above the obstacle over the whole crossing swing; () = none.
+        obstacle_clearance_margin: the sole points stay this far above the obstacle's top [m] while their
+            straight-path position is over its footprint grown by ``obstacle_footprint_margin``.
+        obstacle_shank_margin: the shank frame stays this far above the top [m].
+        obstacle_footprint_margin: the footprint grown by this for the sole points' gating [m].
+        obstacle_apex_margin: a crossing swing's apex H (eq. 19) is at least the top plus this [m], and high
+            enough that the eq. (19) profile clears the top plus ``obstacle_clearance_margin`` at the first
+            and last gated node.
+        obstacle_apex_height_max: upper bound of a crossing swing's apex H [m] (what the legs can lift).
+        obstacle_foothold_weight: the ``{foot}_foothold`` weight of every swing while the horizon holds a
+            crossing swing (the footholds next to an obstacle must be where the plan puts them, not where
+            they emerge); 0 = ``foothold_weight`` always. Needs ``foothold_weight`` > 0 (the term exists).
         max_line_search_trials: FDDP line-search steps tried (1, ½, …).
         reg_min, reg_max: FDDP regularisation bounds.
         th_stop: FDDP stopping threshold.
@@ -201,6 +227,15 @@ class WalkingOCPConfig:
     contact_damping_moments: str = "uniform"
     dynamics_backend: str = "pinocchio"
     evaluation: str = "auto"
+    obstacle_clearance_weight: float = 0.0
+    obstacle_sole_points: tuple[tuple[float, float, float], ...] = ()
+    obstacle_shank_frames: tuple[tuple[str, str], ...] = ()
+    obstacle_clearance_margin: float = 0.05
+    obstacle_shank_margin: float = 0.05
+    obstacle_footprint_margin: float = 0.02
+    obstacle_apex_margin: float = 0.1
+    obstacle_apex_height_max: float = 0.5
+    obstacle_foothold_weight: float = 0.0
     max_line_search_trials: int = 10
     reg_min: float = 1e-9
     reg_max: float = 1e9
@@ -210,12 +245,31 @@ class WalkingOCPConfig:
         for name in ("foot_height_weight", "touchdown_height_weight", "touchdown_velocity_weight", "state_weight",
                      "control_weight", "control_bound_weight",
                      "com_terminal_weight", "foothold_weight", "contact_force_weight", "friction_cone_weight",
-                     "wrench_cone_weight", "swing_orientation_weight"):
+                     "wrench_cone_weight", "swing_orientation_weight", "obstacle_clearance_weight",
+                     "obstacle_foothold_weight"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f"{name}={value} must be finite and >= 0")
         if not (np.isfinite(self.swing_apex_height) and self.swing_apex_height >= 0):
             raise ParameterError(f"swing_apex_height={self.swing_apex_height} m must be finite and >= 0")
+        for name in ("obstacle_clearance_margin", "obstacle_shank_margin", "obstacle_footprint_margin",
+                     "obstacle_apex_margin", "obstacle_apex_height_max"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not (np.isfinite(value) and value >= 0):
+                raise ParameterError(f"{name}={value!r} m must be finite and >= 0")
+        try:  # TOML arrays as the tuples a frozen config holds
+            object.__setattr__(self, "obstacle_sole_points", tuple(tuple(float(v) for v in point)
+                                                                      for point in self.obstacle_sole_points))
+            object.__setattr__(self, "obstacle_shank_frames", tuple(tuple(pair) for pair in self.obstacle_shank_frames))
+        except (TypeError, ValueError):
+            raise ParameterError(f"obstacle_sole_points={self.obstacle_sole_points!r} must be (x, y, z) triples [m] "
+                                 f"and obstacle_shank_frames={self.obstacle_shank_frames!r} (foot, frame) pairs") from None
+        for point in self.obstacle_sole_points:
+            if len(point) != 3 or not np.all(np.isfinite(np.asarray(point, dtype=float))):
+                raise ParameterError(f"obstacle_sole_points: {point!r} must be (x, y, z) [m] in the foot frame")
+        for pair in self.obstacle_shank_frames:
+            if len(pair) != 2 or not all(isinstance(name, str) for name in pair):
+                raise ParameterError(f"obstacle_shank_frames: {pair!r} must be (foot, frame name)")
         if not (0 < self.control_bound_fraction <= 1):
             raise ParameterError(f"control_bound_fraction={self.control_bound_fraction} must be in (0, 1]")
         if not (0 < self.cop_sole_fraction <= 1):
@@ -320,6 +374,7 @@ class WalkingOCP:
         self.torque_limit = torque_limit
         self.mass = float(sum(inertia.mass for inertia in model.inertias))
         self.x_reference = np.concatenate([np.asarray(robot.q_reference, dtype=float), np.zeros(model.nv)])
+        self._shank_frame_ids = self._shank_frames(config.obstacle_shank_frames)
         pdata = model.createData()
         pin.framesForwardKinematics(model, pdata, self.x_reference[: model.nq])
         self._reference_placements = {foot: pin.SE3(pdata.oMf[fid]) for foot, fid in self.foot_frame_ids.items()}
@@ -340,6 +395,12 @@ class WalkingOCP:
                     "height", "touchdown_height", "touchdown_velocity", "foothold", "contact_force", "friction_cone",
                     "wrench_cone", "orientation"))
                 for foot in self.feet]))
+        # per running node, per foot: (the sole points' clearance cost items, the shank's or None)
+        self._clearance_terms = [
+            [([items[f"{foot}_clearance_sole{i}"] for i in range(len(config.obstacle_sole_points))],
+              items.get(f"{foot}_clearance_shank")) for foot in self.feet]
+            for items in (model.differential.costs.costs for model in running)
+        ] if config.obstacle_clearance_weight > 0 else None
         self.problem = ShootingProblem(self.x_reference, running, terminal)
         self._timed = False  # running nodes carry a timed schedule's spacing (see update)
         #: "batched" or "nodes" (see WalkingOCPConfig.evaluation); evaluation_note says why nodes
@@ -357,6 +418,18 @@ class WalkingOCP:
                               "choose it, or 'batched' to make this an error)", SlowPathWarning, stacklevel=2)
 
     # ------------------------------------------------------------------ construction
+    def _shank_frames(self, pairs) -> dict[str, int]:
+        """foot -> shank frame id of ``obstacle_shank_frames`` (checked against the robot)."""
+        model = self.robot.pinocchio_model
+        frames = {}
+        for foot, name in pairs:
+            if foot not in self.feet:
+                raise ParameterError(f"obstacle_shank_frames: foot {foot!r} must be one of {self.feet}")
+            if not model.existFrame(name):
+                raise ParameterError(f"obstacle_shank_frames: robot {self.robot.name!r} has no frame {name!r}")
+            frames[foot] = model.getFrameId(name)
+        return frames
+
     def _contact(self, foot: str):
         fid = self.foot_frame_ids[foot]
         gains = self.config.baumgarte_gains
@@ -417,6 +490,19 @@ class WalkingOCP:
                           CostModelResidual(residual, ActivationQuadraticBarrier(residual.lower_bounds,
                                                                                  residual.upper_bounds)),
                           cfg.wrench_cone_weight, active=False)
+            if not terminal and cfg.obstacle_clearance_weight > 0:
+                barrier = (np.zeros(1), np.full(1, np.inf))  # one-sided: no cost above the reference
+                for i, point in enumerate(cfg.obstacle_sole_points):
+                    costs.add(f"{foot}_clearance_sole{i}",
+                              CostModelResidual(ResidualFramePointHeight(state, fid, point, 0.0, nu),
+                                                ActivationQuadraticBarrier(*barrier)),
+                              cfg.obstacle_clearance_weight, active=False)
+                shank = self._shank_frame_ids.get(foot)
+                if shank is not None:
+                    costs.add(f"{foot}_clearance_shank",
+                              CostModelResidual(ResidualFramePointHeight(state, shank, np.zeros(3), 0.0, nu),
+                                                ActivationQuadraticBarrier(*barrier)),
+                              cfg.obstacle_clearance_weight, active=False)
             if not terminal and cfg.swing_orientation_weight > 0 and flat:
                 costs.add(f"{foot}_orientation",
                           CostModelResidual(ResidualFrameRotation(state, fid, self._reference_placements[foot].rotation,
@@ -447,7 +533,7 @@ class WalkingOCP:
 
     # ------------------------------------------------------------------ update
     def update(self, x0: np.ndarray, schedule, com_terminal_reference: np.ndarray,
-               touchdown_depth: float = 0.0) -> None:
+               touchdown_depth: float = 0.0, crossings=None) -> None:
         """Set the initial state, the per-node contacts and references from a schedule.
 
         Args:
@@ -459,6 +545,9 @@ class WalkingOCP:
             touchdown_depth: how far below the ground the ``{foot}_touchdown_height`` term aims
                 the foot at the last swing node [m], >= 0 (0: on the ground; the walking
                 controller aims a due foot still in the air below it).
+            crossings: the swings that pass over obstacles on this grid (a
+                :class:`wbmpc.walking.reference.CrossingSchedule`, same rows and feet as ``schedule``), or None
+                (none: the problem without obstacles). Their apex and clearance terms: :meth:`_clearance`.
         """
         self.problem.set_x0(x0)
         if schedule.n_nodes != self.n_nodes:
@@ -482,7 +571,20 @@ class WalkingOCP:
         phase = np.asarray(schedule.swing_phase, dtype=float)[:, columns]
         touchdown = np.asarray(schedule.touchdown_position, dtype=float)[:, columns]
         touchdown_yaw = np.nan_to_num(np.asarray(schedule.touchdown_yaw, dtype=float)[:, columns])
-        heights = self.ground_height + swing_height_reference(np.nan_to_num(phase), cfg.swing_apex_height)
+        apex = cfg.swing_apex_height
+        foothold_weight = cfg.foothold_weight
+        if crossings is not None and cfg.obstacle_foothold_weight > 0:
+            foothold_weight = cfg.obstacle_foothold_weight
+        if self._clearance_terms is not None:  # off until a crossing swing turns them on
+            for node_terms in self._clearance_terms:
+                for soles, shank in node_terms:
+                    for item in soles:
+                        item.active = False
+                    if shank is not None:
+                        shank.active = False
+        if crossings is not None:
+            apex = self._clearance(crossings, ~in_contact, np.nan_to_num(phase), columns)
+        heights = self.ground_height + swing_height_reference(np.nan_to_num(phase), apex)
         n_stance = np.maximum(in_contact.sum(axis=1), 1)
         last_swing = np.zeros_like(in_contact)
         last_swing[:-1] = ~in_contact[:-1] & in_contact[1:]
@@ -511,6 +613,8 @@ class WalkingOCP:
                     touchdown_velocity.active = first_rows[k][j]
                 if foothold is not None:
                     foothold.active = last_rows[k][j]
+                    if foothold.weight != foothold_weight:
+                        foothold.weight = foothold_weight
                     if last_rows[k][j]:
                         foothold.cost.residual.reference[:] = (touchdown[k, j, 0], touchdown[k, j, 1],
                                                                 self.ground_height)
@@ -533,6 +637,66 @@ class WalkingOCP:
         self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
         if self.evaluation == "batched":  # contact sets (references, weights and activity are shared)
             self.problem.sync()
+
+    def _clearance(self, crossings, swinging: np.ndarray, phase: np.ndarray, columns: list[int]) -> np.ndarray:
+        """Write the clearance terms of ``crossings`` and return the swing apex H (n + 1, n_feet) [m] of eq. (19).
+
+        For each crossing swing (a run of swing nodes of one foot over one obstacle) and each sole point p_i,
+        the point's straight-path position (the foot's path position plus p_i turned by the touchdown yaw) is
+        over the footprint grown by ``obstacle_footprint_margin`` at some nodes: there ``{foot}_clearance_sole{i}``
+        is active with the reference top + ``obstacle_clearance_margin``; ``{foot}_clearance_shank`` is active
+        over the whole crossing swing with top + ``obstacle_shank_margin``. The swing's apex is the largest of
+        ``swing_apex_height``, top + ``obstacle_apex_margin`` and the height at which eq. (19) is at the
+        clearance reference at the first and the last gated node, at most ``obstacle_apex_height_max``. World
+        z = 0 is the ground the obstacles stand on."""
+        cfg = self.config
+        index = np.asarray(crossings.index)[:, columns]
+        path = np.asarray(crossings.path_xy, dtype=float)[:, columns]
+        path_yaw = np.nan_to_num(np.asarray(crossings.path_yaw, dtype=float)[:, columns])
+        if index.shape != swinging.shape:
+            raise ParameterError(f"crossings.index has shape {index.shape}, the schedule {swinging.shape}")
+        apex = np.full(swinging.shape, float(cfg.swing_apex_height))
+        terms = self._clearance_terms
+        points = np.asarray(cfg.obstacle_sole_points, dtype=float).reshape(-1, 3)
+        n_running = self.n_nodes
+        for j in range(swinging.shape[1]):
+            k = 0
+            while k < swinging.shape[0]:
+                if not (swinging[k, j] and index[k, j] >= 0):
+                    k += 1
+                    continue
+                start, which = k, index[k, j]
+                while k < swinging.shape[0] and swinging[k, j] and index[k, j] == which:
+                    k += 1
+                obstacle = crossings.obstacles[which]
+                region = obstacle.grown(cfg.obstacle_footprint_margin)
+                nodes = np.arange(start, k)
+                c, s = np.cos(path_yaw[nodes, j]), np.sin(path_yaw[nodes, j])
+                gated = np.zeros((nodes.size, points.shape[0]), dtype=bool)
+                for i, point in enumerate(points):
+                    xy = path[nodes, j] + np.column_stack((c * point[0] - s * point[1], s * point[0] + c * point[1]))
+                    gated[:, i] = region.contains(xy)
+                top = float(obstacle.height)
+                height = max(float(cfg.swing_apex_height), top + cfg.obstacle_apex_margin - self.ground_height)
+                over = np.flatnonzero(gated.any(axis=1))
+                if over.size:
+                    need = top + cfg.obstacle_clearance_margin - self.ground_height
+                    edge = float(np.min(swing_height_reference(phase[nodes[[over[0], over[-1]]], j], 1.0)))
+                    height = max(height, need / edge if edge > 0 else np.inf)
+                apex[nodes, j] = min(height, max(float(cfg.obstacle_apex_height_max), float(cfg.swing_apex_height)))
+                if terms is None:
+                    continue
+                for row, node in enumerate(nodes.tolist()):
+                    if node >= n_running:
+                        continue
+                    soles, shank = terms[node][j]
+                    for i, item in enumerate(soles):
+                        item.active = bool(gated[row, i])
+                        item.cost.residual.reference = top + cfg.obstacle_clearance_margin
+                    if shank is not None:
+                        shank.active = True
+                        shank.cost.residual.reference = top + cfg.obstacle_shank_margin
+        return apex
 
     def _set_node_spacing(self, spacing) -> None:
         """Give running node k the spacing ``spacing[k]`` [s] (a timed schedule), or ``dt`` (None)."""

@@ -7,6 +7,10 @@ updates the online estimates (:mod:`wbmpc.walking.estimators`) and asks the foot
 for a plan from the current stance with the velocity command (plus the speed integral's
 correction). A planner failure (:class:`wbmpc.errors.SolverError`, e.g. an infeasible step QP)
 keeps the previous plan and is reported in the record; it never stops the loop.
+
+Perceived obstacles switch the mode walking -> negotiation -> walking
+(:mod:`wbmpc.walking.negotiation`); in negotiation the planner gets the obstacles of the negotiation and
+the lift-off point of the swinging foot (``StanceState.swing_liftoff``: the previous stance's foothold).
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from wbmpc.errors import ParameterError, SolverError
 from wbmpc.walking.alip_state import contact_angular_momentum
 from wbmpc.walking.controller_config import WalkingControllerConfig
 from wbmpc.walking.estimators import LipmCorrectionEstimator, StanceSlide, VelocityIntegral
+from wbmpc.walking.negotiation import NEGOTIATION, NegotiationMode
 from wbmpc.walking.stance import StanceTracker
 
 
@@ -62,6 +67,12 @@ class PlanningStage:
                 f"sequencer_params_from: the later planner's omega={planner_after[1].omega:.6g} 1/s must equal "
                 f"the first one's {self.omega:.6g} 1/s (z_c fixes the run's omega)"
             )
+        for candidate in (planner, None if planner_after is None else planner_after[1]):
+            if candidate is not None and config.negotiation_lookahead > 0 and not getattr(candidate, "avoids_obstacles",
+                                                                                           False):
+                raise ParameterError(
+                    f"negotiation_lookahead={config.negotiation_lookahead} m needs a footstep planner that avoids "
+                    f"obstacles (the DCM planner); {type(candidate).__name__} does not: set negotiation_lookahead = 0")
         self._planner_after = planner_after
         self.measure_angular_momentum = bool(measure_angular_momentum)
         self.stance = StanceTracker(self.feet, config.touchdown_detection)
@@ -77,6 +88,9 @@ class PlanningStage:
             )
         self.command = VelocityCommand()
         self._range = planner.command_range()
+        self.negotiation = NegotiationMode(config.negotiation_lookahead, config.negotiation_corridor,
+                                           config.negotiation_release)
+        self.swing_liftoff = None  # world (x, y) [m] where the swinging foot lifted off
         self.plan = None
         self.planner_time = 0.0  # [s], total wall time in the planner
 
@@ -102,6 +116,8 @@ class PlanningStage:
         self.stance.reset(self.config.first_stance_foot, feet[index, :2], t0 + self.config.start_double_support,
                           yaw=float(base_yaw(q0[3:7])))
         self.slide.reset(self.stance.state.position)
+        self.swing_liftoff = feet[1 - index, :2].copy() if len(self.feet) == 2 else None
+        self.negotiation.reset()
         self.set_command(command)
         self.plan = None
 
@@ -122,11 +138,15 @@ class PlanningStage:
         c = self.command
         dx, dy = self.velocity_integral.correction_xy
         (low_x, high_x), (low_y, high_y) = self._range["v_x"], self._range["v_y"]
+        if self.negotiation.mode == NEGOTIATION:
+            high_x = min(high_x, self.config.negotiation_speed_max)
         return VelocityCommand(min(max(c.v_x + dx, low_x), high_x), min(max(c.v_y + dy, low_y), high_y), c.yaw_rate)
 
     # ------------------------------------------------------------------ every replan
-    def update(self, t: float, x: np.ndarray, foot_in_contact: np.ndarray) -> tuple[Any, ReducedState, dict]:
-        """Switch the stance, update the estimates, plan. Returns (plan, reduced state, record).
+    def update(self, t: float, x: np.ndarray, foot_in_contact: np.ndarray,
+               obstacles=()) -> tuple[Any, ReducedState, dict]:
+        """Switch the stance, update the estimates and the negotiation mode (``obstacles``: the perceived
+        ones, world frame), plan. Returns (plan, reduced state, record).
 
         Raises:
             SolverError: the planner failed and there is no previous plan to keep.
@@ -140,6 +160,7 @@ class PlanningStage:
         first = self.plan.steps[0] if self.plan is not None and len(self.plan.steps) else None
         stance_index = self.feet.index(stance.foot)
         slide = self.slide.measure(stance.position, feet[stance_index, :2])
+        previous_stance = stance
         switched = self.stance.update(
             t, None if first is None else first.foot, None if first is None else first.touchdown_time,
             stance.t_start, feet, foot_in_contact, 0.0 if first is None else first.yaw,
@@ -147,6 +168,7 @@ class PlanningStage:
         stance = self.stance.state
         stance_index = self.feet.index(stance.foot)
         if switched:  # the measurement before the switch covered the old stance foot up to now
+            self.swing_liftoff = np.array(previous_stance.position, dtype=float)  # the foot that lifts off now
             ended_slide = self.slide.slide
             self.slide.reset(stance.position)
             slide = self.slide.measure(stance.position, feet[stance_index, :2])
@@ -157,6 +179,8 @@ class PlanningStage:
             if self._planner_after is not None and t >= self._planner_after[0] - 1e-9:
                 self._switch_planner(self._planner_after[1])
         self.slide.follow_if_sliding(slide, feet[stance_index, :2], bool(foot_in_contact[stance_index]))
+        mode_switch = self.negotiation.update(t, obstacles, measured.com[:2], feet[:, :2], stance.yaw)
+        planned_obstacles = self.negotiation.active
         command = self.planned_command
         record: dict[str, float] = {
             "stance_foot": float(stance_index),
@@ -177,6 +201,10 @@ class PlanningStage:
             "swing_drift": np.nan if self.lipm is None else self.lipm.corrections.swing_drift,
             "dcm_offset_bias": np.nan if self.lipm is None else self.lipm.corrections.dcm_offset_bias,
             "stance_drift": np.nan if self.lipm is None else self.lipm.corrections.stance_drift,
+            "negotiation_mode": float(self.negotiation.mode),
+            "negotiation_switch": float(mode_switch),
+            "obstacles_perceived": float(len(obstacles)),
+            "obstacles_planned": float(len(planned_obstacles)),
         }
         if self.measure_angular_momentum:  # about the planned contact: the sole's point on the ground under it
             contact = np.array([*self.slide.plan_position, feet[stance_index, 2]])
@@ -186,9 +214,13 @@ class PlanningStage:
                 record[f"angular_momentum_contact_{axis}"] = float(centroidal.angular_momentum_contact[index])
                 record[f"angular_momentum_com_{axis}"] = float(centroidal.angular_momentum_com[index])
         tic = time.perf_counter()
-        planned_stance = StanceState(stance.foot, self.slide.plan_position, stance.yaw, stance.t_start)
+        planned_stance = StanceState(stance.foot, self.slide.plan_position, stance.yaw, stance.t_start,
+                                     swing_liftoff=self.swing_liftoff)
         try:
-            self.plan = self.planner.plan(t, planned_stance, measured, command)
+            if planned_obstacles:
+                self.plan = self.planner.plan(t, planned_stance, measured, command, obstacles=planned_obstacles)
+            else:  # the planner's own call, as without perception
+                self.plan = self.planner.plan(t, planned_stance, measured, command)
         except SolverError:  # e.g. an infeasible step QP: keep following the last plan
             if self.plan is None:
                 raise
@@ -200,6 +232,8 @@ class PlanningStage:
         record["next_foot"] = float(self.feet.index(step.foot))
         record["next_x"], record["next_y"] = float(step.position[0]), float(step.position[1])
         record["next_touchdown_time"] = float(step.touchdown_time)
+        crossing = getattr(step, "crossing", None)
+        record["next_crossing_height"] = np.nan if crossing is None else float(crossing.obstacle.height)
         return self.plan, measured, record
 
     def _switch_planner(self, planner: FootstepPlanner) -> None:

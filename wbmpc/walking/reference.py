@@ -5,6 +5,11 @@ each node, swing phases, footholds) and the terminal CoM reference (eq. 24): the
 prediction at the end of the horizon, at the planner's CoM height. Holding z at the model's
 height (not at the measured height) matters: with the measured height the terminal cost let
 Bolt's CoM creep up by 1 cm per second of walking (legs stretching) until it fell.
+
+A plan whose steps pass over obstacles (``PlannedStep.crossing``, :mod:`sequencer.footholds`) also gives
+the OCP its crossing swings on the grid (:class:`CrossingSchedule`): which obstacle each swinging foot
+passes over and the foot's straight-path position at each node (lift-off to touchdown, by the swing
+phase), from which the OCP raises the swing apex and turns on its clearance terms.
 """
 
 from __future__ import annotations
@@ -28,12 +33,69 @@ class OcpReference:
         touchdown_wait: delay [s] applied to the plan so that a due but unmeasured touchdown
             lies ahead (0 when none, see :func:`wbmpc.walking.stance.delay_to_touchdown`).
         touchdown_depth: how far below the ground the OCP aims that foot [m] (0 when no wait).
+        crossings: the swings over obstacles on the grid, or None (the plan crosses none).
     """
 
     schedule: ContactSchedule
     com_terminal: np.ndarray
     touchdown_wait: float
     touchdown_depth: float
+    crossings: "CrossingSchedule | None" = None
+
+
+@dataclass(frozen=True)
+class CrossingSchedule:
+    """The swings that pass over obstacles, on the OCP grid (rows and feet as the contact schedule's).
+
+    Attributes:
+        obstacles: the obstacles crossed (:class:`sequencer.obstacles.Obstacle`).
+        index: (n_nodes + 1, n_feet) int, the index in ``obstacles`` of the obstacle the swinging foot passes
+            over at that node, -1 where none (or in contact).
+        path_xy: (n_nodes + 1, n_feet, 2), world (x, y) [m] of the foot frame on the straight path from its
+            lift-off to its touchdown at the node's swing phase s: liftoff + s (touchdown - liftoff); NaN where
+            index is -1.
+        path_yaw: (n_nodes + 1, n_feet), the touchdown yaw [rad] there (the sole's heading); NaN elsewhere.
+        feet: foot names of the columns.
+    """
+
+    obstacles: tuple
+    index: np.ndarray
+    path_xy: np.ndarray
+    path_yaw: np.ndarray
+    feet: tuple[str, ...]
+
+
+def crossing_schedule(plan: Any, schedule: ContactSchedule) -> CrossingSchedule | None:
+    """The :class:`CrossingSchedule` of ``plan``'s crossing steps on ``schedule`` (made from that plan), or None
+    when no swing of the schedule is a crossing. A node's swing is the plan's step of that foot that lands at
+    the schedule's touchdown position."""
+    crossing_steps = [step for step in plan.steps if step.crossing is not None]
+    if not crossing_steps:
+        return None
+    rows, n_feet = schedule.in_contact.shape
+    index = np.full((rows, n_feet), -1, dtype=int)
+    path = np.full((rows, n_feet, 2), np.nan)
+    path_yaw = np.full((rows, n_feet), np.nan)
+    obstacles: list = []
+    for j, foot in enumerate(schedule.feet):
+        for k in np.flatnonzero(~np.asarray(schedule.in_contact[:, j], dtype=bool)).tolist():
+            touchdown = schedule.touchdown_position[k, j]
+            step = next((s for s in crossing_steps if s.foot == foot and np.allclose(s.position, touchdown,
+                                                                                      rtol=0.0, atol=1e-9)), None)
+            if step is None:
+                continue
+            obstacle = step.crossing.obstacle
+            which = next((i for i, known in enumerate(obstacles) if known is obstacle), None)
+            if which is None:
+                obstacles.append(obstacle)
+                which = len(obstacles) - 1
+            phase = float(schedule.swing_phase[k, j])
+            index[k, j] = which
+            path[k, j] = step.crossing.liftoff + phase * (step.position - step.crossing.liftoff)
+            path_yaw[k, j] = step.yaw
+    if not obstacles:
+        return None
+    return CrossingSchedule(tuple(obstacles), index, path, path_yaw, tuple(schedule.feet))
 
 
 class OcpReferenceStage:
@@ -73,4 +135,4 @@ class OcpReferenceStage:
             depth = self.wait_depth
         # (a plan for a stance that has not begun starts later than t: it predicts from its start)
         com_end = plan.com_reference(max(t + self.n_nodes * self.node_dt, plan.t0), com_xy)
-        return OcpReference(schedule, np.asarray(com_end, dtype=float), wait, depth)
+        return OcpReference(schedule, np.asarray(com_end, dtype=float), wait, depth, crossing_schedule(sampled, schedule))

@@ -10,6 +10,7 @@ from wbmpc.ocp.residuals.com_position import ResidualCoMPosition
 from wbmpc.ocp.residuals.contact_force import ResidualContactForce, ResidualLinearInContactForce
 from wbmpc.ocp.residuals.control import ResidualControl
 from wbmpc.ocp.residuals.frame_height import ResidualFrameHeight
+from wbmpc.ocp.residuals.frame_point_height import ResidualFramePointHeight
 from wbmpc.ocp.residuals.frame_rotation import ResidualFrameRotation
 from wbmpc.ocp.residuals.frame_translation import ResidualFrameTranslation
 from wbmpc.ocp.residuals.frame_velocity import ResidualFrameVelocity
@@ -25,6 +26,7 @@ __all__ = [
     "ResidualLinearInContactForce",
     "ResidualControl",
     "ResidualFrameHeight",
+    "ResidualFramePointHeight",
     "ResidualFrameRotation",
     "ResidualFrameTranslation",
     "ResidualFrameVelocity",

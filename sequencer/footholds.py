@@ -1,0 +1,357 @@
+"""Footholds outside obstacles: the per-step bounds of the step QP and the before/beyond choice.
+
+The step QP (:mod:`sequencer.step_qp`) is a box-bounded QP in the step (ℓ, w) = p_T - p_0 written
+in the stance's heading frame (x along the heading), and the duration T of the step. An obstacle
+(:class:`sequencer.obstacles.Obstacle`) forbids a region of (ℓ, w): every foothold whose *sole
+rectangle* (``sole_front`` ahead of the foot frame, ``sole_rear`` behind it, ``sole_half_width`` to
+each side, along the step's heading) overlaps the footprint grown by ``obstacle_margin`` on every
+side. In the heading frame that region is bounded by the box (:func:`forbidden_box`)::
+
+    a < ℓ < b  and  c < w < d,   a = near - margin - approach - sole_front,  b = far + margin + sole_rear,
+                                 c = right - margin - sole_half_width,  d = left + margin + sole_half_width
+
+with near/far/right/left the extents, in the heading frame relative to p_0, of the grown footprint's
+part that the sole can reach within the step's width bounds (exact for a box square to the heading, a
+bounding box otherwise: conservative).
+
+The allowed set (outside the box) is not convex: it is the union of four half-planes, each a box
+bound of the QP. The choice is made per step, by the planner, not by the QP:
+
+1. solve the step's QP with its nominal bounds; a foothold outside every box is kept as it is
+   (so a plan whose footholds miss the obstacles is the plan without obstacles, bit for bit);
+2. else, along the heading, the step goes *beyond* the obstacle (ℓ >= b, the far side seen from
+   p_0; ℓ <= a walking backwards) when the obstacle lies in the direction of travel (the sign of the
+   nominal step; stepping in place crosses nothing), one step can reach it and the DCM can carry that
+   step (its offset at touchdown within ``obstacle_offset_tolerance`` of the nominal one):
+   b <= max(l_max, obstacle_step_length_max), the crossing step's own length bound, with the
+   duration T >= max(t_min, obstacle_step_duration_min) (a crossing swing lifts higher and takes
+   longer); otherwise it stays *before* it (ℓ <= a: the last step
+   before the obstacle, its toe ``obstacle_margin`` before the near edge at most). That last step
+   aims at the DCM offset the crossing step needs (a point-foot LIPM cannot make a step four times
+   the nominal one from the nominal offset: from 4.7 cm the H1's DCM needs 0.76 s to travel a 0.48 m
+   crossing, and the planned crossing ended with the DCM behind the foot); a robot that cannot
+   reach beyond from there steps in place before the obstacle (a safe stop);
+3. stepping *beside* the obstacle (w <= c or w >= d, within the width bounds) is the other
+   candidate; of the candidates that are feasible, the one of least QP cost is taken;
+4. repeat while the new foothold lies in another obstacle's box (bounds only tighten, except the
+   crossing step's longer length), and lengthen a step whose swing passes over an obstacle (the
+   trailing foot's, which lands beyond with a nominal step) to the crossing duration.
+
+"Cross when one step can reach beyond, else stop at the safe distance" rather than "the cheaper
+side": from the last foothold before an obstacle the cheaper step is always in place (the crossing
+step is far from the nominal one), and a planner choosing by cost would never cross.
+
+A swing passes over an obstacle when its sole rectangle, carried along the straight path of its foot
+frame from lift-off to touchdown, meets the grown footprint (:func:`crossing_of`); the
+plan marks that step (``PlannedStep.crossing``, a :class:`Crossing`), so the whole-body OCP lifts
+that swing over the obstacle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+
+from sequencer.obstacles import Obstacle
+from wbmpc.errors import ParameterError, SolverError
+
+
+class FootholdInfeasible(SolverError):
+    """No foothold of a step lies outside the obstacles within the step's bounds (a control loop keeps
+    its last plan)."""
+
+
+@dataclass(frozen=True)
+class FootholdGeometry:
+    """What the planner knows of obstacles and feet (the ``obstacle_*`` and ``sole_*`` planner parameters).
+
+    Attributes:
+        margin: the footprint grown by this on every side [m] (>= 0).
+        step_length_max: length bound of a step that goes beyond an obstacle [m] (the planner uses
+            max(l_max, this)).
+        step_duration_min: duration lower bound of a step whose swing passes over an obstacle [s] (the
+            planner uses max(t_min, this)).
+        sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m].
+        sole_half_width: the sole's half width [m].
+        approach_margin: the near side (facing the stance, along the heading) grown by this much more [m]:
+            a walking robot's foot overshoots a short step (the H1's by 6 cm), and lands no shorter than planned.
+        offset_tolerance: a step crosses only if its DCM offset at touchdown, along the heading, is within
+            this of the nominal one [m] (else the robot takes one more step before the obstacle, aiming at
+            the offset the crossing needs).
+    """
+
+    margin: float
+    step_length_max: float
+    step_duration_min: float
+    sole_front: float = 0.0
+    sole_rear: float = 0.0
+    sole_half_width: float = 0.0
+    offset_tolerance: float = math.inf
+    approach_margin: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class Crossing:
+    """A planned swing that passes over an obstacle.
+
+    Attributes:
+        obstacle: the obstacle it steps over (the tallest, when it passes over several).
+        liftoff: world (x, y) where the swinging foot lifted off [m], shape (2,).
+        phase_interval: (s_in, s_out), the fractions of the straight lift-off -> touchdown path of the
+            foot frame along which the sole is over the footprint grown by the margin, in [0, 1].
+    """
+
+    obstacle: Obstacle
+    liftoff: np.ndarray
+    phase_interval: tuple[float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class StepCandidate:
+    """One solution of a step QP in the stance's heading frame.
+
+    Attributes:
+        dx, dy: the step p_T - p_0 (heading frame) [m]; gamma: exp(ω T) [-]; hx, hy: the DCM offset at
+        touchdown (heading frame) [m]; bits: active-inequality bits (sequencer.step_qp); objective: the
+        QP cost f [-]; duration: T [s].
+    """
+
+    dx: float
+    dy: float
+    gamma: float
+    hx: float
+    hy: float
+    bits: int
+    objective: float
+    duration: float
+
+
+StepBounds = tuple[float, float, float, float, float]
+"""(ℓ_min, ℓ_max, w_min, w_max, T_min) of one step, heading frame [m, m, m, m, s]."""
+
+
+def forbidden_box(obstacle: Obstacle, p0, yaw: float, geometry: FootholdGeometry,
+                  width_bounds: tuple[float, float] | None = None) -> tuple[float, float, float, float]:
+    """(a, b, c, d): a foothold (ℓ, w) = p_T - p_0 in the heading frame of ``yaw`` [rad] puts the sole on
+    the footprint grown by ``geometry.margin`` only if a < ℓ < b and c < w < d [m] (see the module docstring).
+
+    The box bounds the grown footprint's part within reach of the sole: with ``width_bounds`` (w_min, w_max)
+    [m], the slab w_min - sole_half_width <= w <= w_max + sole_half_width the sole can cover, so that a wide
+    obstacle turned from the heading is not as deep as its whole bounding box (inf: the slab misses it)."""
+    corners = obstacle.grown(geometry.margin).footprint_corners() - np.asarray(p0, dtype=float)
+    c, s = math.cos(yaw), math.sin(yaw)
+    polygon = np.column_stack((corners @ np.array([c, s]), corners @ np.array([-s, c])))
+    if width_bounds is not None:
+        polygon = _clip_slab(polygon, width_bounds[0] - geometry.sole_half_width,
+                             width_bounds[1] + geometry.sole_half_width)
+        if polygon.shape[0] == 0:
+            return (math.inf, math.inf, math.inf, math.inf)
+    a, b = float(polygon[:, 0].min()) - geometry.sole_front, float(polygon[:, 0].max()) + geometry.sole_rear
+    if a + b > 0.0:  # the near side is the one facing the stance
+        a -= geometry.approach_margin
+    else:
+        b += geometry.approach_margin
+    return (a, b, float(polygon[:, 1].min()) - geometry.sole_half_width,
+            float(polygon[:, 1].max()) + geometry.sole_half_width)
+
+
+def _clip_slab(polygon: np.ndarray, low: float, high: float) -> np.ndarray:
+    """The convex ``polygon`` (n, 2) cut to low <= y <= high (Sutherland-Hodgman, two half-planes); (0, 2) if empty."""
+    for sign, bound in ((1.0, low), (-1.0, high)):  # keep sign * (y - bound) >= 0
+        if polygon.shape[0] == 0:
+            break
+        kept = []
+        for i in range(polygon.shape[0]):
+            p, q = polygon[i], polygon[(i + 1) % polygon.shape[0]]
+            fp, fq = sign * (p[1] - bound), sign * (q[1] - bound)
+            if fp >= 0.0:
+                kept.append(p)
+            if fp * fq < 0.0:
+                kept.append(p + (q - p) * (fp / (fp - fq)))
+        polygon = np.array(kept).reshape(-1, 2)
+    return polygon
+
+
+PATH_SAMPLES = 41
+"""Positions of the sole along a swing's straight path at which :func:`crossing_of` tests it (every 2.5 %)."""
+
+
+def sole_corners(center_xy, yaw: float, geometry: FootholdGeometry) -> np.ndarray:
+    """The sole rectangle's corners, world (x, y) [m], shape (..., 4, 2), of feet at ``center_xy`` (..., 2)
+    with heading ``yaw`` [rad] (``sole_front`` ahead, ``sole_rear`` behind, ``sole_half_width`` aside)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    local = np.array([[-geometry.sole_rear, -geometry.sole_half_width], [geometry.sole_front, -geometry.sole_half_width],
+                      [geometry.sole_front, geometry.sole_half_width], [-geometry.sole_rear, geometry.sole_half_width]])
+    world = local @ np.array([[c, s], [-s, c]])
+    return np.asarray(center_xy, dtype=float)[..., None, :] + world
+
+
+def rectangles_overlap(corners, other) -> np.ndarray:
+    """True where rectangle ``corners`` (..., 4, 2) and the rectangle ``other`` (4, 2) overlap with a positive
+    area (separating axes: the four edge normals; rectangles that only touch do not overlap). A rectangle of
+    zero size (a point foot) overlaps when it lies strictly inside the other one."""
+    corners = np.asarray(corners, dtype=float)
+    other = np.asarray(other, dtype=float)
+    overlap = np.ones(corners.shape[:-2], dtype=bool)
+    for polygon in (corners, other):
+        for edge in (0, 1):
+            axis = polygon[..., edge + 1, :] - polygon[..., edge, :]
+            axis = np.stack((-axis[..., 1], axis[..., 0]), axis=-1)[..., None, :]
+            mine = np.sum(corners * axis, axis=-1)
+            theirs = np.sum(other * axis, axis=-1)
+            separated = (mine.max(axis=-1) <= theirs.min(axis=-1) + 1e-9) | (theirs.max(axis=-1) <= mine.min(axis=-1) + 1e-9)
+            degenerate = np.linalg.norm(axis[..., 0, :], axis=-1) < 1e-12  # a point foot's zero-length edges
+            overlap &= ~separated | degenerate
+    return overlap
+
+
+def crossing_of(obstacles: Sequence[Obstacle], liftoff, touchdown, yaw: float,
+                geometry: FootholdGeometry) -> Crossing | None:
+    """The :class:`Crossing` of a swing from ``liftoff`` to ``touchdown`` (world (x, y) [m]), its sole heading
+    ``yaw`` [rad], over the tallest of ``obstacles`` whose footprint grown by the margin the sole meets
+    somewhere on the straight path (tested at :data:`PATH_SAMPLES` positions), or None."""
+    if liftoff is None or not obstacles:
+        return None
+    start = np.array(liftoff, dtype=float)
+    phases = np.linspace(0.0, 1.0, PATH_SAMPLES)
+    soles = sole_corners(start + phases[:, None] * (np.asarray(touchdown, dtype=float) - start), yaw, geometry)
+    best = None
+    for obstacle in obstacles:
+        over = np.flatnonzero(rectangles_overlap(soles, obstacle.grown(geometry.margin).footprint_corners()))
+        if over.size and (best is None or obstacle.height > best[0].height):
+            best = (obstacle, (float(phases[over[0]]), float(phases[over[-1]])))
+    if best is None:
+        return None
+    start.setflags(write=False)
+    return Crossing(best[0], start, best[1])
+
+
+class FootholdConstraints:
+    """The per-step choice of the module docstring for a set of obstacles.
+
+    Args:
+        obstacles: the obstacles (world frame).
+        geometry: margins, the crossing step's bounds and the sole.
+        t_max: the step duration upper bound [s] (a crossing duration bound above it is refused).
+        omega: the LIPM's natural frequency [1/s] (the DCM offset the last step before an obstacle aims at).
+    """
+
+    def __init__(self, obstacles: Sequence[Obstacle], geometry: FootholdGeometry, t_max: float, omega: float) -> None:
+        obstacles = tuple(obstacles)
+        for obstacle in obstacles:
+            if not isinstance(obstacle, Obstacle):
+                raise ParameterError(f"obstacles must be sequencer.obstacles.Obstacle, got {type(obstacle).__name__}")
+        self.obstacles = obstacles
+        self.geometry = geometry
+        self.t_max = float(t_max)
+        self.omega = float(omega)
+
+    def choose(self, p0, yaw: float, bounds: StepBounds, nominal: StepCandidate,
+               solve: Callable[[StepBounds, float | None], StepCandidate], liftoff, step_length_nominal: float,
+               offset_nominal: float, cross: bool | None = None) -> tuple[StepCandidate, bool]:
+        """The step of stance ``p0`` (world (x, y) [m]) in the heading frame ``yaw`` [rad] whose foothold
+        avoids every obstacle: (candidate, changed). ``nominal`` is the QP's solution with its nominal
+        ``bounds``; ``solve(bounds, aim)`` solves the same QP with other bounds (and, unless ``aim`` is None,
+        the DCM offset b_x [m] it aims at along the heading instead of ``offset_nominal``); ``liftoff`` is where the swinging
+        foot lifted off (world (x, y) [m], None: unknown), for the crossing duration; the sign of
+        ``step_length_nominal`` [m] (the nominal step along the heading) is the direction of travel: only
+        an obstacle in that direction is crossed (0: stepping in place crosses none). ``cross`` keeps a decision
+        already made (the swing in progress: True crosses when one step reaches beyond, whatever the DCM;
+        False stays before); None decides.
+
+        Raises:
+            FootholdInfeasible: no candidate side is feasible within the bounds.
+        """
+        p0 = np.asarray(p0, dtype=float)
+        boxes = [forbidden_box(obstacle, p0, yaw, self.geometry, (bounds[2], bounds[3])) for obstacle in self.obstacles]
+        candidate, changed, aim = nominal, False, None
+        lengthened = False
+        for _ in range(2 * len(boxes) + 2):
+            hit = next((box for box in boxes if box[0] < candidate.dx < box[1] and box[2] < candidate.dy < box[3]),
+                       None)
+            if hit is None:
+                if lengthened or not self._crosses(p0, yaw, candidate, liftoff) or \
+                        candidate.duration >= self.geometry.step_duration_min - 1e-12:
+                    return candidate, changed
+                bounds = (*bounds[:4], max(bounds[4], self.geometry.step_duration_min))
+                candidate, changed, lengthened = solve(bounds, aim), True, True
+                continue
+            along, beside = self._options(hit, bounds, step_length_nominal, offset_nominal)
+            if along and along[0][2]:  # cross, unless the DCM cannot carry it: then one more step before
+                if cross is None:
+                    crossing = solve(*along[0][:2])
+                    sign = 1.0 if step_length_nominal > 0.0 else -1.0
+                    late = sign * (offset_nominal - crossing.hx) > self.geometry.offset_tolerance
+                else:
+                    late = not cross
+                along = along[1:2] if late and len(along) > 1 else along[:1]
+            options = along + beside
+            if not options:
+                raise FootholdInfeasible(
+                    f"no foothold outside the obstacle box (a, b, c, d) = {tuple(round(v, 4) for v in hit)} m "
+                    f"within the step bounds {tuple(round(v, 4) for v in bounds)} (stance p0={p0.tolist()} m)")
+            solved = [self._solve_option(solve, option, far, step_length_nominal, offset_nominal)
+                      for option, far, _ in options]
+            candidate, bounds, aim = min(solved, key=lambda triple: triple[0].objective)
+            changed = True
+        raise FootholdInfeasible(f"the footholds of the stance p0={p0.tolist()} m did not settle outside the "
+                                 f"{len(boxes)} obstacles")
+
+    def _options(self, box, bounds: StepBounds, step_length_nominal: float,
+                 offset_nominal: float) -> tuple[list, list]:
+        """The feasible candidates (bounds, far side for a last step before it or None, crossing?) of a foothold
+        outside ``box``, as (along the heading, beside it): along, the crossing step first when the obstacle
+        (the box's middle) lies in the direction of travel and one step reaches beyond it, then the step
+        before it (both sides, no crossing, when the stance sole is itself within the box); beside it, either
+        side within the width bounds."""
+        a, b, c, d = box
+        l_lo, l_hi, w_lo, w_hi, t_lo = bounds
+        reach, t_cross = self.geometry.step_length_max, max(t_lo, self.geometry.step_duration_min)
+        inside = a < 0.0 < b and c < 0.0 < d  # the stance sole itself is within the grown footprint
+        ahead = a + b > 0.0  # the box's middle ahead of the stance along the heading
+        prepare = None  # the far side the next step crosses, when this may be the last step before it
+        if not inside and (ahead == (step_length_nominal > 0.0)) and step_length_nominal != 0.0 and b - a <= reach:
+            prepare = b if ahead else a  # crossable from the foothold at the safe distance
+        if inside:  # either side, no crossing step
+            along = [((l_lo, min(l_hi, a), w_lo, w_hi, t_lo), None, False),
+                     ((max(l_lo, b), l_hi, w_lo, w_hi, t_lo), None, False)]
+        elif ahead:  # beyond (crossing, when walking forwards) or before
+            along = [((max(l_lo, b), max(l_hi, reach), w_lo, w_hi, t_cross), None, True)] \
+                if step_length_nominal > 0.0 else []
+            along.append(((l_lo, min(l_hi, a), w_lo, w_hi, t_lo), prepare, False))
+        else:  # behind: beyond it backwards (walking backwards), or stay
+            along = [((min(l_lo, -reach), min(l_hi, a), w_lo, w_hi, t_cross), None, True)] \
+                if step_length_nominal < 0.0 else []
+            along.append(((max(l_lo, b), l_hi, w_lo, w_hi, t_lo), prepare, False))
+        beside = [(l_lo, l_hi, w_lo, min(w_hi, c), t_lo), (l_lo, l_hi, max(w_lo, d), w_hi, t_lo)]
+        return ([option for option in along if self._feasible(option[0])],
+                [(option, None, False) for option in beside if self._feasible(option)])
+
+    def _solve_option(self, solve, bounds: StepBounds, far: float | None, step_length_nominal: float,
+                      offset_nominal: float) -> tuple[StepCandidate, StepBounds, float | None]:
+        """(candidate, bounds, aimed offset) of one option. ``far`` (the far side b of the obstacle the next step
+        crosses, relative to this stance [m]) marks the last step before it: that step aims at the DCM offset
+        that makes the crossing step from its foothold ℓ (length |b - ℓ|, the crossing duration) end at the
+        nominal offset, b_x = (|b - ℓ| + offset_nominal) exp(-ω T_cross) (eq. 1b; three fixed-point passes,
+        the foothold moves with the aim)."""
+        if far is None:
+            return solve(bounds, None), bounds, None
+        sign = 1.0 if step_length_nominal > 0.0 else -1.0
+        decay = math.exp(-self.omega * max(bounds[4], self.geometry.step_duration_min))
+        foothold, aim, candidate = bounds[1] if sign > 0.0 else bounds[0], None, None
+        for _ in range(3):
+            aim = sign * (abs(far - foothold) + sign * offset_nominal) * decay
+            candidate = solve(bounds, aim)
+            foothold = candidate.dx
+        return candidate, bounds, aim
+
+    def _feasible(self, bounds: StepBounds) -> bool:
+        return bounds[0] <= bounds[1] and bounds[2] <= bounds[3] and bounds[4] <= self.t_max
+
+    def _crosses(self, p0, yaw: float, candidate: StepCandidate, liftoff) -> bool:
+        c, s = math.cos(yaw), math.sin(yaw)
+        touchdown = p0 + np.array([c * candidate.dx - s * candidate.dy, s * candidate.dx + c * candidate.dy])
+        return crossing_of(self.obstacles, liftoff, touchdown, yaw, self.geometry) is not None

@@ -1,0 +1,209 @@
+"""Footholds outside obstacles (sequencer.footholds): the DCM planner's before/beyond choice per step, the
+crossing step's bounds, the crossing marks, and the plan without obstacles unchanged."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from sequencer.dcm_planner import DcmFootstepPlanner
+from sequencer.footholds import crossing_of, rectangles_overlap, sole_corners
+from sequencer.obstacles import Obstacle
+from sequencer.params import SequencerParams
+from sequencer.planner import ReducedState, StanceState, VelocityCommand
+from wbmpc.errors import ParameterError, SolverError
+
+# the H1's walking geometry (wbmpc/walking/presets/h1.toml [planner]) with a long horizon
+H1 = SequencerParams(alpha1=1e3, alpha2=1.0, alpha3=1e6, z_c=0.97, v_x=0.0, l_min=-0.3, l_max=0.3, pelvis_width=0.406,
+                     w_left_min=-0.6, w_left_max=-0.3, w_right_min=0.3, w_right_max=0.6, t_min=0.3, t_nom=0.4,
+                     t_max=0.8, double_support=0.1, horizon=4.0, obstacle_margin=0.04, obstacle_step_length_max=0.6,
+                     obstacle_step_duration_min=0.5, sole_front=0.1025, sole_rear=0.1375, sole_half_width=0.04)
+COMMAND = VelocityCommand(0.3, 0.0, 0.0)
+
+
+def _start(planner: DcmFootstepPlanner, yaw: float = 0.0):
+    """A left stance at the origin with the nominal gait's DCM, the right foot lifted off beside it."""
+    position = np.array([-0.203 * np.sin(yaw), 0.203 * np.cos(yaw)])
+    stance = StanceState("left", position, yaw, 0.0, swing_liftoff=-position)
+    dcm = planner.stance_start_dcm(stance, COMMAND)
+    return stance, ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm)
+
+
+def _sole_overlaps(plan, obstacle: Obstacle, geometry) -> list[int]:
+    """Indices of the planned footholds whose sole rectangle overlaps the obstacle grown by the margin."""
+    grown = obstacle.grown(geometry.margin).footprint_corners()
+    return [k for k, step in enumerate(plan.steps)
+            if rectangles_overlap(sole_corners(step.position, step.yaw, geometry), grown)]
+
+
+def _assert_plans_equal(a, b) -> None:
+    """Every field of two plans and of their steps equal, bit for bit."""
+    for field in dataclasses.fields(a):
+        if field.name != "steps":
+            assert np.array_equal(getattr(a, field.name), getattr(b, field.name)), field.name
+    assert len(a.steps) == len(b.steps)
+    for x, y in zip(a.steps, b.steps):
+        for field in dataclasses.fields(x):
+            u, v = getattr(x, field.name), getattr(y, field.name)
+            assert (u is None and v is None) or np.array_equal(u, v), field.name
+
+
+def _along(plan, yaw: float) -> np.ndarray:
+    return plan.positions @ np.array([np.cos(yaw), np.sin(yaw)])
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_random_obstacles_ahead_are_stepped_over_with_every_sole_outside(seed):
+    rng = np.random.default_rng(seed)
+    yaw = rng.uniform(-0.5, 0.5)  # the walking heading
+    planner = DcmFootstepPlanner(H1)
+    stance, measured = _start(planner, yaw)
+    distance, depth = rng.uniform(0.3, 1.0), rng.uniform(0.05, 0.15)
+    heading = np.array([np.cos(yaw), np.sin(yaw)])
+    obstacle = Obstacle((distance + 0.5 * depth) * heading + rng.uniform(-0.05, 0.05, 2), yaw + rng.uniform(-0.1, 0.1),
+                        depth, rng.uniform(0.8, 1.5), rng.uniform(0.1, 0.4))
+    plan = planner.plan(0.0, stance, measured, COMMAND, obstacles=(obstacle,))
+    geometry = H1.foothold_geometry()
+    assert _sole_overlaps(plan, obstacle, geometry) == []
+    # the plan gets beyond: some foothold past the far side, both feet eventually
+    corners_along = obstacle.footprint_corners() @ heading
+    along = _along(plan, yaw)
+    beyond = np.flatnonzero(along > corners_along.max())
+    assert beyond.size >= 2
+    first = beyond[0]
+    previous = along[first - 1] if first > 0 else stance.position @ heading
+    # the crossing step: within its own length bound, as long as the crossing duration, marked
+    crossing = plan.steps[first]
+    assert along[first] - previous <= geometry.step_length_max + 1e-9
+    assert crossing.duration >= geometry.step_duration_min - 1e-9
+    assert crossing.crossing is not None and crossing.crossing.obstacle is obstacle
+    trailing = plan.steps[first + 1]  # the other foot crosses next, marked and slow too
+    assert trailing.crossing is not None and trailing.duration >= geometry.step_duration_min - 1e-9
+    # the last step before it lands before the near side, within the step length bounds
+    assert previous <= corners_along.min()
+    steps = np.diff(np.concatenate([[stance.position @ heading], along]))
+    assert np.all(steps >= H1.l_min - 1e-9) and np.all(steps <= geometry.step_length_max + 1e-9)
+    # after the crossing, walking steps again (within the walking bounds)
+    assert np.all(np.abs(steps[first + 2:]) <= H1.l_max + 1e-9)
+
+
+def test_the_plan_without_obstacles_or_past_them_is_bit_identical():
+    planner = DcmFootstepPlanner(H1)
+    stance, measured = _start(planner, 0.3)
+    plain = planner.plan(0.1, stance, measured, COMMAND)
+    _assert_plans_equal(planner.plan(0.1, stance, measured, COMMAND, obstacles=()), plain)
+    behind = Obstacle(np.array([-1.0, 0.0]), 0.0, 0.2, 1.0, 0.2)  # behind the robot: no foothold moves
+    beside = Obstacle(np.array([1.0, 3.0]), 0.0, 0.2, 1.0, 0.2)
+    _assert_plans_equal(planner.plan(0.1, stance, measured, COMMAND, obstacles=(behind, beside)), plain)
+
+
+def test_the_osqp_backend_chooses_the_same_footholds_as_the_exact_one():
+    pytest.importorskip("osqp")
+    obstacle = Obstacle(np.array([0.85, 0.0]), 0.0, 0.15, 1.2, 0.2)
+    plans = []
+    for backend in ("exact", "osqp"):
+        planner = DcmFootstepPlanner(H1, backend=backend)
+        stance, measured = _start(planner)
+        plans.append(planner.plan(0.0, stance, measured, COMMAND, obstacles=(obstacle,)))
+    assert np.allclose(plans[0].positions, plans[1].positions, atol=2e-4)
+    assert [s.crossing is None for s in plans[0].steps] == [s.crossing is None for s in plans[1].steps]
+
+
+def test_an_obstacle_too_deep_to_cross_stops_the_robot_before_it():
+    deep = Obstacle(np.array([0.9, 0.0]), 0.0, 0.5, 1.2, 0.2)  # 0.5 + 0.08 + 0.24 m > 0.6 m crossing steps
+    planner = DcmFootstepPlanner(H1)
+    stance, measured = _start(planner)
+    plan = planner.plan(0.0, stance, measured, COMMAND, obstacles=(deep,))
+    assert np.all(_along(plan, 0.0) + H1.sole_front <= 0.65 - H1.obstacle_margin + 1e-9)  # toes before the margin
+    assert all(step.crossing is None for step in plan.steps)
+
+
+def test_a_narrow_post_is_stepped_beside_not_over():
+    post = Obstacle(np.array([0.55, -0.203]), 0.0, 0.05, 0.05, 0.3)  # on the right foot's line
+    planner = DcmFootstepPlanner(H1)
+    stance, measured = _start(planner)
+    plan = planner.plan(0.0, stance, measured, COMMAND, obstacles=(post,))
+    assert _sole_overlaps(plan, post, H1.foothold_geometry()) == []
+
+
+def test_crossing_marks_follow_the_sole_along_the_swing():
+    geometry = H1.foothold_geometry()
+    box = Obstacle(np.array([0.5, 0.0]), 0.0, 0.1, 1.0, 0.1)
+    over = crossing_of((box,), (0.1, 0.1), (0.9, 0.1), 0.0, geometry)
+    assert over is not None and over.obstacle is box
+    s_in, s_out = over.phase_interval
+    # the toe reaches the grown near side (0.41 m) at 0.41 - 0.1025 m, the heel leaves the far side at 0.59 + 0.1375
+    assert s_in == pytest.approx((0.41 - 0.1025 - 0.1) / 0.8, abs=0.026)
+    assert s_out == pytest.approx((0.59 + 0.1375 - 0.1) / 0.8, abs=0.026)
+    assert crossing_of((box,), (0.1, 0.1), (0.2, 0.1), 0.0, geometry) is None  # a step that stays before it
+    assert crossing_of((box,), None, (0.9, 0.1), 0.0, geometry) is None  # lift-off unknown
+
+
+def test_obstacle_helpers_and_bad_input():
+    box = Obstacle(np.array([1.0, 0.0]), 0.0, 0.2, 1.0, 0.1)
+    grown = box.grown(0.05)
+    assert (grown.depth, grown.width, grown.height) == pytest.approx((0.3, 1.1, 0.1))
+    assert grown.contains((0.86, 0.54)) and not box.contains((0.86, 0.54))
+    with pytest.raises(ParameterError, match="margin=-0.1 m must be >= 0"):
+        box.grown(-0.1)
+    with pytest.raises(ParameterError, match="obstacle_step_length_max=0.0 m must be > 0"):
+        dataclasses.replace(H1, obstacle_step_length_max=0.0)
+    with pytest.raises(ParameterError, match=r"obstacle_step_duration_min=0.9 s must be in \[0, t_max=0.8 s\]"):
+        dataclasses.replace(H1, obstacle_step_duration_min=0.9)
+    with pytest.raises(ParameterError, match="sole_front=-0.01 m must be >= 0"):
+        dataclasses.replace(H1, sole_front=-0.01)
+    planner = DcmFootstepPlanner(H1)
+    stance, measured = _start(planner)
+    with pytest.raises(ParameterError, match="obstacles must be sequencer.obstacles.Obstacle"):
+        planner.plan(0.0, stance, measured, COMMAND, obstacles=("box",))
+
+
+def test_a_stance_inside_the_margin_with_no_way_out_is_a_solver_error():
+    """The stance sole in the grown footprint of a box that no step within the bounds leaves: a SolverError
+    (a control loop keeps its last plan), never a foothold on the box."""
+    tight = dataclasses.replace(H1, l_min=-0.05, l_max=0.05, obstacle_step_length_max=0.05)
+    planner = DcmFootstepPlanner(tight)
+    stance = StanceState("left", np.array([0.0, 0.203]), 0.0, 0.0, swing_liftoff=np.array([0.0, -0.203]))
+    measured = ReducedState(np.array([0.0, 0.0, 0.97]), np.zeros(3), np.array([0.02, 0.1]))
+    around = Obstacle(np.array([0.0, 0.0]), 0.0, 0.3, 3.0, 0.1)  # under both feet
+    with pytest.raises(SolverError, match="no foothold outside the obstacle box"):
+        planner.plan(0.0, stance, measured, VelocityCommand(0.1), obstacles=(around,))
+
+
+def test_the_alip_planner_refuses_obstacles():
+    from sequencer.alip import AlipParams
+    from sequencer.alip.planner import AlipFootstepPlanner
+
+    planner = AlipFootstepPlanner(AlipParams.preset("g1"))
+    assert not planner.avoids_obstacles and DcmFootstepPlanner(H1).avoids_obstacles
+    stance = StanceState("left", np.array([0.0, 0.1]), 0.0, 0.0)
+    measured = ReducedState(np.array([0.0, 0.0, 0.7]), np.zeros(3), np.zeros(2))
+    with pytest.raises(ParameterError, match="the ALIP planner cannot avoid obstacles"):
+        planner.plan(0.0, stance, measured, VelocityCommand(0.2), obstacles=(Obstacle(np.ones(2), 0.0, 0.1, 1, 0.1),))
+
+
+def test_the_swing_in_progress_keeps_its_before_or_beyond_decision():
+    """Decided at lift-off (the first plan after the double support), the step in progress does not flip
+    from before the obstacle to beyond it when the measured DCM moves on (nor back)."""
+    box = Obstacle(np.array([0.7425, 0.0]), 0.0, 0.1, 1.2, 0.1)  # near side 0.6925 m: ℓ <= 0.1 m stays before
+    planner = DcmFootstepPlanner(H1)
+    stance = StanceState("left", np.array([0.45, 0.203]), 0.0, 0.0, swing_liftoff=np.array([0.33, -0.203]))
+
+    def first_step(t, dcm_ahead):
+        dcm = stance.position + np.array([dcm_ahead, -0.09])
+        plan = planner.plan(t, stance, ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm), COMMAND,
+                            obstacles=(box,))
+        return plan.steps[0]
+
+    assert first_step(0.05, 0.0).crossing is None  # still in double support: decided afresh each time
+    late = first_step(0.12, 0.0)  # lift-off with the DCM on the stance foot: the crossing is late, one more before
+    assert late.crossing is None and late.position[0] + H1.sole_front <= 0.6925 - H1.obstacle_margin + 1e-9
+    assert first_step(0.2, 0.3).crossing is None  # the DCM far ahead now: the decision is kept
+    fresh = DcmFootstepPlanner(H1)  # a planner deciding at that state crosses
+    stance_fresh = dataclasses.replace(stance)
+    dcm = stance_fresh.position + np.array([0.3, -0.09])
+    crossing = fresh.plan(0.2, stance_fresh, ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm), COMMAND,
+                          obstacles=(box,)).steps[0]
+    assert crossing.crossing is not None

@@ -1,0 +1,53 @@
+"""The H1 in closed loop towards a 10 cm box it is told about (``Measurement.obstacles`` filled with the true
+box, tests/negotiation_scene.py): it switches to negotiation at once, walks up to the box with every sole
+outside it and places its last step before the box, short (3.6 s). Stepping over it is measured in docs/ocp.md
+("Obstacle clearance": the lead foot crosses, the trailing foot does not yet)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from negotiation_scene import BoxContacts, KnownObstacleController, StepOverBox
+from robot_extras import needs_h1_extra
+
+from sim.runner import run_scenario
+from wbmpc.walking.negotiation import NEGOTIATION
+from wbmpc.walking.ocp import SlowPathWarning
+from wbmpc.walking.preset import load_walking_preset
+
+pytestmark = [needs_h1_extra, pytest.mark.filterwarnings(f"ignore::{SlowPathWarning.__module__}.SlowPathWarning")]
+
+
+@pytest.fixture(scope="module")
+def approach():
+    box = StepOverBox(height=0.1, depth=0.1, distance=1.0, speed=0.3)
+    preset = load_walking_preset("h1")
+    controller = KnownObstacleController(preset, (box.obstacle(),))
+    contacts = BoxContacts(box)
+    log = run_scenario("step_over_box", robot="h1", duration=3.6, controller=controller, on_tick=contacts,
+                       progress=False, height=box.height, depth=box.depth, distance=box.distance, speed=box.speed)
+    return box, preset, controller, contacts, log
+
+
+def test_h1_negotiates_a_perceived_box_from_the_first_replan(approach):
+    box, preset, controller, contacts, log = approach
+    assert log.status == "completed", (log.fall_time, log.fall_reason, log.error)
+    assert controller.negotiation_switches == [(0.0, NEGOTIATION)]  # 1 m ahead: within the 1.5 m lookahead
+    replans = log.replans
+    assert np.all(replans["negotiation_mode"] == NEGOTIATION) and replans["negotiation_switch"][0] == 1.0
+    assert np.all(replans["obstacles_planned"] == 1.0)
+    assert np.all(replans["sequencer_v_x"] <= preset.controller.negotiation_speed_max + 1e-12)
+    assert replans["crossing_nodes"].max() > 0  # the OCP's horizon held crossing swings
+
+
+def test_h1_walks_up_to_the_box_with_every_foothold_before_it_and_without_touching_it(approach):
+    box, preset, controller, contacts, log = approach
+    assert contacts.touches == []
+    replans = log.replans
+    landed = replans["stance_switched"] > 0
+    stance_x = replans["stance_x"][landed]
+    assert stance_x.size >= 6 and stance_x.max() > 0.6  # it walked towards the box
+    # every foothold so far before the box: the whole sole (its toe) before the near edge by half the margin at
+    # least (the closed loop lands short steps up to 6 cm beyond the plan)
+    planner = preset.planner
+    assert np.all(stance_x + planner.sole_front < box.distance - 0.5 * planner.obstacle_margin)

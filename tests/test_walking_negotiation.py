@@ -1,0 +1,101 @@
+"""Obstacle negotiation in the walking controller: the walking/negotiation mode (wbmpc.walking.negotiation),
+the planning stage handing the obstacles on, the OCP reference's crossing swings (no MuJoCo)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from robots import load_robot
+from sequencer.obstacles import Obstacle
+from sequencer.planner import VelocityCommand
+from sequencer.schedule import contact_schedule
+from wbmpc.errors import ParameterError
+from wbmpc.walking.negotiation import NEGOTIATION, WALKING, NegotiationMode
+from wbmpc.walking.planning import PlanningStage
+from wbmpc.walking.preset import load_walking_preset
+from wbmpc.walking.reference import crossing_schedule
+
+BOX = Obstacle(np.array([0.5, 0.0]), 0.0, 0.1, 1.0, 0.1)  # across the path, near edge 0.45 m ahead
+FEET = np.array([[0.0, 0.2], [0.0, -0.2]])
+
+
+def test_the_mode_switches_to_negotiation_within_the_lookahead_and_back_once_past():
+    mode = NegotiationMode(lookahead=1.0, corridor=0.3, release=0.05)
+    assert mode.update(0.0, (), (0.0, 0.0), FEET, 0.0) == 0 and mode.mode == WALKING
+    far = Obstacle(np.array([2.0, 0.0]), 0.0, 0.1, 1.0, 0.1)  # 1.95 m ahead: beyond the lookahead
+    assert mode.update(0.1, (far,), (0.0, 0.0), FEET, 0.0) == 0 and mode.active == ()
+    aside = Obstacle(np.array([0.5, 1.0]), 0.0, 0.1, 0.5, 0.1)  # 0.75 m to the left: outside the corridor
+    assert mode.update(0.2, (aside,), (0.0, 0.0), FEET, 0.0) == 0
+    assert mode.update(0.3, (far, BOX), (0.0, 0.0), FEET, 0.0) == 1
+    assert mode.mode == NEGOTIATION and mode.active == (BOX,)
+    one_foot_past = np.array([[0.7, 0.2], [0.5, -0.2]])  # the trailing foot still before the release line
+    assert mode.update(1.0, (BOX,), (0.6, 0.0), one_foot_past, 0.0) == 0 and mode.mode == NEGOTIATION
+    both_past = np.array([[0.7, 0.2], [0.62, -0.2]])
+    assert mode.update(1.5, (BOX,), (0.66, 0.0), both_past, 0.0) == -1 and mode.mode == WALKING
+    assert mode.switches == [(0.3, NEGOTIATION), (1.5, WALKING)]
+    # along the heading: a robot turned away (heading +pi/2) does not negotiate the box ahead in x
+    assert NegotiationMode(1.0, 0.3, 0.05).update(0.0, (BOX,), (0.0, 0.0), FEET, np.pi / 2) == 0
+    assert NegotiationMode(0.0, 0.3, 0.05).update(0.0, (BOX,), (0.0, 0.0), FEET, 0.0) == 0  # lookahead 0: never
+    with pytest.raises(ParameterError, match="measurement obstacles must be sequencer.obstacles.Obstacle"):
+        NegotiationMode(1.0, 0.3, 0.05).update(0.0, ("box",), (0.0, 0.0), FEET, 0.0)
+
+
+def _bolt_stage(**controller):
+    robot = load_robot("bolt")
+    preset = load_walking_preset("bolt")
+    config = dataclasses.replace(preset.controller, **controller)
+    from sequencer.dcm_planner import DcmFootstepPlanner
+
+    stage = PlanningStage(robot, DcmFootstepPlanner(preset.planner), config)
+    x0 = np.concatenate([robot.q_reference, np.zeros(robot.pinocchio_model.nv)])
+    stage.reset(x0, 0.0, VelocityCommand(0.3))
+    return robot, stage, x0
+
+
+def test_the_planning_stage_plans_over_the_obstacles_of_a_negotiation_and_logs_the_mode():
+    robot, stage, x0 = _bolt_stage(negotiation_lookahead=1.0, negotiation_speed_max=0.2)
+    contact = np.ones(2, dtype=bool)
+    box = Obstacle(np.array([0.3, 0.0]), 0.0, 0.05, 0.6, 0.03)
+    plan, _, record = stage.update(0.0, x0, contact, obstacles=(box,))
+    assert record["negotiation_mode"] == NEGOTIATION and record["negotiation_switch"] == 1.0
+    assert record["obstacles_perceived"] == 1.0 and record["obstacles_planned"] == 1.0
+    assert record["sequencer_v_x"] <= 0.2  # the negotiation's speed bound
+    assert any(step.crossing is not None for step in plan.steps)
+    grown = box.grown(stage.planner.params.obstacle_margin - 1e-9)  # a foothold may lie on the margin's line
+    assert not np.any(grown.contains(plan.positions))  # Bolt's point feet: the footholds themselves
+    assert stage.negotiation.switches == [(0.0, NEGOTIATION)]
+    # the plan's crossing swings on the OCP grid: the foot over the box at some nodes, from its lift-off
+    schedule = contact_schedule(plan, 0.0, 0.01, 250, rounding="nearest")
+    crossings = crossing_schedule(plan, schedule)
+    assert crossings is not None and crossings.obstacles == (box,)
+    over = crossings.index >= 0
+    assert over.any() and not np.any(over & schedule.in_contact)
+    assert np.all(np.isfinite(crossings.path_xy[over])) and np.all(np.isnan(crossings.path_xy[~over]))
+
+
+def test_without_obstacles_the_stage_plans_as_without_perception():
+    _, stage, x0 = _bolt_stage(negotiation_lookahead=1.0)
+    _, plain, x0 = _bolt_stage()
+    contact = np.ones(2, dtype=bool)
+    for t in (0.0, 0.01, 0.02):
+        a, _, record = stage.update(t, x0, contact, obstacles=())
+        b, _, _ = plain.update(t, x0, contact)
+        assert record["negotiation_mode"] == WALKING and crossing_schedule(a, contact_schedule(a, t, 0.01, 50)) is None
+        assert np.array_equal(a.positions, b.positions) and np.array_equal(a.touchdown_times, b.touchdown_times)
+
+
+def test_a_negotiation_with_a_planner_that_cannot_avoid_obstacles_is_refused():
+    from sequencer.alip import AlipParams
+    from sequencer.alip.planner import AlipFootstepPlanner
+
+    robot = load_robot("bolt")
+    preset = load_walking_preset("bolt")
+    config = dataclasses.replace(preset.controller, negotiation_lookahead=1.0)
+    planner = AlipFootstepPlanner(AlipParams.preset("g1"))
+    with pytest.raises(ParameterError, match="negotiation_lookahead=1.0 m needs a footstep planner that avoids"):
+        PlanningStage(robot, planner, config)
+    with pytest.raises(ParameterError, match=r"negotiation_lookahead=-1.0 m must be in \[0, 10.0\] m"):
+        dataclasses.replace(preset.controller, negotiation_lookahead=-1.0)
