@@ -38,6 +38,8 @@ Definitions (all times in s, velocities in m/s, world frame):
   push's end; ``yaw_push_error_abs`` its magnitude; ``yaw_push_error_peak``: max |e| after the
   push's start; ``yaw_push_rate_peak`` / ``yaw_push_rate_before`` [rad/s]: max |ψ̇ − commanded rate|
   from the push's start to ``YAW_RATE_WINDOW`` after its end / over the window before the push.
+  Given the yaw of the same run without the push (same seed; ``undisturbed_yaw``), Ψ is that yaw
+  instead: the error is then the disturbance's effect alone, without the walk's own heading drift.
 - ``max_stance_slide``: largest distance between the stance foot and its touchdown point (slips).
 - ``max_torque_ratio``: max |tau_command| / torque limit (> 1 means the limits clipped the command);
   ``saturated_fraction``: fraction of ticks with at least one clipped joint.
@@ -125,7 +127,8 @@ def path_metrics(path: PlanarPath, position: np.ndarray, yaw: np.ndarray, laps: 
     return metrics
 
 
-def yaw_error(t: np.ndarray, yaw: np.ndarray, yaw_rate_command: np.ndarray, push_start: float) -> np.ndarray | None:
+def yaw_error(t: np.ndarray, yaw: np.ndarray, yaw_rate_command: np.ndarray, push_start: float,
+              undisturbed_yaw: np.ndarray | None = None) -> np.ndarray | None:
     """The heading error e(t) = ψ(t) − Ψ(t) − e₀ of a yaw disturbance (module docstring) [rad], shape (n,).
 
     Args:
@@ -133,23 +136,31 @@ def yaw_error(t: np.ndarray, yaw: np.ndarray, yaw_rate_command: np.ndarray, push
         yaw: (n,) base yaw, world frame [rad] (wrapped or not: it is unwrapped here).
         yaw_rate_command: (n,) commanded yaw rate at each tick [rad/s].
         push_start: start of the disturbance [s]; e₀ is the mean of ψ − Ψ over the ``YAW_AVERAGE_WINDOW`` before it.
+        undisturbed_yaw: (n,) the base yaw [rad] of the same run without the disturbance (same seed, same
+            ticks), or None. Given, it is Ψ: e then holds the disturbance's effect alone, without the
+            heading drift the walk has on its own (a deterministic simulation repeats the run up to the push,
+            so e₀ = 0); None: Ψ is the integral of ``yaw_rate_command``.
 
     Returns:
         e (n,), or None when the log has no tick before the push.
     """
     t = np.asarray(t, dtype=float)
-    commanded = np.concatenate([[0.0], np.cumsum(np.asarray(yaw_rate_command, dtype=float)[:-1]) * (t[1] - t[0])])
+    if undisturbed_yaw is None:
+        commanded = np.concatenate([[0.0], np.cumsum(np.asarray(yaw_rate_command, dtype=float)[:-1]) * (t[1] - t[0])])
+    else:
+        commanded = np.unwrap(np.asarray(undisturbed_yaw, dtype=float))
     relative = np.unwrap(np.asarray(yaw, dtype=float)) - commanded  # ψ − Ψ
     before = (t >= push_start - YAW_AVERAGE_WINDOW) & (t < push_start)
     return relative - np.mean(relative[before]) if before.any() else None
 
 
 def yaw_disturbance_metrics(t: np.ndarray, yaw: np.ndarray, yaw_rate_command: np.ndarray, push_start: float,
-                            push_end: float, completed: bool) -> dict[str, float | None]:
+                            push_end: float, completed: bool,
+                            undisturbed_yaw: np.ndarray | None = None) -> dict[str, float | None]:
     """The pelvis's heading error after a yaw disturbance (definitions in the module docstring).
 
     Args:
-        t, yaw, yaw_rate_command, push_start: as :func:`yaw_error`.
+        t, yaw, yaw_rate_command, push_start, undisturbed_yaw: as :func:`yaw_error`.
         push_end: end of the disturbance [s].
         completed: the run ended without a fall (else ``yaw_push_error`` is None).
 
@@ -161,7 +172,7 @@ def yaw_disturbance_metrics(t: np.ndarray, yaw: np.ndarray, yaw_rate_command: np
     t = np.asarray(t, dtype=float)
     metrics: dict[str, float | None] = dict.fromkeys(
         ("yaw_push_error", "yaw_push_error_abs", "yaw_push_error_peak", "yaw_push_rate_peak", "yaw_push_rate_before"))
-    error = yaw_error(t, yaw, yaw_rate_command, push_start)  # e(t) [rad]
+    error = yaw_error(t, yaw, yaw_rate_command, push_start, undisturbed_yaw)  # e(t) [rad]
     if error is None or t[-1] < push_start:
         return metrics
     rate = np.gradient(error, t[1] - t[0])  # ψ̇ − commanded rate [rad/s]

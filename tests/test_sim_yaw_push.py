@@ -104,3 +104,17 @@ def test_g1_walking_pelvis_yaw_rate_jumps_under_the_torso_moment():
     assert metrics["yaw_push_rate_peak"] > 3.0 * metrics["yaw_push_rate_before"], metrics
     assert metrics["yaw_push_error_peak"] > 0.01  # [rad]
     assert metrics["yaw_push_error"] is None  # 0.75 s after the push: not yet "after recovery"
+
+
+def test_yaw_error_against_the_undisturbed_run_takes_the_walks_own_drift_out():
+    from sim.metrics import yaw_disturbance_metrics
+
+    t = np.arange(0.0, 8.0, 0.001)
+    drift = -0.004 * t + 0.02 * np.sin(2 * np.pi * t / 0.8)  # the walk's heading drifts by itself
+    kick = np.where(t < 4.05, 0.1 * np.clip((t - 4.0) / 0.05, 0.0, 1.0), 0.05 + 0.05 * np.exp(-(t - 4.05) / 0.3))
+    against_heading = yaw_disturbance_metrics(t, drift + kick, np.zeros_like(t), 4.0, 4.05, True)
+    against_run = yaw_disturbance_metrics(t, drift + kick, np.zeros_like(t), 4.0, 4.05, True, undisturbed_yaw=drift)
+    assert against_run["yaw_push_error"] == pytest.approx(0.05, abs=1e-4)  # the kick decays with 0.3 s
+    assert against_run["yaw_push_error_peak"] == pytest.approx(0.1, abs=1e-6)
+    # against the heading before the push, the drift over the 4 s between the two windows' centres (3.2, 7.2 s) counts too
+    assert against_heading["yaw_push_error"] == pytest.approx(0.05 - 0.004 * 4.0, abs=1e-4)

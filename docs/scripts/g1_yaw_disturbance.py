@@ -47,6 +47,7 @@ VARIANTS = {
     "free": {},  # the G1 preset as committed: joint_position_by_name = waist 10, shoulder/elbow/wrist 3
     "held": {"ocp.state_weights.joint_position_by_name": [[part, HELD_WEIGHT] for part in UPPER_BODY]},
 }
+VS = "metrics_vs_undisturbed"
 TRACE_STEP = 10  # ticks (10 ms) between the samples of the yaw error kept in a trial file
 
 
@@ -78,9 +79,11 @@ def run_trial(variant: str, moment: float, phase: float, seed: int) -> dict:
     }
 
 
-def _degrees(group: list[dict], key: str) -> list[float | None]:
-    """The metric ``key`` [rad] of each trial of ``group`` in degrees (None where it was not measured)."""
-    return [None if t["metrics"][key] is None else float(np.degrees(t["metrics"][key])) for t in group]
+def _degrees(group: list[dict], key: str, metrics: str = "metrics") -> list[float | None]:
+    """The metric ``key`` [rad] of each trial of ``group`` in degrees (None where it was not measured),
+    from the trial's ``metrics`` (against the heading) or ``metrics_vs_undisturbed``."""
+    return [None if not t.get(metrics) or t[metrics][key] is None else float(np.degrees(t[metrics][key]))
+            for t in group]
 
 
 def _stats(values: list[float]) -> dict:
@@ -90,8 +93,29 @@ def _stats(values: list[float]) -> dict:
     return {"mean": float(np.mean(values)), "std": float(np.std(values))}
 
 
+def with_undisturbed(trials: list[dict]) -> list[dict]:
+    """Each trial with ``metrics_vs_undisturbed``: the yaw metrics against the moment-0 trial of the same
+    variant, phase and seed (the same run up to the push: the walk's own heading drift taken out), from the
+    100 Hz traces; None when that trial is missing or fell."""
+    reference = {(t["variant"], t["phase"], t["seed"]): t for t in trials if t["moment"] == 0.0}
+    out = []
+    for trial in trials:
+        base = reference.get((trial["variant"], trial["phase"], trial["seed"]))
+        vs = None
+        if trial["moment"] != 0.0 and base is not None and base["success"] and trial["trace"]["yaw_error"] is not None:
+            n = min(len(trial["trace"]["t"]), len(base["trace"]["t"]))
+            t = np.array(trial["trace"]["t"][:n])
+            start = trial["params"]["push_time"]
+            vs = yaw_disturbance_metrics(t, np.array(trial["trace"]["yaw_error"][:n]), np.zeros(n), start,
+                                         start + trial["params"]["push_duration"], trial["success"],
+                                         undisturbed_yaw=np.array(base["trace"]["yaw_error"][:n]))
+        out.append({**trial, "metrics_vs_undisturbed": vs})
+    return out
+
+
 def summarise(trials: list[dict]) -> dict:
-    """Per variant and moment: trials, successes, |yaw error| after recovery and peak [deg] (mean, std)."""
+    """Per variant and moment: trials, successes, |yaw error| after recovery and peak [deg] (mean, std),
+    against the heading (``metrics``) and against the undisturbed run (``metrics_vs_undisturbed``)."""
     table: dict[str, dict[str, dict]] = {}
     for variant in VARIANTS:
         rows = {}
@@ -103,6 +127,9 @@ def summarise(trials: list[dict]) -> dict:
                 "yaw_error_deg": _stats(_degrees(group, "yaw_push_error_abs")),
                 "yaw_error_signed_deg": _stats(_degrees(group, "yaw_push_error")),
                 "peak_yaw_error_deg": _stats(_degrees(group, "yaw_push_error_peak")),
+                "yaw_error_vs_undisturbed_deg": _stats(_degrees(group, "yaw_push_error_abs", VS)),
+                "yaw_error_vs_undisturbed_signed_deg": _stats(_degrees(group, "yaw_push_error", VS)),
+                "peak_yaw_error_vs_undisturbed_deg": _stats(_degrees(group, "yaw_push_error_peak", VS)),
                 "fall_times": [t["fall_time"] for t in group if not t["success"]],
             }
         table[variant] = rows
@@ -111,9 +138,11 @@ def summarise(trials: list[dict]) -> dict:
                      "push_after": PUSH_AFTER, "t_des": T_DES, "after_push": AFTER_PUSH, "body": "torso_link",
                      "moment_sign": "+z (counter-clockwise seen from above)", "variants": VARIANTS,
                      "metric": "sim.metrics.yaw_disturbance_metrics: |mean pelvis yaw error| over the last 1.6 s "
-                               "(>= 2 s after the push), relative to the pre-push heading plus the commanded turn"},
+                               "(>= 2 s after the push), relative to the pre-push heading plus the commanded turn "
+                               "(yaw_error_*) or to the same run without the push (*_vs_undisturbed_*)"},
         "bins": table,
         "free_smaller_in_bins": _comparison(table, "yaw_error_deg"),
+        "free_smaller_vs_undisturbed_in_bins": _comparison(table, "yaw_error_vs_undisturbed_deg"),
         "free_smaller_peak_in_bins": _comparison(table, "peak_yaw_error_deg"),
     }
 
@@ -130,6 +159,16 @@ def _comparison(table: dict, key: str) -> dict:
     return {"bins": compared, "free_smaller": smaller}
 
 
+def _bins(group: list[dict], key: str, metrics: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(moments, mean, std) [N·m, deg, deg] of metric ``key`` over the trials of each moment that have it."""
+    rows = []
+    for moment in sorted({t["moment"] for t in group}):
+        values = [v for v in _degrees([t for t in group if t["moment"] == moment], key, metrics) if v is not None]
+        if values:
+            rows.append((moment, np.mean(values), np.std(values)))
+    return tuple(np.array(column) for column in zip(*rows)) if rows else (np.zeros(0),) * 3
+
+
 def plot(trials: list[dict], path: str) -> None:
     import matplotlib
 
@@ -138,38 +177,35 @@ def plot(trials: list[dict], path: str) -> None:
 
     colours = {"free": "tab:green", "held": "tab:red"}
     labels = {"free": "arms and waist free (preset)", "held": f"arms and waist held (posture weight {HELD_WEIGHT:g})"}
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4.5))
+    largest = max((t["moment"] for t in trials), default=0.0)
     for variant, offset in (("free", -1.5), ("held", 1.5)):
         group = [t for t in trials if t["variant"] == variant]
-        moments = sorted({t["moment"] for t in group})
         for ax, key in ((axes[0], "yaw_push_error_abs"), (axes[1], "yaw_push_error_peak")):
-            mean, std = [], []
-            for moment in moments:
-                values = [np.degrees(t["metrics"][key]) for t in group
-                          if t["moment"] == moment and t["metrics"][key] is not None]
-                mean.append(np.mean(values) if values else np.nan)
-                std.append(np.std(values) if values else np.nan)
-            ax.errorbar(np.array(moments) + offset, mean, yerr=std, fmt="o-", color=colours[variant], capsize=3,
-                        label=labels[variant])
+            moments, mean, std = _bins(group, key, VS)
+            ax.errorbar(moments + offset, mean, yerr=std, fmt="o-", color=colours[variant], capsize=3,
+                        label=f"{labels[variant]}, against the undisturbed run")
+            moments, mean, std = _bins(group, key, "metrics")
+            ax.errorbar(moments + offset, mean, yerr=std, fmt="s--", color=colours[variant], capsize=2, alpha=0.45,
+                        ms=4, label=f"{variant}, against the heading before the push")
             falls = [t["moment"] + offset for t in group if not t["success"]]
-            if falls and key == "yaw_push_error_peak":
-                ax.plot(falls, np.zeros(len(falls)), "x", color=colours[variant], ms=9, mew=2,
-                        label=f"{variant}: fell")
-        largest = max(moments) if moments else None
+            if falls:
+                ax.plot(falls, np.zeros(len(falls)), "x", color=colours[variant], ms=9, mew=2, label=f"{variant}: fell")
         for t in group:
             if t["moment"] == largest:
                 axes[2].plot(np.array(t["trace"]["t"]) - t["params"]["push_time"], np.degrees(t["trace"]["yaw_error"]),
                              color=colours[variant], alpha=0.8, lw=1,
                              label=f"{variant}, phase {t['phase']:g}" + ("" if t["success"] else " (fell)"))
     axes[0].set(xlabel="torso moment M_z [N·m] (0.05 s)", ylabel="|pelvis yaw error| after recovery [deg]",
-                title="after recovery (mean of the last 1.6 s)")
-    axes[1].set(xlabel="torso moment M_z [N·m] (0.05 s)", ylabel="peak |pelvis yaw error| [deg]", title="peak")
-    axes[2].set(xlabel="time from the push [s]", ylabel="pelvis yaw error [deg]",
-                title=f"yaw error at the largest moment ({largest:g} N·m)" if trials else "")
+                title="after recovery (mean of the run's last 1.6 s)")
+    axes[1].set(xlabel="torso moment M_z [N·m] (0.05 s)", ylabel="peak |pelvis yaw error| [deg]",
+                title="peak after the push")
+    axes[2].set(xlabel="time from the push's start [s]", ylabel="pelvis yaw error (against the heading) [deg]",
+                title=f"{largest:g} N·m")
     for ax in axes:
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.suptitle("G1 walking at 0.3 m/s, torso yaw moment for 0.05 s (ALIP paper Fig. 5 analogue)")
+        ax.legend(fontsize=6)
+    fig.suptitle("G1 walking at 0.3 m/s, a torso yaw moment for 0.05 s (the ALIP paper's Fig. 5 on the whole-body MPC)")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
 
@@ -203,12 +239,11 @@ def main() -> None:
                     print(json.dumps({k: record[k] for k in ("variant", "moment", "phase", "status", "wall_time")}
                                      | {k: record["metrics"][k] for k in ("yaw_push_error", "yaw_push_error_peak")}),
                           flush=True)
-    trials = [json.loads(p.read_text()) for p in sorted(runs.glob("*.json"))]
+    trials = with_undisturbed([json.loads(p.read_text()) for p in sorted(runs.glob("*.json"))])
     summary = summarise(trials)
     Path(args.summary).write_text(json.dumps(summary, indent=1) + "\n")
     plot(trials, args.plot)
-    print(json.dumps({"trials": len(trials), "free_smaller_in_bins": summary["free_smaller_in_bins"],
-                      "free_smaller_peak_in_bins": summary["free_smaller_peak_in_bins"]}))
+    print(json.dumps({"trials": len(trials)} | {k: v for k, v in summary.items() if k.startswith("free_smaller")}))
 
 
 if __name__ == "__main__":
