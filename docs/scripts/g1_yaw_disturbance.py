@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robots import load_robot
 from robots.conventions import base_yaw
 from sim import run_scenario
 from sim.metrics import yaw_disturbance_metrics, yaw_error
@@ -68,12 +69,17 @@ def run_trial(variant: str, moment: float, phase: float, seed: int) -> dict:
     metrics = yaw_disturbance_metrics(t, yaw, command, events["push_start"], events["push_end"],
                                       log.status == "completed")
     trace = yaw_error(t, yaw, command, events["push_start"])
+    # how far the waist turned the torso away from the pelvis: the free upper body's share of the impulse
+    waist = log.ticks["x"][:, 7 + load_robot("g1").actuated_joint_names.index("waist_yaw_joint")]
+    before = (t >= events["push_start"] - 1.0) & (t < events["push_start"])
+    waist_peak = float(np.max(np.abs(waist[t >= events["push_start"]] - np.mean(waist[before])))) if before.any() else None
     return {
         "variant": variant, "moment": moment, "phase": phase, "seed": seed, "params": params,
         "overrides": VARIANTS[variant], "status": log.status, "fall_time": log.fall_time,
         "fall_reason": log.fall_reason, "error": log.error, "success": log.status == "completed",
         "metrics": metrics, "mean_velocity_x": log.metrics.get("mean_velocity_x"),
         "real_time_factor": log.metrics.get("real_time_factor"), "wall_time": wall,
+        "waist_yaw_peak": waist_peak,  # [rad], max |waist yaw - its mean over the second before the push|
         "trace": {"t": [round(float(v), 3) for v in t[::TRACE_STEP]],
                   "yaw_error": [round(float(v), 5) for v in trace[::TRACE_STEP]]},
     }
@@ -121,15 +127,16 @@ def summarise(trials: list[dict]) -> dict:
         rows = {}
         for moment in sorted({t["moment"] for t in trials if t["variant"] == variant}):
             group = [t for t in trials if t["variant"] == variant and t["moment"] == moment]
+            recovered = [t for t in group if t["success"]]  # a fall's peak is the fall's, not the disturbance's
             rows[f"{moment:g}"] = {
                 "trials": len(group), "successes": sum(t["success"] for t in group),
                 "phases": sorted(t["phase"] for t in group),
                 "yaw_error_deg": _stats(_degrees(group, "yaw_push_error_abs")),
                 "yaw_error_signed_deg": _stats(_degrees(group, "yaw_push_error")),
-                "peak_yaw_error_deg": _stats(_degrees(group, "yaw_push_error_peak")),
+                "peak_yaw_error_deg": _stats(_degrees(recovered, "yaw_push_error_peak")),
                 "yaw_error_vs_undisturbed_deg": _stats(_degrees(group, "yaw_push_error_abs", VS)),
                 "yaw_error_vs_undisturbed_signed_deg": _stats(_degrees(group, "yaw_push_error", VS)),
-                "peak_yaw_error_vs_undisturbed_deg": _stats(_degrees(group, "yaw_push_error_peak", VS)),
+                "peak_yaw_error_vs_undisturbed_deg": _stats(_degrees(recovered, "yaw_push_error_peak", VS)),
                 "fall_times": [t["fall_time"] for t in group if not t["success"]],
             }
         table[variant] = rows
@@ -145,6 +152,27 @@ def summarise(trials: list[dict]) -> dict:
         "free_smaller_vs_undisturbed_in_bins": _comparison(table, "yaw_error_vs_undisturbed_deg"),
         "free_smaller_peak_in_bins": _comparison(table, "peak_yaw_error_deg"),
     }
+
+
+def markdown_table(summary: dict) -> str:
+    """The summary's bins as the table of docs/campaigns.md: per moment and variant, successes / trials,
+    |yaw error| after recovery against the undisturbed run and against the heading, and the peak (mean ± std, deg)."""
+    def cell(row: dict, key: str) -> str:
+        stats = row[key]
+        return "—" if stats["mean"] is None else f"{stats['mean']:.2f} ± {stats['std']:.2f}"
+
+    lines = ["| M_z [N·m] | free: no fall | held: no fall | free: after recovery, vs undisturbed | held: vs "
+             "undisturbed | free: vs heading | held: vs heading | free: peak | held: peak |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    free, held = summary["bins"].get("free", {}), summary["bins"].get("held", {})
+    for moment in sorted(set(free) | set(held), key=float):
+        f, h = free.get(moment), held.get(moment)
+        row = [moment]
+        row += [f"{r['successes']}/{r['trials']}" if r else "—" for r in (f, h)]
+        for key in ("yaw_error_vs_undisturbed_deg", "yaw_error_deg", "peak_yaw_error_deg"):
+            row += [cell(r, key) if r else "—" for r in (f, h)]
+        lines.append("| " + " | ".join(row) + " |")
+    return "\n".join(lines)
 
 
 def _comparison(table: dict, key: str) -> dict:
@@ -181,11 +209,12 @@ def plot(trials: list[dict], path: str) -> None:
     largest = max((t["moment"] for t in trials), default=0.0)
     for variant, offset in (("free", -1.5), ("held", 1.5)):
         group = [t for t in trials if t["variant"] == variant]
+        recovered = [t for t in group if t["success"]]
         for ax, key in ((axes[0], "yaw_push_error_abs"), (axes[1], "yaw_push_error_peak")):
-            moments, mean, std = _bins(group, key, VS)
+            moments, mean, std = _bins(recovered, key, VS)
             ax.errorbar(moments + offset, mean, yerr=std, fmt="o-", color=colours[variant], capsize=3,
                         label=f"{labels[variant]}, against the undisturbed run")
-            moments, mean, std = _bins(group, key, "metrics")
+            moments, mean, std = _bins(recovered, key, "metrics")
             ax.errorbar(moments + offset, mean, yerr=std, fmt="s--", color=colours[variant], capsize=2, alpha=0.45,
                         ms=4, label=f"{variant}, against the heading before the push")
             falls = [t["moment"] + offset for t in group if not t["success"]]
@@ -199,7 +228,7 @@ def plot(trials: list[dict], path: str) -> None:
     axes[0].set(xlabel="torso moment M_z [N·m] (0.05 s)", ylabel="|pelvis yaw error| after recovery [deg]",
                 title="after recovery (mean of the run's last 1.6 s)")
     axes[1].set(xlabel="torso moment M_z [N·m] (0.05 s)", ylabel="peak |pelvis yaw error| [deg]",
-                title="peak after the push")
+                title="peak after the push (trials without a fall)")
     axes[2].set(xlabel="time from the push's start [s]", ylabel="pelvis yaw error (against the heading) [deg]",
                 title=f"{largest:g} N·m")
     for ax in axes:
@@ -222,6 +251,7 @@ def main() -> None:
     parser.add_argument("--summary", default="docs/figures/g1_yaw_disturbance.json")
     parser.add_argument("--plot", default="docs/figures/g1_yaw_disturbance.png")
     parser.add_argument("--report-only", action="store_true", help="only rewrite the summary and figure")
+    parser.add_argument("--table", action="store_true", help="also print the summary as a markdown table")
     args = parser.parse_args()
     runs = Path(args.runs)
     runs.mkdir(parents=True, exist_ok=True)
@@ -243,6 +273,8 @@ def main() -> None:
     summary = summarise(trials)
     Path(args.summary).write_text(json.dumps(summary, indent=1) + "\n")
     plot(trials, args.plot)
+    if args.table:
+        print(markdown_table(summary))
     print(json.dumps({"trials": len(trials)} | {k: v for k, v in summary.items() if k.startswith("free_smaller")}))
 
 
