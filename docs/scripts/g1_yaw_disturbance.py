@@ -205,38 +205,43 @@ def plot(trials: list[dict], path: str) -> None:
 
     colours = {"free": "tab:green", "held": "tab:red"}
     labels = {"free": "arms and waist free (preset)", "held": f"arms and waist held (posture weight {HELD_WEIGHT:g})"}
-    fig, axes = plt.subplots(1, 3, figsize=(16, 4.5))
-    largest = max((t["moment"] for t in trials), default=0.0)
+    fig, axes = plt.subplots(2, 2, figsize=(13, 9))
+    (after_ax, peak_ax), (success_ax, trace_ax) = axes
+    # the traces: at the largest moment every trial of both variants recovered from (else the largest)
+    all_recovered = [m for m in {t["moment"] for t in trials} if all(t["success"] for t in trials if t["moment"] == m)]
+    shown = max(all_recovered, default=max((t["moment"] for t in trials), default=0.0))
     for variant, offset in (("free", -1.5), ("held", 1.5)):
         group = [t for t in trials if t["variant"] == variant]
         recovered = [t for t in group if t["success"]]
-        for ax, key in ((axes[0], "yaw_push_error_abs"), (axes[1], "yaw_push_error_peak")):
+        for ax, key in ((after_ax, "yaw_push_error_abs"), (peak_ax, "yaw_push_error_peak")):
             moments, mean, std = _bins(recovered, key, VS)
             ax.errorbar(moments + offset, mean, yerr=std, fmt="o-", color=colours[variant], capsize=3,
                         label=f"{labels[variant]}, against the undisturbed run")
             moments, mean, std = _bins(recovered, key, "metrics")
             ax.errorbar(moments + offset, mean, yerr=std, fmt="s--", color=colours[variant], capsize=2, alpha=0.45,
                         ms=4, label=f"{variant}, against the heading before the push")
-            falls = [t["moment"] + offset for t in group if not t["success"]]
-            if falls:
-                ax.plot(falls, np.zeros(len(falls)), "x", color=colours[variant], ms=9, mew=2, label=f"{variant}: fell")
+        moments = sorted({t["moment"] for t in group})
+        rate = [np.mean([t["success"] for t in group if t["moment"] == m]) for m in moments]
+        success_ax.plot(np.array(moments) + offset / 3, 100 * np.array(rate), "o-", color=colours[variant],
+                        label=labels[variant])
         for t in group:
-            if t["moment"] == largest:
-                axes[2].plot(np.array(t["trace"]["t"]) - t["params"]["push_time"], np.degrees(t["trace"]["yaw_error"]),
-                             color=colours[variant], alpha=0.8, lw=1,
-                             label=f"{variant}, phase {t['phase']:g}" + ("" if t["success"] else " (fell)"))
-    axes[0].set(xlabel="torso moment M_z [N·m] (0.05 s)", ylabel="|pelvis yaw error| after recovery [deg]",
-                title="after recovery (mean of the run's last 1.6 s)")
-    axes[1].set(xlabel="torso moment M_z [N·m] (0.05 s)", ylabel="peak |pelvis yaw error| [deg]",
-                title="peak after the push (trials without a fall)")
-    axes[2].set(xlabel="time from the push's start [s]", ylabel="pelvis yaw error (against the heading) [deg]",
-                title=f"{largest:g} N·m")
-    for ax in axes:
+            if t["moment"] == shown:
+                trace_ax.plot(np.array(t["trace"]["t"]) - t["params"]["push_time"], np.degrees(t["trace"]["yaw_error"]),
+                              color=colours[variant], alpha=0.8, lw=1,
+                              label=f"{variant}, phase {t['phase']:g}" + ("" if t["success"] else " (fell)"))
+    moment_label = "torso moment M_z [N·m] (0.05 s)"
+    after_ax.set(xlabel=moment_label, ylabel="|pelvis yaw error| after recovery [deg]",
+                 title="after recovery (mean of the run's last 1.6 s), trials without a fall")
+    peak_ax.set(xlabel=moment_label, ylabel="peak |pelvis yaw error| [deg]", title="peak after the push, trials without a fall")
+    success_ax.set(xlabel=moment_label, ylabel="trials without a fall [%]", ylim=(-5, 105), title="success")
+    trace_ax.set(xlabel="time from the push's start [s]", ylabel="pelvis yaw error (against the heading) [deg]",
+                 title=f"{shown:g} N·m")
+    for ax in axes.flat:
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=6)
+        ax.legend(fontsize=7)
     fig.suptitle("G1 walking at 0.3 m/s, a torso yaw moment for 0.05 s (the ALIP paper's Fig. 5 on the whole-body MPC)")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=110)
 
 
 def main() -> None:
