@@ -28,6 +28,20 @@ Definitions (all times in s, velocities in m/s, world frame):
   ``path_completion``: ``path_progress`` / (laps x path length) (1 = back at the end point).
 - obstacle crossing (scenario ``obstacle``): ``success``, ``touched``, ``crossing_time``, the
   perception's detection and errors (:mod:`sim.obstacle_metrics`).
+- yaw disturbances (pushes with a ``moment`` about z, the ``yaw_push`` scenario, ALIP paper section
+  4.2, Fig. 5; :func:`yaw_disturbance_metrics`): the heading error e(t) = ψ(t) − Ψ(t) − e₀, with ψ
+  the base's (the G1's pelvis's) unwrapped yaw [rad], Ψ(t) the integral of the commanded yaw rate
+  since the start of the run (0 walking straight) and e₀ the mean of ψ − Ψ over the
+  ``YAW_AVERAGE_WINDOW`` before the push: how far the disturbance turned the robot away from the
+  heading it would have kept. ``yaw_push_error`` [rad, signed]: the mean of e over the last
+  ``YAW_AVERAGE_WINDOW`` of the run, "the yaw of the base after the robot is stabilized" (the paper
+  records it after the recovery; the mean over two strides removes the gait's own yaw oscillation),
+  None unless the run completed and that window starts ``YAW_SETTLE_TIME`` or more after the
+  push's end; ``yaw_push_error_abs`` its magnitude; ``yaw_push_error_peak``: max |e| after the
+  push's start; ``yaw_push_rate_peak`` / ``yaw_push_rate_before`` [rad/s]: max |ψ̇ − commanded rate|
+  from the push's start to ``YAW_RATE_WINDOW`` after its end / over the window before the push.
+  Given the yaw of the same run without the push (same seed; ``undisturbed_yaw``), Ψ is that yaw
+  instead: the error is then the disturbance's effect alone, without the walk's own heading drift.
 - ``max_stance_slide``: largest distance between the stance foot and its touchdown point (slips).
 - ``max_torque_ratio``: max |tau_command| / torque limit (> 1 means the limits clipped the command);
   ``saturated_fraction``: fraction of ticks with at least one clipped joint.
@@ -50,6 +64,9 @@ from sim.paths import PlanarPath, path_from_parameters, wrap_angle
 HEADING_CORNER_MARGIN = 0.5  # [m] of arc length on each side of a path's corner, left out of the heading error
 AVERAGE_WINDOW = 1.0  # [s], running average of the base velocity (about two steps)
 RECOVERY_BAND = 0.03  # [m/s]
+YAW_AVERAGE_WINDOW = 1.6  # [s], two G1 strides at its desired step period (0.4 s): the pelvis yaw's gait oscillation averages out
+YAW_SETTLE_TIME = 2.0  # [s] after the end of a yaw push, the earliest start of the "after recovery" window (five steps)
+YAW_RATE_WINDOW = 0.1  # [s] after the end of a yaw push, still searched for the peak yaw rate
 PAPER_FIGURES = {
     "velocity_error_x": 5.2e-3,  # [m/s], walk at 0.33 m/s (section IV.B)
     "velocity_error_y": 1.1e-3,  # [m/s]
@@ -119,6 +136,67 @@ def path_metrics(path: PlanarPath, position: np.ndarray, yaw: np.ndarray, laps: 
     error = np.abs(wrap_angle(np.asarray(yaw, dtype=float) - path.heading_at(s)))[away]
     metrics["heading_error_max"] = float(np.max(error)) if error.size else None
     metrics["heading_error_mean"] = float(np.mean(error)) if error.size else None
+    return metrics
+
+
+def yaw_error(t: np.ndarray, yaw: np.ndarray, yaw_rate_command: np.ndarray, push_start: float,
+              undisturbed_yaw: np.ndarray | None = None) -> np.ndarray | None:
+    """The heading error e(t) = ψ(t) − Ψ(t) − e₀ of a yaw disturbance (module docstring) [rad], shape (n,).
+
+    Args:
+        t: (n,) tick times [s], uniformly spaced.
+        yaw: (n,) base yaw, world frame [rad] (wrapped or not: it is unwrapped here).
+        yaw_rate_command: (n,) commanded yaw rate at each tick [rad/s].
+        push_start: start of the disturbance [s]; e₀ is the mean of ψ − Ψ over the ``YAW_AVERAGE_WINDOW`` before it.
+        undisturbed_yaw: (n,) the base yaw [rad] of the same run without the disturbance (same seed, same
+            ticks), or None. Given, it is Ψ: e then holds the disturbance's effect alone, without the
+            heading drift the walk has on its own (a deterministic simulation repeats the run up to the push,
+            so e₀ = 0); None: Ψ is the integral of ``yaw_rate_command``.
+
+    Returns:
+        e (n,), or None when the log has no tick before the push.
+    """
+    t = np.asarray(t, dtype=float)
+    if undisturbed_yaw is None:
+        commanded = np.concatenate([[0.0], np.cumsum(np.asarray(yaw_rate_command, dtype=float)[:-1]) * (t[1] - t[0])])
+    else:
+        commanded = np.unwrap(np.asarray(undisturbed_yaw, dtype=float))
+    relative = np.unwrap(np.asarray(yaw, dtype=float)) - commanded  # ψ − Ψ
+    before = (t >= push_start - YAW_AVERAGE_WINDOW) & (t < push_start)
+    return relative - np.mean(relative[before]) if before.any() else None
+
+
+def yaw_disturbance_metrics(t: np.ndarray, yaw: np.ndarray, yaw_rate_command: np.ndarray, push_start: float,
+                            push_end: float, completed: bool,
+                            undisturbed_yaw: np.ndarray | None = None) -> dict[str, float | None]:
+    """The pelvis's heading error after a yaw disturbance (definitions in the module docstring).
+
+    Args:
+        t, yaw, yaw_rate_command, push_start, undisturbed_yaw: as :func:`yaw_error`.
+        push_end: end of the disturbance [s].
+        completed: the run ended without a fall (else ``yaw_push_error`` is None).
+
+    Returns:
+        ``yaw_push_error`` [rad, signed] and ``yaw_push_error_abs`` [rad] (None when not measurable),
+        ``yaw_push_error_peak`` [rad], ``yaw_push_rate_peak`` and ``yaw_push_rate_before`` [rad/s]
+        (None when the log ends before the push or has no window before it).
+    """
+    t = np.asarray(t, dtype=float)
+    metrics: dict[str, float | None] = dict.fromkeys(
+        ("yaw_push_error", "yaw_push_error_abs", "yaw_push_error_peak", "yaw_push_rate_peak", "yaw_push_rate_before"))
+    error = yaw_error(t, yaw, yaw_rate_command, push_start, undisturbed_yaw)  # e(t) [rad]
+    if error is None or t[-1] < push_start:
+        return metrics
+    rate = np.gradient(error, t[1] - t[0])  # ψ̇ − commanded rate [rad/s]
+    before = (t >= push_start - YAW_AVERAGE_WINDOW) & (t < push_start)
+    during = (t >= push_start) & (t <= push_end + YAW_RATE_WINDOW)
+    metrics["yaw_push_error_peak"] = float(np.max(np.abs(error[t >= push_start])))
+    metrics["yaw_push_rate_peak"] = float(np.max(np.abs(rate[during])))
+    metrics["yaw_push_rate_before"] = float(np.max(np.abs(rate[before])))
+    after = t >= t[-1] - YAW_AVERAGE_WINDOW
+    if completed and t[-1] - YAW_AVERAGE_WINDOW >= push_end + YAW_SETTLE_TIME:
+        metrics["yaw_push_error"] = float(np.mean(error[after]))
+        metrics["yaw_push_error_abs"] = abs(metrics["yaw_push_error"])
     return metrics
 
 
@@ -196,6 +274,11 @@ def compute_metrics(log) -> dict[str, Any]:
             metrics["push_max_dcm_deviation_y"] = float(
                 np.max(np.abs(ticks["dcm"][after, 1] - ticks["dcm"][before][-1, 1]))
             )
+
+    # Yaw disturbance: a push with a moment about z (yaw_push).
+    if "push_start" in events and log.params.get("scenario", {}).get("moment", 0.0) != 0.0:
+        metrics.update(yaw_disturbance_metrics(t, base_yaw(ticks["x"][:, 3:7]), command[:, 2], events["push_start"],
+                                               events["push_end"], log.status == "completed"))
 
     # Path following (waypoints).
     scenario = log.params.get("scenario", {})
