@@ -536,8 +536,9 @@ class FootstepSequencer:
                     length_min: float | None = None) -> tuple:
         """(p_x, p_y, γ, b_x, b_y, active bits) of one step QP (closed form) from the stance foothold (p0x, p0y)
         and the DCM (zx, zy) ``elapsed`` [s] into the stance (world frame [m]), in the heading frame of ``yaw``
-        [rad] (``rotate``: else the world frame is the heading frame), with its foothold outside the obstacles of ``constraints`` (``lift``: where the swinging foot
-        lifted off; ``cross``: the before/beyond decision kept, or None), its duration at least ``duration_min``
+        [rad] (``rotate``: else the world frame is the heading frame), with its foothold outside the obstacles
+        of ``constraints`` (``lift``: where the swinging foot lifted off; ``cross``: the before/beyond decision
+        kept, or None), its duration at least ``duration_min``
         [s] and its length along the heading at least ``length_min`` [m] (None: ``l_min``)."""
         params = self.params
         omega = self._omega
