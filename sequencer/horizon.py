@@ -72,8 +72,10 @@ class PlannedStep:
         double_support: None (the plan's ``double_support``), or this step's own [s]: a *settled* step of a
             quasi-static crossing (``SequencerParams.obstacle_double_support``): its swing lifts off this long
             after the stance began, and until ``double_support - plan.double_support`` after it the planner's
-            model holds the DCM at ``settle_dcm`` (the pendulum's pivot there: the centre of pressure moving
-            within both soles is modelled as a jump of the DCM to that point), the LIPM from it after that.
+            model holds the DCM (the pendulum's pivot under it): where the touchdown left it for the first half
+            of that time, at ``settle_dcm`` for the second (the centre of pressure moving within both soles is
+            modelled as a jump of the DCM to that point; half way, so that the CoM reference does not move on
+            before the foot is down), the LIPM from it after that.
         settle_dcm: world (x, y) [m] the DCM settles at in that double support (the stance foothold before a
             crossing swing; the nominal stance-start offset for the step resuming the walk), or None.
     """
@@ -154,8 +156,12 @@ class FootstepPlan:
         pivot = self.stance_position if self.stance_cop_offset is None else self.stance_position + self.stance_cop_offset
         start, dcm = self.t0, self.dcm_measured
         for step in self.steps:
-            if step.settle_dcm is not None:  # a settled stance: the DCM held at settle_dcm until the LIPM resumes
+            if step.settle_dcm is not None:  # a settled stance: the DCM held, then at settle_dcm, until the LIPM resumes
                 resume = step.stance_start_time + step.double_support - self.double_support
+                hold = 0.5 * (step.stance_start_time + resume)
+                if start < hold:
+                    yield start, dcm, dcm
+                    start = hold
                 if start < resume:
                     yield start, step.settle_dcm, step.settle_dcm
                     start, dcm = resume, step.settle_dcm
@@ -494,7 +500,10 @@ class FootstepSequencer:
                                               constraints, lift, cross_kept)
                 crosses = crossing_of(constraints.obstacles, lift, (tx, ty), yaw, constraints.geometry) is not None
                 if crosses or resume_next:
-                    settle = (p0x, p0y) if crosses else walking  # on the stance foot; or the walk resumes
+                    # before a crossing swing on the stance foot along the heading, with the walking gait's lateral
+                    # offset (the sway of the walk; a DCM held over a 2 cm wide sole for the whole swing made the
+                    # H1's OCP diverge); the walking offset when the walk resumes
+                    settle = (p0x - s * oy, p0y + c * oy) if crosses else walking
                     shift = halt - params.double_support
                     if not steps:
                         stance_start = true_start

@@ -232,9 +232,12 @@ def test_a_quasi_static_crossing_settles_the_dcm_before_each_crossing_swing():
             (step.double_support is None and step.settle_dcm is None), k
     before = plan.steps[lead - 1].position
     assert before[0] + quasi.sole_front <= 1.0 - quasi.obstacle_margin + 1e-9  # the last foot before the box
-    assert np.array_equal(plan.steps[lead].settle_dcm, before)  # the lead swing from the halt on it
-    assert np.array_equal(plan.steps[trailing].settle_dcm, plan.steps[lead].position)  # weight on the lead foot
-    np.testing.assert_allclose(plan.steps[lead].dcm_at_touchdown, before, atol=1e-12)  # it stayed there
+    # the lead swing from a halt on it (along the heading; across it the walk's sway), the trailing swing with the
+    # weight on the lead foot
+    sway = planner.stance_start_dcm(StanceState(plan.steps[lead - 1].foot, before, 0.0, 0.0), COMMAND) - before
+    np.testing.assert_allclose(plan.steps[lead].settle_dcm, before + [0.0, sway[1]], atol=1e-12)
+    np.testing.assert_allclose(plan.steps[trailing].settle_dcm[0], plan.steps[lead].position[0], atol=1e-12)
+    np.testing.assert_allclose(plan.steps[lead].dcm_at_touchdown[0], before[0], atol=1e-12)  # it stayed there
     assert plan.steps[lead].position[0] > 1.1 and plan.steps[trailing].position[0] > 1.1
     for k in (lead, trailing):  # the swing after the double support lasts the crossing duration
         step = plan.steps[k]
@@ -242,8 +245,10 @@ def test_a_quasi_static_crossing_settles_the_dcm_before_each_crossing_swing():
         assert swing >= geometry.step_duration_min - quasi.double_support - 1e-9
         start = step.stance_start_time
         settle_end = start + 0.8 - quasi.double_support
-        np.testing.assert_allclose(plan.dcm_at(np.linspace(start, settle_end - 1e-3, 5)),
-                                   np.tile(step.settle_dcm, (5, 1)), atol=1e-12)
+        held = plan.dcm_at(np.linspace(start, 0.5 * (start + settle_end) - 1e-3, 5))  # where the touchdown left it
+        np.testing.assert_allclose(held, np.tile(held[0], (5, 1)), atol=1e-12)
+        np.testing.assert_allclose(plan.dcm_at(np.linspace(0.5 * (start + settle_end), settle_end - 1e-3, 5)),
+                                   np.tile(step.settle_dcm, (5, 1)), atol=1e-12)  # then at the settle point
         grid_t0 = start + 0.01
         schedule = contact_schedule(plan, grid_t0, 0.02, 50, rounding="nearest")
         rows = schedule.times < start + 0.8 - 0.011
