@@ -500,10 +500,14 @@ class FootstepSequencer:
                                               constraints, lift, cross_kept)
                 crosses = crossing_of(constraints.obstacles, lift, (tx, ty), yaw, constraints.geometry) is not None
                 if crosses or resume_next:
-                    # before a crossing swing on the stance foot along the heading, with the walking gait's lateral
-                    # offset (the sway of the walk; a DCM held over a 2 cm wide sole for the whole swing made the
-                    # H1's OCP diverge); the walking offset when the walk resumes
-                    settle = (p0x - s * oy, p0y + c * oy) if crosses else walking
+                    # before a crossing swing on the stance foot along the heading and across it where the crossing
+                    # duration's LIPM carries the DCM to its nominal offset at a nominal width, (b_y + w_nom)
+                    # exp(-ω T) (held on the stance foot, the QP widened the step to its bound: the H1's lead foot
+                    # 0.6 m aside, out of reach; with the walk's offset the OCP diverged); the walking offset when
+                    # the walk resumes
+                    w_nom, (_, bny), _ = per_stance[stance]
+                    across = (bny + w_nom) * math.exp(-omega * constraints.geometry.step_duration_min)
+                    settle = (p0x - s * across, p0y + c * across) if crosses else walking
                     shift = halt - params.double_support
                     if not steps:
                         stance_start = true_start

@@ -82,8 +82,10 @@ class SequencerParams:
             swing passes over an obstacle lifts off this long after the previous touchdown (instead of
             ``double_support``), a double support in which the centre of pressure brings the DCM onto the
             stance foot; the planner then models that stance as settled (DCM and CoM reference on the stance
-            foothold along the heading, with the walking gait's lateral offset across it; the swing of max(t_min, obstacle_step_duration_min) - double_support after it) and crosses
-            whatever the DCM (no offset tolerance, no aimed last step before the obstacle).
+            foothold along the heading; across it where the crossing step's LIPM reaches the nominal offset at
+            the nominal width; the swing after it lasts at least max(t_min, obstacle_step_duration_min) -
+            double_support), and crosses whatever the DCM (no offset tolerance, no aimed last step before the
+            obstacle); the step after the trailing crossing resumes the walk after as long a double support.
         sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m],
             >= 0 (0: a point foot); sole_half_width: its half width [m], >= 0. The footholds keep the whole
             sole rectangle outside the grown footprints.

@@ -234,8 +234,12 @@ def test_a_quasi_static_crossing_settles_the_dcm_before_each_crossing_swing():
     assert before[0] + quasi.sole_front <= 1.0 - quasi.obstacle_margin + 1e-9  # the last foot before the box
     # the lead swing from a halt on it (along the heading; across it the walk's sway), the trailing swing with the
     # weight on the lead foot
+    np.testing.assert_allclose(plan.steps[lead].settle_dcm[0], before[0], atol=1e-12)
+    inward = plan.steps[lead].settle_dcm[1] - before[1]  # towards the landing side, less than the walk's sway
     sway = planner.stance_start_dcm(StanceState(plan.steps[lead - 1].foot, before, 0.0, 0.0), COMMAND) - before
-    np.testing.assert_allclose(plan.steps[lead].settle_dcm, before + [0.0, sway[1]], atol=1e-12)
+    assert np.sign(inward) == np.sign(sway[1]) and abs(inward) < abs(sway[1])
+    # which carries the DCM to the nominal width: the lead foot lands a pelvis width aside, not at the bound
+    np.testing.assert_allclose(abs(plan.steps[lead].position[1] - before[1]), quasi.pelvis_width, atol=1e-9)
     np.testing.assert_allclose(plan.steps[trailing].settle_dcm[0], plan.steps[lead].position[0], atol=1e-12)
     np.testing.assert_allclose(plan.steps[lead].dcm_at_touchdown[0], before[0], atol=1e-12)  # it stayed there
     assert plan.steps[lead].position[0] > 1.1 and plan.steps[trailing].position[0] > 1.1
