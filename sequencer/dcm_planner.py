@@ -84,6 +84,8 @@ class DcmFootstepPlanner:
         self.corrections = LipmCorrections.from_params(params) if corrections is None else corrections
         self.clamp_elapsed = clamp_elapsed
         self._swing_decision: tuple | None = None  # (stance foot, t_start, crossing?) of the swing in progress
+        self._landing: tuple | None = None  # (foot, settled crossing?) of the last plan's first step
+        self._resume: tuple | None = None  # (stance foot, t_start, resume?) of the current stance
 
     # ------------------------------------------------------------------ model
     @property
@@ -151,7 +153,10 @@ class DcmFootstepPlanner:
         before or beyond them (:mod:`sequencer.footholds`); a step whose swing passes over one carries its
         :class:`~sequencer.footholds.Crossing` (from ``stance.swing_liftoff`` for the swing in progress). The
         swing in progress keeps the before/beyond decision of the first plan after its lift-off (the end of the
-        double support). Empty: the plan without obstacles, bit for bit.
+        double support). With ``params.obstacle_double_support`` > 0 (a quasi-static crossing) a crossing swing
+        lifts off after that long a double support, and the stance that begins with its touchdown resumes the walk
+        with another such step (``first_resume`` of :meth:`FootstepSequencer.plan`). Empty: the plan without
+        obstacles, bit for bit.
 
         Raises:
             ParameterError: bad input, or a command outside :meth:`command_range` (clip it first).
@@ -176,13 +181,20 @@ class DcmFootstepPlanner:
         swinging = len(obstacles) > 0 and t >= stance.t_start + self.params.double_support
         kept = self._swing_decision[2] if swinging and self._swing_decision is not None \
             and self._swing_decision[:2] == key else None
+        # a stance that began with the touchdown of a settled crossing swing resumes the walk with a settled step
+        if self._resume is None or self._resume[:2] != key:
+            landed = self._landing is not None and self._landing[0] == stance.foot and self._landing[1]
+            self._resume = (*key, bool(landed and len(obstacles) > 0))
         plan = self.sequencer.plan(
             t, stance.foot, stance.position, dcm, stance.t_start, self.clamp_elapsed,
             stance_yaw=stance.yaw, yaw_rate=command.yaw_rate, velocity=(command.v_x, command.v_y),
             corrections=self.corrections, obstacles=obstacles, liftoff=stance.swing_liftoff, first_crossing=kept,
+            first_resume=self._resume[2],
         )
         if swinging and kept is None:
             self._swing_decision = (*key, plan.steps[0].crossing is not None)
+        first = plan.steps[0]
+        self._landing = (first.foot, first.crossing is not None and first.settle_dcm is not None)
         return plan
 
     def stance_start_dcm(self, stance: StanceState, command: VelocityCommand) -> np.ndarray:

@@ -81,6 +81,10 @@ class FootholdGeometry:
         offset_tolerance: a step crosses only if its DCM offset at touchdown, along the heading, is within
             this of the nominal one [m] (else the robot takes one more step before the obstacle, aiming at
             the offset the crossing needs).
+        halt_double_support: > 0: a quasi-static crossing (``SequencerParams.obstacle_double_support`` [s]): the
+            crossing swing lifts off after this long a double support that settles the DCM on the stance foot,
+            so a step crosses whatever its DCM offset (no tolerance) and the last step before the obstacle
+            aims at no particular offset; 0: the dynamic crossing above.
     """
 
     margin: float
@@ -91,6 +95,7 @@ class FootholdGeometry:
     sole_half_width: float = 0.0
     offset_tolerance: float = math.inf
     approach_margin: float = 0.0
+    halt_double_support: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -281,7 +286,9 @@ class FootholdConstraints:
                 continue
             along, beside = self._options(hit, bounds, step_length_nominal, offset_nominal)
             if along and along[0][2]:  # cross, unless the DCM cannot carry it: then one more step before
-                if cross is None:
+                if cross is None and self.geometry.halt_double_support > 0.0:
+                    late = False  # quasi-static: the double support before the swing settles the DCM
+                elif cross is None:
                     crossing = solve(*along[0][:2])
                     sign = 1.0 if step_length_nominal > 0.0 else -1.0
                     late = sign * (offset_nominal - crossing.hx) > self.geometry.offset_tolerance
@@ -313,7 +320,8 @@ class FootholdConstraints:
         inside = a < 0.0 < b and c < 0.0 < d  # the stance sole itself is within the grown footprint
         ahead = a + b > 0.0  # the box's middle ahead of the stance along the heading
         prepare = None  # the far side the next step crosses, when this may be the last step before it
-        if not inside and (ahead == (step_length_nominal > 0.0)) and step_length_nominal != 0.0 and b - a <= reach:
+        if not inside and (ahead == (step_length_nominal > 0.0)) and step_length_nominal != 0.0 and b - a <= reach \
+                and self.geometry.halt_double_support == 0.0:
             prepare = b if ahead else a  # crossable from the foothold at the safe distance
         if inside:  # either side, no crossing step
             along = [((l_lo, min(l_hi, a), w_lo, w_hi, t_lo), None, False),

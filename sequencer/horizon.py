@@ -69,6 +69,15 @@ class PlannedStep:
         crossing: the obstacle this step's swing passes over (a :class:`sequencer.footholds.Crossing`: the
             obstacle, the lift-off point and the part of the path over it), or None: the whole-body OCP lifts
             a crossing swing over the obstacle (``docs/sequencer.md``, "Obstacles").
+        double_support: None (the plan's ``double_support``), or this step's own [s]: a *settled* step of a
+            quasi-static crossing (``SequencerParams.obstacle_double_support``): its swing lifts off this long
+            after the stance began, and until ``double_support - plan.double_support`` after it the planner's
+            model holds the DCM (the pendulum's pivot under it): where the touchdown left it for the first half
+            of that time, at ``settle_dcm`` for the second (the centre of pressure moving within both soles is
+            modelled as a jump of the DCM to that point; half way, so that the CoM reference does not move on
+            before the foot is down), the LIPM from it after that.
+        settle_dcm: world (x, y) [m] the DCM settles at in that double support (the stance foothold before a
+            crossing swing; the nominal stance-start offset for the step resuming the walk), or None.
     """
 
     foot: str
@@ -81,6 +90,8 @@ class PlannedStep:
     yaw: float = 0.0
     cop_offset: np.ndarray | None = None
     crossing: Crossing | None = None
+    double_support: float | None = None
+    settle_dcm: np.ndarray | None = None
 
     @property
     def duration(self) -> float:
@@ -143,10 +154,21 @@ class FootstepPlan:
         """(start time, pendulum pivot, DCM at start) of every stance, the current one first (the pivot is the
         foothold, shifted by the CoP offset when the plan has one)."""
         pivot = self.stance_position if self.stance_cop_offset is None else self.stance_position + self.stance_cop_offset
-        yield self.t0, pivot, self.dcm_measured
+        start, dcm = self.t0, self.dcm_measured
         for step in self.steps:
-            yield step.touchdown_time, (step.position if step.cop_offset is None else step.position + step.cop_offset), \
-                step.dcm_at_touchdown
+            if step.settle_dcm is not None:  # a settled stance: the DCM held, then at settle_dcm, until the LIPM resumes
+                resume = step.stance_start_time + step.double_support - self.double_support
+                hold = 0.5 * (step.stance_start_time + resume)
+                if start < hold:
+                    yield start, dcm, dcm
+                    start = hold
+                if start < resume:
+                    yield start, step.settle_dcm, step.settle_dcm
+                    start, dcm = resume, step.settle_dcm
+            yield start, pivot, dcm
+            start, dcm = step.touchdown_time, step.dcm_at_touchdown
+            pivot = step.position if step.cop_offset is None else step.position + step.cop_offset
+        yield start, pivot, dcm
 
     def _check_times(self, t) -> np.ndarray:
         times = np.asarray(t, dtype=float)
@@ -234,6 +256,8 @@ class FootstepPlan:
 
     def _lipm_com_scalar(self, t: float, com0: np.ndarray) -> np.ndarray:
         """lipm_com_at for one time, on plain floats (called every control cycle)."""
+        if any(step.settle_dcm is not None for step in self.steps):
+            return self.lipm_com_at(np.array([t]), com0)[0]
         omega = self.omega
         cx, cy = float(com0[0]), float(com0[1])
         start = self.t0
@@ -354,6 +378,7 @@ class FootstepSequencer:
         obstacles=(),
         liftoff=None,
         first_crossing: bool | None = None,
+        first_resume: bool = False,
     ) -> FootstepPlan:
         """Run Algorithm 1 from the measured state.
 
@@ -377,6 +402,9 @@ class FootstepSequencer:
                 swing is then not marked as a crossing, nor lengthened).
             first_crossing: the before/beyond decision of the first step kept (True: it crosses when one step
                 reaches beyond; False: it stays before), None: decided now (see :mod:`sequencer.footholds`).
+            first_resume: the current stance began with the touchdown of a settled crossing swing (quasi-static
+                crossing, ``params.obstacle_double_support`` > 0): its next step, unless it crosses too, is the
+                settled step that resumes the walk (``PlannedStep.settle_dcm``).
 
         Returns:
             FootstepPlan whose last step lands at or after t + horizon.
@@ -408,6 +436,9 @@ class FootstepSequencer:
         constraints = None
         if len(obstacles):
             constraints = FootholdConstraints(obstacles, params.foothold_geometry(), params.t_max, self._omega)
+            if params.obstacle_double_support > 0.0 and self.backend_name != "exact":
+                raise ParameterError(f"obstacle_double_support={params.obstacle_double_support} s (a quasi-static "
+                                     f"crossing) is planned by the 'exact' backend only, not {self.backend_name!r}")
             if liftoff is not None:
                 liftoff = np.asarray(liftoff, dtype=float)
                 if liftoff.shape != (2,) or not np.all(np.isfinite(liftoff)):
@@ -424,7 +455,8 @@ class FootstepSequencer:
                 )
         if self.backend_name == "exact":
             steps = self._plan_exact(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate,
-                                     gait.step_length, per_stance, constraints, liftoff, first_crossing)
+                                     gait.step_length, per_stance, constraints, liftoff, first_crossing,
+                                     t - t_stance_start, first_resume)
         else:
             steps = self._plan_backend(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate, gait,
                                        constraints, liftoff, first_crossing)
@@ -438,79 +470,143 @@ class FootstepSequencer:
 
     def _plan_exact(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, l_nom, per_stance,
                     constraints: FootholdConstraints | None = None, liftoff=None,
-                    first_crossing: bool | None = None) -> list[PlannedStep]:
+                    first_crossing: bool | None = None, elapsed_true: float | None = None,
+                    first_resume: bool = False) -> list[PlannedStep]:
         params = self.params
         omega = self._omega
-        a1, a2, a3 = params.alpha1, params.alpha2, params.alpha3
-        l_min, l_max = params.l_min, params.l_max
-        gamma_nom, g_hi = self._gamma_nom, self._gamma_hi
+        elapsed_true = elapsed if elapsed_true is None else elapsed_true
+        true_start = t - elapsed_true if elapsed_true != elapsed else stance_start  # not clamped to t_max
         t_end = t + params.horizon
         rotate = yaw != 0.0 or yaw_rate != 0.0  # else the world frame is every stance's heading frame
         p0x, p0y = float(p0[0]), float(p0[1])
         p0_first = (p0x, p0y)
         zx, zy = float(dcm[0]), float(dcm[1])
         steps, vectors = [], []  # (foot, touchdown, stance start, active bits, yaw), (p_T, b_T, zeta_T)
+        halt = constraints.geometry.halt_double_support if constraints is not None else 0.0
+        resume_next = first_resume  # the step ending the current stance resumes the walk after a crossing
         for _ in range(self._max_steps):
-            w_nom, (bnx, bny), (w_lo, w_hi) = per_stance[stance]
-            if elapsed > 0.0:
-                decay = math.exp(-omega * elapsed)
-                g_lo = math.exp(omega * max(params.t_min, elapsed))
-            else:
-                decay = 1.0
-                g_lo = self._gamma_lo0
-            ax, ay = (zx - p0x) * decay, (zy - p0y) * decay
-            if rotate:  # solve in the heading frame of the stance, rotate the step and the offset back
+            lift = liftoff if not steps else (vectors[-2][:2] if len(steps) >= 2 else p0_first)
+            cross_kept = None if steps else first_crossing
+            px, py, gamma, bx, by, bits = self._exact_step(
+                p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom, constraints, lift, cross_kept)
+            settle, start_qp = None, stance_start
+            if halt > 0.0:  # quasi-static crossing (SequencerParams.obstacle_double_support)
                 c, s = math.cos(yaw), math.sin(yaw)
-                dx, dy, gamma, hx, hy, bits = solve_exact_scalars(
-                    0.0, 0.0, c * ax + s * ay, c * ay - s * ax, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny,
-                    l_min, l_max, w_lo, w_hi, g_lo, g_hi,
-                )
-                px, py = p0x + (c * dx - s * dy), p0y + (s * dx + c * dy)
-                bx, by = c * hx - s * hy, s * hx + c * hy
-            else:
-                px, py, gamma, bx, by, bits = solve_exact_scalars(
-                    p0x, p0y, ax, ay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny,
-                    l_min, l_max, w_lo, w_hi, g_lo, g_hi,
-                )
-            if constraints is not None:  # footholds outside the obstacles (sequencer.footholds)
-                c, s = math.cos(yaw), math.sin(yaw)
-                hax, hay = c * ax + s * ay, c * ay - s * ax  # the DCM growth in the heading frame
-
-                def solve(bounds, aim, hax=hax, hay=hay, w_nom=w_nom, bnx=bnx, bny=bny, elapsed=elapsed):
-                    low = math.exp(omega * max(bounds[4], elapsed))
-                    bnx = bnx if aim is None else aim
-                    dx, dy, g, hx, hy, b = solve_exact_scalars(
-                        0.0, 0.0, hax, hay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny, *bounds[:4], low, g_hi)
-                    cost = a1 * ((dx - l_nom) ** 2 + (dy - w_nom) ** 2) + a2 * (g - gamma_nom) ** 2 \
-                        + a3 * ((hx - bnx) ** 2 + (hy - bny) ** 2)
-                    return StepCandidate(dx, dy, g, hx, hy, b, cost, math.log(g) / omega)
-
-                rx, ry = px - p0x, py - p0y
-                nominal = StepCandidate(c * rx + s * ry, c * ry - s * rx, gamma, c * bx + s * by, c * by - s * bx,
-                                        bits, 0.0, math.log(gamma) / omega)
-                chosen, changed = constraints.choose(
-                    (p0x, p0y), yaw, (l_min, l_max, w_lo, w_hi, params.t_min), nominal, solve,
-                    liftoff if not steps else (vectors[-2][:2] if len(steps) >= 2 else p0_first), l_nom, bnx,
-                    None if steps else first_crossing)
-                if changed:
-                    px, py = p0x + (c * chosen.dx - s * chosen.dy), p0y + (s * chosen.dx + c * chosen.dy)
-                    bx, by = c * chosen.hx - s * chosen.hy, s * chosen.hx + c * chosen.hy
-                    gamma, bits = chosen.gamma, chosen.bits
+                ox, oy = per_stance[other_foot(stance)][1]
+                walking = (p0x + c * ox - s * oy, p0y + s * ox + c * oy)  # the nominal DCM at a stance start
+                # the step crosses when the nominal gait's step from this stance would (not the measured DCM's:
+                # settled on the stance foot, the DCM asks for a step in place and would never cross)
+                tx, ty, *_ = self._exact_step(p0x, p0y, *walking, 0.0, yaw, rotate, stance, per_stance, l_nom,
+                                              constraints, lift, cross_kept)
+                crosses = crossing_of(constraints.obstacles, lift, (tx, ty), yaw, constraints.geometry) is not None
+                if crosses or resume_next:
+                    # before a crossing swing on the stance foot along the heading and across it where the crossing
+                    # duration's LIPM carries the DCM to its nominal offset at a nominal width, (b_y + w_nom)
+                    # exp(-ω T) (held on the stance foot, the QP widened the step to its bound: the H1's lead foot
+                    # 0.6 m aside, out of reach; with the walk's offset the OCP diverged); the walking offset when
+                    # the walk resumes
+                    w_nom, (_, bny), _ = per_stance[stance]
+                    across = (bny + w_nom) * math.exp(-omega * constraints.geometry.step_duration_min)
+                    settle = (p0x - s * across, p0y + c * across) if crosses else walking
+                    shift = halt - params.double_support
+                    if not steps:
+                        stance_start = true_start
+                    start_qp = stance_start + shift
+                    measured = not steps and elapsed_true >= shift  # the swing has begun: the measured DCM
+                    qz = (zx, zy) if measured else settle
+                    q_elapsed = min(elapsed_true - shift, params.t_max) if measured else 0.0
+                    t_min = constraints.geometry.step_duration_min if crosses else 0.0
+                    step = self._exact_step(p0x, p0y, *qz, q_elapsed, yaw, rotate, stance, per_stance, l_nom,
+                                            constraints, lift, True if crosses else cross_kept, duration_min=t_min)
+                    if crosses and crossing_of(constraints.obstacles, lift, step[:2], yaw,
+                                               constraints.geometry) is None:  # short of it: where the gait crosses
+                        step = self._exact_step(p0x, p0y, *qz, q_elapsed, yaw, rotate, stance, per_stance, l_nom,
+                                                constraints, lift, True, duration_min=t_min,
+                                                length_min=c * (tx - p0x) + s * (ty - p0y))
+                    px, py, gamma, bx, by, bits = step
+                resume_next = crosses
             duration = math.log(gamma) / omega
-            touchdown = stance_start + duration
-            yaw = yaw + yaw_rate * duration
+            touchdown = max(start_qp + duration, t) if settle is not None else start_qp + duration
+            yaw = yaw + yaw_rate * (duration if settle is None else touchdown - stance_start)
             landing = "right" if stance == "left" else "left"
             zx, zy = px + bx, py + by
-            steps.append((landing, touchdown, stance_start, bits, yaw))
+            steps.append((landing, touchdown, stance_start, bits, yaw, settle))
             vectors.append((px, py, bx, by, zx, zy))
             if touchdown >= t_end:
                 break
-            stance, p0x, p0y, stance_start, elapsed = landing, px, py, touchdown, 0.0
+            stance, p0x, p0y, stance_start, elapsed, elapsed_true = landing, px, py, touchdown, 0.0, 0.0
         values = np.array(vectors)  # one array for all steps: their vectors are rows of it
         return [
             PlannedStep(landing, values[k, 0:2], touchdown, values[k, 2:4], values[k, 4:6], start, _ACTIVE_NAMES[bits], yaw)
-            for k, (landing, touchdown, start, bits, yaw) in enumerate(steps)
+            if settle is None else
+            PlannedStep(landing, values[k, 0:2], touchdown, values[k, 2:4], values[k, 4:6], start, _ACTIVE_NAMES[bits], yaw,
+                        double_support=halt, settle_dcm=np.array(settle))
+            for k, (landing, touchdown, start, bits, yaw, settle) in enumerate(steps)
         ]
+
+    def _exact_step(self, p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom,
+                    constraints: FootholdConstraints | None, lift, cross, duration_min: float = 0.0,
+                    length_min: float | None = None) -> tuple:
+        """(p_x, p_y, γ, b_x, b_y, active bits) of one step QP (closed form) from the stance foothold (p0x, p0y)
+        and the DCM (zx, zy) ``elapsed`` [s] into the stance (world frame [m]), in the heading frame of ``yaw``
+        [rad] (``rotate``: else the world frame is the heading frame), with its foothold outside the obstacles
+        of ``constraints`` (``lift``: where the swinging foot lifted off; ``cross``: the before/beyond decision
+        kept, or None), its duration at least ``duration_min``
+        [s] and its length along the heading at least ``length_min`` [m] (None: ``l_min``)."""
+        params = self.params
+        omega = self._omega
+        a1, a2, a3 = params.alpha1, params.alpha2, params.alpha3
+        l_min, l_max = params.l_min, params.l_max
+        if length_min is not None:
+            l_min, l_max = length_min, max(l_max, length_min)
+        gamma_nom, g_hi = self._gamma_nom, self._gamma_hi
+        w_nom, (bnx, bny), (w_lo, w_hi) = per_stance[stance]
+        if elapsed > 0.0:
+            decay = math.exp(-omega * elapsed)
+            g_lo = math.exp(omega * max(params.t_min, elapsed))
+        else:
+            decay = 1.0
+            g_lo = self._gamma_lo0
+        if duration_min > 0.0:
+            g_lo = max(g_lo, math.exp(omega * duration_min))
+        ax, ay = (zx - p0x) * decay, (zy - p0y) * decay
+        if rotate:  # solve in the heading frame of the stance, rotate the step and the offset back
+            c, s = math.cos(yaw), math.sin(yaw)
+            dx, dy, gamma, hx, hy, bits = solve_exact_scalars(
+                0.0, 0.0, c * ax + s * ay, c * ay - s * ax, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny,
+                l_min, l_max, w_lo, w_hi, g_lo, g_hi,
+            )
+            px, py = p0x + (c * dx - s * dy), p0y + (s * dx + c * dy)
+            bx, by = c * hx - s * hy, s * hx + c * hy
+        else:
+            px, py, gamma, bx, by, bits = solve_exact_scalars(
+                p0x, p0y, ax, ay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny,
+                l_min, l_max, w_lo, w_hi, g_lo, g_hi,
+            )
+        if constraints is not None:  # footholds outside the obstacles (sequencer.footholds)
+            c, s = math.cos(yaw), math.sin(yaw)
+            hax, hay = c * ax + s * ay, c * ay - s * ax  # the DCM growth in the heading frame
+
+            def solve(bounds, aim):
+                low = math.exp(omega * max(bounds[4], elapsed, duration_min))
+                bx_nom = bnx if aim is None else aim
+                dx, dy, g, hx, hy, b = solve_exact_scalars(
+                    0.0, 0.0, hax, hay, a1, a2, a3, l_nom, w_nom, gamma_nom, bx_nom, bny, *bounds[:4], low, g_hi)
+                cost = a1 * ((dx - l_nom) ** 2 + (dy - w_nom) ** 2) + a2 * (g - gamma_nom) ** 2 \
+                    + a3 * ((hx - bx_nom) ** 2 + (hy - bny) ** 2)
+                return StepCandidate(dx, dy, g, hx, hy, b, cost, math.log(g) / omega)
+
+            rx, ry = px - p0x, py - p0y
+            nominal = StepCandidate(c * rx + s * ry, c * ry - s * rx, gamma, c * bx + s * by, c * by - s * bx,
+                                    bits, 0.0, math.log(gamma) / omega)
+            chosen, changed = constraints.choose(
+                (p0x, p0y), yaw, (l_min, l_max, w_lo, w_hi, max(params.t_min, duration_min)), nominal, solve, lift,
+                l_nom, bnx, cross)
+            if changed:
+                px, py = p0x + (c * chosen.dx - s * chosen.dy), p0y + (s * chosen.dx + c * chosen.dy)
+                bx, by = c * chosen.hx - s * chosen.hy, s * chosen.hx + c * chosen.hy
+                gamma, bits = chosen.gamma, chosen.bits
+        return px, py, gamma, bx, by, bits
 
     def _plan_backend(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, gait,
                       constraints: FootholdConstraints | None = None, liftoff=None,

@@ -78,6 +78,14 @@ class SequencerParams:
         obstacle_offset_tolerance: a step crosses an obstacle only if its DCM offset at touchdown is at most
             this much behind the nominal one, along the heading [m], >= 0 (else one more step before it,
             aiming at the offset the crossing needs; :mod:`sequencer.footholds`).
+        obstacle_double_support: a quasi-static crossing [s], 0 (off) or in [double_support, 5]: a step whose
+            swing passes over an obstacle lifts off this long after the previous touchdown (instead of
+            ``double_support``), a double support in which the centre of pressure brings the DCM onto the
+            stance foot; the planner then models that stance as settled (DCM and CoM reference on the stance
+            foothold along the heading; across it where the crossing step's LIPM reaches the nominal offset at
+            the nominal width; the swing after it lasts at least max(t_min, obstacle_step_duration_min) -
+            double_support), and crosses whatever the DCM (no offset tolerance, no aimed last step before the
+            obstacle); the step after the trailing crossing resumes the walk after as long a double support.
         sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m],
             >= 0 (0: a point foot); sole_half_width: its half width [m], >= 0. The footholds keep the whole
             sole rectangle outside the grown footprints.
@@ -111,6 +119,7 @@ class SequencerParams:
     obstacle_step_length_max: float = 0.3
     obstacle_step_duration_min: float = 0.0
     obstacle_offset_tolerance: float = 0.03
+    obstacle_double_support: float = 0.0
     sole_front: float = 0.0
     sole_rear: float = 0.0
     sole_half_width: float = 0.0
@@ -161,6 +170,9 @@ class SequencerParams:
         if not 0.0 <= self.obstacle_step_duration_min <= self.t_max:
             raise ParameterError(f"obstacle_step_duration_min={self.obstacle_step_duration_min} s must be in "
                                  f"[0, t_max={self.t_max} s]")
+        if not (self.obstacle_double_support == 0.0 or self.double_support <= self.obstacle_double_support <= 5.0):
+            raise ParameterError(f"obstacle_double_support={self.obstacle_double_support} s must be 0 or in "
+                                 f"[double_support={self.double_support} s, 5 s]")
         self.check_velocity(self.v_x, self.v_y)
 
     # ------------------------------------------------------------------ derived values
@@ -197,7 +209,8 @@ class SequencerParams:
         (:class:`sequencer.footholds.FootholdGeometry`; effective crossing bounds: max with l_max, t_min)."""
         return FootholdGeometry(self.obstacle_margin, max(self.l_max, self.obstacle_step_length_max),
                                 max(self.t_min, self.obstacle_step_duration_min), self.sole_front, self.sole_rear,
-                                self.sole_half_width, self.obstacle_offset_tolerance, self.obstacle_approach_margin)
+                                self.sole_half_width, self.obstacle_offset_tolerance, self.obstacle_approach_margin,
+                                self.obstacle_double_support)
 
     # ------------------------------------------------------------------ velocity commands
     def velocity_range(self) -> dict[str, tuple[float, float]]:

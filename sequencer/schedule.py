@@ -111,7 +111,8 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
     The plan is a sequence of touchdowns, one foot each (``plan.steps[i].foot`` lands at
     ``plan.steps[i].touchdown_time``). The foot landing at touchdown i lifts off
     ``plan.double_support`` seconds after the previous touchdown (after ``plan.t_stance_start``
-    for the first one) and swings until its touchdown; every other foot is in contact. Nodes before
+    for the first one; a step with its own ``double_support``, a settled step of a quasi-static
+    crossing, that long after) and swings until its touchdown; every other foot is in contact. Nodes before
     ``plan.t_stance_start`` (a plan for a stance that has not begun: a start from standing, see
     :meth:`sequencer.dcm_planner.DcmFootstepPlanner.plan`) have every foot in contact. With
     ``double_support = 0`` (point feet) exactly one foot of a biped is in stance between two
@@ -173,12 +174,14 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
     node_interval, node_times = interval, times
     start = np.concatenate([[plan.t_stance_start], touchdowns])[interval]  # the previous touchdown
     end = touchdowns[interval]
-    double_support = float(plan.double_support)
+    double_support = _double_supports(plan)[interval]
     start = start + double_support  # lift-off of the landing foot
-    if double_support > 0.0 and np.any(end <= start):
-        late = float(end[np.argmax(end <= start)])
+    short = (double_support > 0.0) & (end <= start)
+    if np.any(short):
+        late = int(np.argmax(short))
         raise ParameterError(
-            f"double_support={double_support} s leaves no swing before the touchdown at {late:.4g} s"
+            f"double_support={float(double_support[late])} s leaves no swing before the touchdown at "
+            f"{float(end[late]):.4g} s"
         )
     swinging = times + shift >= start  # (all nodes for point feet, once the stance has begun)
     rows, interval, start, end = rows[swinging], interval[swinging], start[swinging], end[swinging]
@@ -209,6 +212,14 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
         swing_duration=swing_duration, touchdown_position=touchdown_position, touchdown_yaw=touchdown_yaw,
         contact_yaw=contact_yaw,
     )
+
+
+def _double_supports(plan) -> np.ndarray:
+    """Double support before each step's swing [s], shape (K,): the step's own ``double_support``, else the
+    plan's."""
+    default = float(plan.double_support)
+    own = [getattr(step, "double_support", None) for step in plan.steps]
+    return np.array([default if value is None else float(value) for value in own])
 
 
 def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_times=None,
@@ -253,6 +264,9 @@ def timed_contact_schedule(plan, t0: float, dt: float, n_nodes: int, touchdown_t
             have no node), or ``touchdown_times`` of the wrong shape, not finite, unordered or
             moving an event into or out of the horizon.
     """
+    if any(getattr(step, "double_support", None) is not None for step in plan.steps):
+        raise ParameterError("timed_contact_schedule takes one double support for all steps; the plan has steps "
+                             "with their own (a quasi-static crossing): use contact_schedule")
     nominal = contact_schedule(plan, t0, dt, n_nodes, rounding="nearest")
     t0, dt, n_nodes = float(t0), float(dt), int(n_nodes)
     t_end = t0 + n_nodes * dt

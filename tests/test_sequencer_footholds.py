@@ -207,3 +207,76 @@ def test_the_swing_in_progress_keeps_its_before_or_beyond_decision():
     crossing = fresh.plan(0.2, stance_fresh, ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm), COMMAND,
                           obstacles=(box,)).steps[0]
     assert crossing.crossing is not None
+
+
+def test_a_quasi_static_crossing_settles_the_dcm_before_each_crossing_swing():
+    """obstacle_double_support > 0: both crossing swings (the lead foot's from the last foot before the box, the
+    trailing foot's from the lead foot beyond it) and the step resuming the walk lift off after that long a double
+    support, in which the plan's DCM rests on the settle point (the stance foothold before a crossing swing); the
+    contact schedule keeps both feet down for it; the steps before and after walk as without it."""
+    from sequencer.schedule import contact_schedule, timed_contact_schedule
+
+    quasi = dataclasses.replace(H1, obstacle_double_support=0.8, horizon=8.0)
+    box = Obstacle(np.array([1.05, 0.0]), 0.0, 0.1, 1.2, 0.1)
+    planner = DcmFootstepPlanner(quasi)
+    stance, measured = _start(planner)
+    plan = planner.plan(0.0, stance, measured, COMMAND, obstacles=(box,))
+    geometry = quasi.foothold_geometry()
+    assert _sole_overlaps(plan, box, geometry) == []
+    crossing = [k for k, step in enumerate(plan.steps) if step.crossing is not None]
+    assert len(crossing) == 2 and crossing[1] == crossing[0] + 1  # the lead foot, then the trailing foot
+    lead, trailing = crossing
+    for k, step in enumerate(plan.steps):
+        settled = lead <= k <= trailing + 1
+        assert (step.double_support == 0.8 and step.settle_dcm is not None) if settled else \
+            (step.double_support is None and step.settle_dcm is None), k
+    before = plan.steps[lead - 1].position
+    assert before[0] + quasi.sole_front <= 1.0 - quasi.obstacle_margin + 1e-9  # the last foot before the box
+    # the lead swing from a halt on it (along the heading; across it the walk's sway), the trailing swing with the
+    # weight on the lead foot
+    np.testing.assert_allclose(plan.steps[lead].settle_dcm[0], before[0], atol=1e-12)
+    inward = plan.steps[lead].settle_dcm[1] - before[1]  # towards the landing side, less than the walk's sway
+    sway = planner.stance_start_dcm(StanceState(plan.steps[lead - 1].foot, before, 0.0, 0.0), COMMAND) - before
+    assert np.sign(inward) == np.sign(sway[1]) and abs(inward) < abs(sway[1])
+    # which carries the DCM to the nominal width: the lead foot lands a pelvis width aside, not at the bound
+    np.testing.assert_allclose(abs(plan.steps[lead].position[1] - before[1]), quasi.pelvis_width, atol=1e-9)
+    np.testing.assert_allclose(plan.steps[trailing].settle_dcm[0], plan.steps[lead].position[0], atol=1e-12)
+    np.testing.assert_allclose(plan.steps[lead].dcm_at_touchdown[0], before[0], atol=1e-12)  # it stayed there
+    assert plan.steps[lead].position[0] > 1.1 and plan.steps[trailing].position[0] > 1.1
+    for k in (lead, trailing):  # the swing after the double support lasts the crossing duration
+        step = plan.steps[k]
+        swing = step.touchdown_time - step.stance_start_time - 0.8
+        assert swing >= geometry.step_duration_min - quasi.double_support - 1e-9
+        start = step.stance_start_time
+        settle_end = start + 0.8 - quasi.double_support
+        held = plan.dcm_at(np.linspace(start, 0.5 * (start + settle_end) - 1e-3, 5))  # where the touchdown left it
+        np.testing.assert_allclose(held, np.tile(held[0], (5, 1)), atol=1e-12)
+        np.testing.assert_allclose(plan.dcm_at(np.linspace(0.5 * (start + settle_end), settle_end - 1e-3, 5)),
+                                   np.tile(step.settle_dcm, (5, 1)), atol=1e-12)  # then at the settle point
+        grid_t0 = start + 0.01
+        schedule = contact_schedule(plan, grid_t0, 0.02, 50, rounding="nearest")
+        rows = schedule.times < start + 0.8 - 0.011
+        assert schedule.in_contact[rows].all()  # both feet on the ground through the long double support
+        j = schedule.feet.index(step.foot)
+        assert not schedule.in_contact[(schedule.times > start + 0.81) & (schedule.times < step.touchdown_time - 0.011),
+                                       j].any()
+    with pytest.raises(ParameterError, match="use contact_schedule"):
+        timed_contact_schedule(plan, 0.0, 0.02, 50)
+    # the walk resumes: the steps after the resuming one are walking steps
+    steps = np.diff(_along(plan, 0.0))
+    assert np.all(np.abs(steps[trailing + 2:]) <= quasi.l_max + 1e-9) and plan.steps[-1].position[0] > 1.5
+    # the plan without obstacles does not change
+    _assert_plans_equal(DcmFootstepPlanner(quasi).plan(0.0, stance, measured, COMMAND),
+                        DcmFootstepPlanner(dataclasses.replace(quasi, obstacle_double_support=0.0)).plan(
+                            0.0, stance, measured, COMMAND))
+
+
+def test_quasi_static_crossing_bad_input():
+    with pytest.raises(ParameterError, match="obstacle_double_support"):
+        dataclasses.replace(H1, obstacle_double_support=0.05)  # shorter than the walking double support
+    with pytest.raises(ParameterError, match="obstacle_double_support"):
+        dataclasses.replace(H1, obstacle_double_support=6.0)
+    planner = DcmFootstepPlanner(dataclasses.replace(H1, obstacle_double_support=0.8), backend="osqp")
+    stance, measured = _start(planner)
+    with pytest.raises(ParameterError, match="exact"):
+        planner.plan(0.0, stance, measured, COMMAND, obstacles=(Obstacle(np.array([1.0, 0.0]), 0.0, 0.1, 1.0, 0.1),))

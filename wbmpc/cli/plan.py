@@ -58,6 +58,7 @@ _HELP = {
     "obstacle_offset_tolerance": "a step crosses only with its DCM offset this close to the nominal one [m]",
     "sole_front": "sole extent ahead of the foot frame [m]",
     "sole_rear": "sole extent behind the foot frame [m]",
+    "obstacle_double_support": "quasi-static crossing: double support before a crossing swing [s] (0: off)",
     "sole_half_width": "sole half width [m]",
 }
 

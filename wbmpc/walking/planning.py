@@ -161,9 +161,12 @@ class PlanningStage:
         stance_index = self.feet.index(stance.foot)
         slide = self.slide.measure(stance.position, feet[stance_index, :2])
         previous_stance = stance
+        swing_start = stance.t_start
+        if first is not None and getattr(first, "double_support", None) is not None:  # a settled step: the swing
+            swing_start += first.double_support - self.plan.double_support  # begins after its long double support
         switched = self.stance.update(
             t, None if first is None else first.foot, None if first is None else first.touchdown_time,
-            stance.t_start, feet, foot_in_contact, 0.0 if first is None else first.yaw,
+            swing_start, feet, foot_in_contact, 0.0 if first is None else first.yaw,
         )
         stance = self.stance.state
         stance_index = self.feet.index(stance.foot)
@@ -174,8 +177,10 @@ class PlanningStage:
             slide = self.slide.measure(stance.position, feet[stance_index, :2])
             if self.lipm is not None:
                 landed = first is not None and first.foot == stance.foot
+                # a settled step (quasi-static crossing) aimed at no walking offset: the estimates skip it
+                walked = landed and getattr(first, "settle_dcm", None) is None
                 self.lipm.touchdown(t, measured.dcm, stance.position, stance.yaw,
-                                    first.dcm_offset if landed else None, ended_slide)
+                                    first.dcm_offset if walked else None, ended_slide)
             if self._planner_after is not None and t >= self._planner_after[0] - 1e-9:
                 self._switch_planner(self._planner_after[1])
         self.slide.follow_if_sliding(slide, feet[stance_index, :2], bool(foot_in_contact[stance_index]))
