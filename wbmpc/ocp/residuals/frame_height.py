@@ -12,7 +12,22 @@ from wbmpc.ocp.state import StateMultibody
 _Z = np.array([2], dtype=np.int64)
 
 
-class ResidualFrameHeight(BatchedResidual):
+class HeightReference:
+    """A residual's mutable reference height z* [m], world frame (``reference``), kept in ``_reference`` (1,)."""
+
+    _reference: np.ndarray
+
+    @property
+    def reference(self) -> float:
+        """Reference height z* [m], world frame."""
+        return float(self._reference[0])
+
+    @reference.setter
+    def reference(self, value: float) -> None:
+        self._reference[0] = value
+
+
+class ResidualFrameHeight(HeightReference, BatchedResidual):
     """r(x) = oMf.translation[2] − z_reference, Rx = [(oRf J_local[:3])[2], 0].
 
     Args:
@@ -29,15 +44,6 @@ class ResidualFrameHeight(BatchedResidual):
         self._reference = np.array([float(height_reference)])
         self.nr = 1
         self.nu = nu
-
-    @property
-    def reference(self) -> float:
-        """Reference height z* [m], world frame."""
-        return float(self._reference[0])
-
-    @reference.setter
-    def reference(self, value: float) -> None:
-        self._reference[0] = value
 
     def calc(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
         placement = pin.updateFramePlacement(self.state.pinocchio, shared.pinocchio, self.frame_id)

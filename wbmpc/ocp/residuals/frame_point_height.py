@@ -13,10 +13,11 @@ import pinocchio as pin
 
 from wbmpc.errors import ParameterError, check_finite
 from wbmpc.ocp.residuals.base import DataCollector, ResidualData
+from wbmpc.ocp.residuals.frame_height import HeightReference
 from wbmpc.ocp.state import StateMultibody
 
 
-class ResidualFramePointHeight:
+class ResidualFramePointHeight(HeightReference):
     """r(x) = (oMf.translation + oRf p)[2] − z_reference, Rx = [(oRf (J_v − [p]× J_ω))[2], 0].
 
     (J_v, J_ω: the frame's LOCAL Jacobian; the point's velocity is v + ω × p = (J_v − [p]× J_ω) q̇ in the
@@ -44,15 +45,6 @@ class ResidualFramePointHeight:
         self._reference = np.array([float(height_reference)])
         self.nr = 1
         self.nu = nu
-
-    @property
-    def reference(self) -> float:
-        """Reference height z* [m], world frame."""
-        return float(self._reference[0])
-
-    @reference.setter
-    def reference(self, value: float) -> None:
-        self._reference[0] = value
 
     def calc(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
         placement = pin.updateFramePlacement(self.state.pinocchio, shared.pinocchio, self.frame_id)
