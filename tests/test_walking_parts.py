@@ -294,7 +294,7 @@ OBSTACLE_FIELDS = {
                 "sole_rear", "sole_half_width"},
     "ocp": {"obstacle_clearance_weight", "obstacle_sole_points", "obstacle_shank_frames", "obstacle_clearance_margin",
             "obstacle_shank_margin", "obstacle_footprint_margin", "obstacle_apex_margin", "obstacle_apex_height_max",
-            "obstacle_swing_profile",
+            "obstacle_swing_profile", "obstacle_plateau_transition_min",
             "obstacle_foothold_weight"},
     "controller": {"negotiation_lookahead", "negotiation_corridor", "negotiation_release", "negotiation_speed_max"},
 }

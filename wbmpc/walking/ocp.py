@@ -200,6 +200,9 @@ class WalkingOCPConfig:
             ``obstacle_apex_margin`` before the sole reaches the grown footprint, held until it is past it, a
             smooth fall: :func:`plateau_height_reference`) or "apex" (eq. 19 with its apex raised until it
             clears the top at the first and last gated node).
+        obstacle_plateau_transition_min: the plateau profile's rise and fall each last at least this fraction
+            of the swing, in (0, 0.5] (the breakpoints moved inwards if the footprint asks a shorter one: the
+            gated sole barriers keep the clearance there).
         obstacle_foothold_weight: the ``{foot}_foothold`` weight of every swing while the horizon holds a
             crossing swing (the footholds next to an obstacle must be where the plan puts them, not where
             they emerge); 0 = ``foothold_weight`` always. Needs ``foothold_weight`` > 0 (the term exists).
@@ -240,6 +243,7 @@ class WalkingOCPConfig:
     obstacle_apex_margin: float = 0.1
     obstacle_apex_height_max: float = 0.5
     obstacle_swing_profile: str = "plateau"
+    obstacle_plateau_transition_min: float = 0.05
     obstacle_foothold_weight: float = 0.0
     max_line_search_trials: int = 10
     reg_min: float = 1e-9
@@ -262,6 +266,10 @@ class WalkingOCPConfig:
             value = getattr(self, name)
             if isinstance(value, bool) or not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f"{name}={value!r} m must be finite and >= 0")
+        if isinstance(self.obstacle_plateau_transition_min, bool) or not (
+                0.0 < self.obstacle_plateau_transition_min <= 0.5):
+            raise ParameterError(f"obstacle_plateau_transition_min={self.obstacle_plateau_transition_min!r} "
+                                 "must be in (0, 0.5]")
         if self.obstacle_swing_profile not in ("plateau", "apex"):
             raise ParameterError(f"obstacle_swing_profile={self.obstacle_swing_profile!r} must be one of "
                                  "('plateau', 'apex')")
@@ -343,7 +351,6 @@ def swing_height_reference_derivative(phase, apex_height: float):
 
 
 PLATEAU_SAMPLES = 401  # phases sampled on a crossing swing's straight path to find where it meets the footprint
-PLATEAU_PHASE_MIN = 0.05  # a crossing swing's rise and fall last at least this fraction of the swing
 
 
 def _turned_points(centre_xy: np.ndarray, yaw: np.ndarray, point) -> np.ndarray:
@@ -738,7 +745,8 @@ class WalkingOCP:
                 s = phase[nodes, j]
                 if cfg.obstacle_swing_profile == "plateau":
                     breaks = self._plateau_phases(region, s, path[nodes, j], path_yaw[nodes[0], j], points,
-                                                  s[over] if over.size else s[:0])
+                                                  s[over] if over.size else s[:0],
+                                                  cfg.obstacle_plateau_transition_min)
                     if breaks is None:
                         heights[nodes, j] = swing_height_reference(s, min(height, cap))
                     else:
@@ -765,7 +773,7 @@ class WalkingOCP:
 
     @staticmethod
     def _plateau_phases(region, phases: np.ndarray, path_xy: np.ndarray, yaw: float, points: np.ndarray,
-                        gated_phases: np.ndarray) -> tuple[float, float] | None:
+                        gated_phases: np.ndarray, transition: float) -> tuple[float, float] | None:
         """Breakpoints (rise_end, fall_start) of a crossing swing's :func:`plateau_height_reference`, or None
         when no sole point's straight path meets ``region`` (the grown footprint).
 
@@ -774,7 +782,8 @@ class WalkingOCP:
         :data:`PLATEAU_SAMPLES` phases; rise_end is the last sample before any of the ``points`` (n, 3) [m]
         (foot frame, turned by ``yaw`` [rad]) is in ``region``, fall_start the first after all have left it.
         With a single node phase the ``gated_phases`` (the nodes over the region) bound the plateau instead.
-        Both are kept within [PLATEAU_PHASE_MIN, 1 − PLATEAU_PHASE_MIN] (a finite rise and fall)."""
+        Both are kept within [transition, 1 − transition] (``transition`` in (0, 0.5]: a rise and a fall of at
+        least that fraction of the swing)."""
         if np.ptp(phases) > 1e-9:
             first, last = int(np.argmin(phases)), int(np.argmax(phases))
             direction = (path_xy[last] - path_xy[first]) / (phases[last] - phases[first])
@@ -792,7 +801,7 @@ class WalkingOCP:
             rise_end, fall_start = float(np.min(gated_phases)), float(np.max(gated_phases))
         else:
             return None
-        low, high = PLATEAU_PHASE_MIN, 1.0 - PLATEAU_PHASE_MIN
+        low, high = float(transition), 1.0 - float(transition)
         rise_end = float(np.clip(rise_end, low, high))
         return rise_end, float(np.clip(fall_start, rise_end, high))
 
