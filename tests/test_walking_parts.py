@@ -294,6 +294,7 @@ OBSTACLE_FIELDS = {
                 "sole_rear", "sole_half_width"},
     "ocp": {"obstacle_clearance_weight", "obstacle_sole_points", "obstacle_shank_frames", "obstacle_clearance_margin",
             "obstacle_shank_margin", "obstacle_footprint_margin", "obstacle_apex_margin", "obstacle_apex_height_max",
+            "obstacle_swing_profile", "obstacle_plateau_transition_min",
             "obstacle_foothold_weight"},
     "controller": {"negotiation_lookahead", "negotiation_corridor", "negotiation_release", "negotiation_speed_max"},
 }
@@ -429,3 +430,32 @@ def test_contact_wrench_scales_weigh_moments_by_the_sole():
     np.testing.assert_array_equal(contact_wrench_scales(100.0), np.full(6, 100.0))
     with pytest.raises(ParameterError, match=r"sole_size=\(0.2, 0.0\) must be \(length > 0, width > 0\)"):
         contact_wrench_scales(100.0, (0.2, 0.0))
+
+
+def test_the_plateau_profile_rises_holds_and_falls_smoothly_with_zero_vertical_velocity_at_its_ends():
+    from wbmpc.walking.ocp import plateau_height_reference, plateau_height_reference_derivative
+
+    height, rise_end, fall_start = 0.2, 0.3, 0.75
+    s = np.linspace(0.0, 1.0, 2001)
+    z = plateau_height_reference(s, height, rise_end, fall_start)
+    dz = plateau_height_reference_derivative(s, height, rise_end, fall_start)
+    np.testing.assert_allclose(z[[0, -1]], 0.0, atol=1e-15)  # on the ground at lift-off and touchdown
+    np.testing.assert_allclose(plateau_height_reference([rise_end, fall_start], height, rise_end, fall_start), height)
+    plateau = (s >= rise_end) & (s <= fall_start)
+    np.testing.assert_allclose(z[plateau], height)  # held over the whole plateau
+    assert np.all(z <= height + 1e-15) and np.all(z >= 0.0)
+    assert np.all(np.diff(z[s <= rise_end]) >= 0.0) and np.all(np.diff(z[s >= fall_start]) <= 0.0)
+    # zero vertical velocity at lift-off, at both plateau ends and at touchdown
+    ends = plateau_height_reference_derivative([0.0, rise_end, fall_start, 1.0], height, rise_end, fall_start)
+    np.testing.assert_allclose(ends, 0.0, atol=1e-12)
+    # the derivative is the profile's (central differences), and continuous: no jump between samples
+    h = s[1] - s[0]
+    np.testing.assert_allclose(dz[1:-1], (z[2:] - z[:-2]) / (2 * h), atol=1e-4)
+    assert np.max(np.abs(np.diff(dz))) < 50 * h * height / rise_end**2
+    assert np.max(np.abs(np.diff(z))) < 2 * h * np.max(np.abs(dz)) + 1e-12
+    # the peak vertical speed of a quintic smoothstep: 15/8 H over the rise's and the fall's durations
+    np.testing.assert_allclose(dz.max(), 15 / 8 * height / rise_end, rtol=1e-4)
+    np.testing.assert_allclose(dz.min(), -15 / 8 * height / (1 - fall_start), rtol=1e-4)
+    for bad in ((0.0, 0.5), (0.6, 0.5), (0.3, 1.0)):
+        with pytest.raises(ParameterError, match="plateau breakpoints"):
+            plateau_height_reference(0.5, height, *bad)

@@ -475,7 +475,7 @@ def test_h1_obstacle_clearance_residual_jacobians_match_finite_differences():
 
 
 @needs_h1_extra
-def test_h1_crossing_swing_raises_the_apex_and_turns_the_clearance_on_only_over_the_box():
+def test_h1_crossing_swing_holds_a_plateau_over_the_box_and_turns_the_clearance_on_only_over_it():
     h1, ocp, schedule, crossings = _h1_crossing()
     x0 = standing_state(h1)
     ocp.update(x0, schedule, np.array([0.1, 0.0, 0.97]))  # no crossing: every clearance term off
@@ -494,8 +494,25 @@ def test_h1_crossing_swing_raises_the_apex_and_turns_the_clearance_on_only_over_
         if over:
             assert toe.cost.residual.reference == pytest.approx(0.1 + config.obstacle_clearance_margin)
         assert node["right_clearance_shank"].active == swinging
-        if swinging and 0.0 < schedule.swing_phase[k, 1] < 1.0:  # the apex is raised: the reference higher
+        if swinging and 0.0 < schedule.swing_phase[k, 1] < 1.0:  # the swing is raised: the reference higher
             assert node["right_height"].cost.residual.reference > plain_heights[k]
+    assert config.obstacle_swing_profile == "plateau"
+    plateau = [node["right_height"].cost.residual.reference for node in costs]
+    assert max(plateau) == pytest.approx(0.1 + config.obstacle_apex_margin)  # not the 1.7 m an apex would need
+    # with the shortest transitions, the plateau covers every node where a sole point is over the grown footprint
+    for profile in ("plateau", "apex"):
+        other = WalkingOCP(h1, dataclasses.replace(config, obstacle_swing_profile=profile,
+                                                   obstacle_plateau_transition_min=0.05), n_nodes=ocp.n_nodes, dt=0.02)
+        other.update(x0, schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
+        heights = [model.differential.costs.costs["right_height"].cost.residual.reference
+                   for model in other.problem.running_models]
+        if profile == "apex":
+            assert max(heights) > max(plateau)  # eq. (19) clearing the same nodes peaks higher
+            continue
+        for k, height in enumerate(heights):
+            path_x = crossings.path_xy[k, 1, 0] + np.array([point[0] for point in config.obstacle_sole_points])
+            if not schedule.in_contact[k, 1] and np.any(np.abs(path_x - 0.25) <= 0.05 + config.obstacle_footprint_margin):
+                assert height == pytest.approx(0.1 + config.obstacle_apex_margin), k
     # one-sided: no cost above the reference, a quadratic one below
     model = ocp.problem.running_models[0].differential
     data = model.createData()

@@ -192,10 +192,17 @@ class WalkingOCPConfig:
             straight-path position is over its footprint grown by ``obstacle_footprint_margin``.
         obstacle_shank_margin: the shank frame stays this far above the top [m].
         obstacle_footprint_margin: the footprint grown by this for the sole points' gating [m].
-        obstacle_apex_margin: a crossing swing's apex H (eq. 19) is at least the top plus this [m], and high
-            enough that the eq. (19) profile clears the top plus ``obstacle_clearance_margin`` at the first
-            and last gated node.
-        obstacle_apex_height_max: upper bound of a crossing swing's apex H [m] (what the legs can lift).
+        obstacle_apex_margin: a crossing swing's height H (the plateau, or the apex of eq. 19) is at least the
+            top plus this [m] (with the "apex" profile also high enough that eq. 19 clears the top plus
+            ``obstacle_clearance_margin`` at the first and last gated node).
+        obstacle_apex_height_max: upper bound of a crossing swing's height H [m] (what the legs can lift).
+        obstacle_swing_profile: a crossing swing's height reference: "plateau" (a smooth rise to the top +
+            ``obstacle_apex_margin`` before the sole reaches the grown footprint, held until it is past it, a
+            smooth fall: :func:`plateau_height_reference`) or "apex" (eq. 19 with its apex raised until it
+            clears the top at the first and last gated node).
+        obstacle_plateau_transition_min: the plateau profile's rise and fall each last at least this fraction
+            of the swing, in (0, 0.5] (the breakpoints moved inwards if the footprint asks a shorter one: the
+            gated sole barriers keep the clearance there).
         obstacle_foothold_weight: the ``{foot}_foothold`` weight of every swing while the horizon holds a
             crossing swing (the footholds next to an obstacle must be where the plan puts them, not where
             they emerge); 0 = ``foothold_weight`` always. Needs ``foothold_weight`` > 0 (the term exists).
@@ -235,6 +242,8 @@ class WalkingOCPConfig:
     obstacle_footprint_margin: float = 0.02
     obstacle_apex_margin: float = 0.1
     obstacle_apex_height_max: float = 0.5
+    obstacle_swing_profile: str = "plateau"
+    obstacle_plateau_transition_min: float = 0.05
     obstacle_foothold_weight: float = 0.0
     max_line_search_trials: int = 10
     reg_min: float = 1e-9
@@ -257,6 +266,13 @@ class WalkingOCPConfig:
             value = getattr(self, name)
             if isinstance(value, bool) or not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f"{name}={value!r} m must be finite and >= 0")
+        if isinstance(self.obstacle_plateau_transition_min, bool) or not (
+                0.0 < self.obstacle_plateau_transition_min <= 0.5):
+            raise ParameterError(f"obstacle_plateau_transition_min={self.obstacle_plateau_transition_min!r} "
+                                 "must be in (0, 0.5]")
+        if self.obstacle_swing_profile not in ("plateau", "apex"):
+            raise ParameterError(f"obstacle_swing_profile={self.obstacle_swing_profile!r} must be one of "
+                                 "('plateau', 'apex')")
         try:  # TOML arrays as the tuples a frozen config holds
             object.__setattr__(self, "obstacle_sole_points", tuple(tuple(float(v) for v in point)
                                                                       for point in self.obstacle_sole_points))
@@ -332,6 +348,50 @@ def swing_height_reference_derivative(phase, apex_height: float):
     """d/ds of :func:`swing_height_reference`: 32 H s (1 − s)(1 − 2 s) [m]."""
     s = np.asarray(phase, dtype=float)
     return 32.0 * apex_height * s * (1.0 - s) * (1.0 - 2.0 * s)
+
+
+PLATEAU_SAMPLES = 401  # phases sampled on a crossing swing's straight path to find where it meets the footprint
+
+
+def _turned_points(centre_xy: np.ndarray, yaw: np.ndarray, point) -> np.ndarray:
+    """World (x, y) (m, 2) [m] of the foot-frame ``point`` (x, y, ...) [m] of feet at ``centre_xy`` (m, 2) [m]
+    with yaws ``yaw`` (m,) [rad]."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    return centre_xy + np.column_stack((c * point[0] - s * point[1], s * point[0] + c * point[1]))
+
+
+def _plateau_breakpoints(rise_end: float, fall_start: float) -> tuple[float, float]:
+    """The checked phase breakpoints (rise_end, fall_start) of :func:`plateau_height_reference`."""
+    rise_end, fall_start = float(rise_end), float(fall_start)
+    if not (0.0 < rise_end <= fall_start < 1.0):
+        raise ParameterError(f"plateau breakpoints rise_end={rise_end}, fall_start={fall_start} must satisfy "
+                             "0 < rise_end <= fall_start < 1")
+    return rise_end, fall_start
+
+
+def plateau_height_reference(phase, height: float, rise_end: float, fall_start: float):
+    """A crossing swing's height above the ground [m] at swing phase s = t / t_f (any shape): a quintic
+    smoothstep rise q(s / s_r) H on [0, s_r], the plateau H on [s_r, s_f] and the mirrored fall
+    q((1 − s) / (1 − s_f)) H on [s_f, 1], with q(u) = 10 u³ − 15 u⁴ + 6 u⁵ (zero vertical velocity and
+    acceleration at lift-off, both plateau ends and touchdown). ``height`` H [m]; ``rise_end`` s_r and
+    ``fall_start`` s_f with 0 < s_r <= s_f < 1 (ParameterError otherwise)."""
+    rise_end, fall_start = _plateau_breakpoints(rise_end, fall_start)
+    s = np.clip(np.asarray(phase, dtype=float), 0.0, 1.0)
+    u = np.minimum(np.minimum(s / rise_end, (1.0 - s) / (1.0 - fall_start)), 1.0)
+    return height * u**3 * (10.0 - 15.0 * u + 6.0 * u**2)
+
+
+def plateau_height_reference_derivative(phase, height: float, rise_end: float, fall_start: float):
+    """d/ds of :func:`plateau_height_reference` [m]: 30 H u² (1 − u)² du/ds, du/ds = 1 / s_r on the rise,
+    0 on the plateau, −1 / (1 − s_f) on the fall (0 outside [0, 1])."""
+    rise_end, fall_start = _plateau_breakpoints(rise_end, fall_start)
+    s = np.asarray(phase, dtype=float)
+    rise, fall = s / rise_end, (1.0 - s) / (1.0 - fall_start)
+    rising = rise < fall
+    u = np.clip(np.where(rising, rise, fall), 0.0, 1.0)
+    slope = np.where(rising, 1.0 / rise_end, -1.0 / (1.0 - fall_start))
+    inside = (s >= 0.0) & (s <= 1.0)
+    return np.where(inside, 30.0 * height * u**2 * (1.0 - u) ** 2 * slope, 0.0)
 
 
 class WalkingOCP:
@@ -582,9 +642,10 @@ class WalkingOCP:
                         item.active = False
                     if shank is not None:
                         shank.active = False
-        if crossings is not None:
-            apex = self._clearance(crossings, ~in_contact, np.nan_to_num(phase), columns)
         heights = self.ground_height + swing_height_reference(np.nan_to_num(phase), apex)
+        if crossings is not None:
+            crossing_heights = self._clearance(crossings, ~in_contact, np.nan_to_num(phase), columns)
+            heights = np.where(np.isnan(crossing_heights), heights, self.ground_height + crossing_heights)
         n_stance = np.maximum(in_contact.sum(axis=1), 1)
         last_swing = np.zeros_like(in_contact)
         last_swing[:-1] = ~in_contact[:-1] & in_contact[1:]
@@ -639,15 +700,19 @@ class WalkingOCP:
             self.problem.sync()
 
     def _clearance(self, crossings, swinging: np.ndarray, phase: np.ndarray, columns: list[int]) -> np.ndarray:
-        """Write the clearance terms of ``crossings`` and return the swing apex H (n + 1, n_feet) [m] of eq. (19).
+        """Write the clearance terms of ``crossings`` and return the swing height references (n + 1, n_feet)
+        [m] above the ground of the crossing swings' nodes, NaN at every other node (eq. 19 there).
 
         For each crossing swing (a run of swing nodes of one foot over one obstacle) and each sole point p_i,
         the point's straight-path position (the foot's path position plus p_i turned by the touchdown yaw) is
         over the footprint grown by ``obstacle_footprint_margin`` at some nodes: there ``{foot}_clearance_sole{i}``
         is active with the reference top + ``obstacle_clearance_margin``; ``{foot}_clearance_shank`` is active
-        over the whole crossing swing with top + ``obstacle_shank_margin``. The swing's apex is the largest of
-        ``swing_apex_height``, top + ``obstacle_apex_margin`` and the height at which eq. (19) is at the
-        clearance reference at the first and the last gated node, at most ``obstacle_apex_height_max``. World
+        over the whole crossing swing with top + ``obstacle_shank_margin``. The height reference
+        (``obstacle_swing_profile``): "plateau", :func:`plateau_height_reference` at H = the largest of
+        ``swing_apex_height`` and top + ``obstacle_apex_margin``, at most ``obstacle_apex_height_max``, its
+        rise over until the first sole point's straight path enters the grown footprint and its fall begun
+        only once the last has left it (:meth:`_plateau_phases`); "apex", eq. (19) with that H raised until
+        the profile is at the clearance reference at the first and the last gated node (same cap). World
         z = 0 is the ground the obstacles stand on."""
         cfg = self.config
         index = np.asarray(crossings.index)[:, columns]
@@ -655,10 +720,11 @@ class WalkingOCP:
         path_yaw = np.nan_to_num(np.asarray(crossings.path_yaw, dtype=float)[:, columns])
         if index.shape != swinging.shape:
             raise ParameterError(f"crossings.index has shape {index.shape}, the schedule {swinging.shape}")
-        apex = np.full(swinging.shape, float(cfg.swing_apex_height))
+        heights = np.full(swinging.shape, np.nan)
         terms = self._clearance_terms
         points = np.asarray(cfg.obstacle_sole_points, dtype=float).reshape(-1, 3)
         n_running = self.n_nodes
+        cap = max(float(cfg.obstacle_apex_height_max), float(cfg.swing_apex_height))
         for j in range(swinging.shape[1]):
             k = 0
             while k < swinging.shape[0]:
@@ -671,19 +737,26 @@ class WalkingOCP:
                 obstacle = crossings.obstacles[which]
                 region = obstacle.grown(cfg.obstacle_footprint_margin)
                 nodes = np.arange(start, k)
-                c, s = np.cos(path_yaw[nodes, j]), np.sin(path_yaw[nodes, j])
-                gated = np.zeros((nodes.size, points.shape[0]), dtype=bool)
-                for i, point in enumerate(points):
-                    xy = path[nodes, j] + np.column_stack((c * point[0] - s * point[1], s * point[0] + c * point[1]))
-                    gated[:, i] = region.contains(xy)
+                gated = np.column_stack([region.contains(_turned_points(path[nodes, j], path_yaw[nodes, j], point))
+                                         for point in points]) if points.size else np.zeros((nodes.size, 0), bool)
                 top = float(obstacle.height)
                 height = max(float(cfg.swing_apex_height), top + cfg.obstacle_apex_margin - self.ground_height)
                 over = np.flatnonzero(gated.any(axis=1))
-                if over.size:
-                    need = top + cfg.obstacle_clearance_margin - self.ground_height
-                    edge = float(np.min(swing_height_reference(phase[nodes[[over[0], over[-1]]], j], 1.0)))
-                    height = max(height, need / edge if edge > 0 else np.inf)
-                apex[nodes, j] = min(height, max(float(cfg.obstacle_apex_height_max), float(cfg.swing_apex_height)))
+                s = phase[nodes, j]
+                if cfg.obstacle_swing_profile == "plateau":
+                    breaks = self._plateau_phases(region, s, path[nodes, j], path_yaw[nodes[0], j], points,
+                                                  s[over] if over.size else s[:0],
+                                                  cfg.obstacle_plateau_transition_min)
+                    if breaks is None:
+                        heights[nodes, j] = swing_height_reference(s, min(height, cap))
+                    else:
+                        heights[nodes, j] = plateau_height_reference(s, min(height, cap), *breaks)
+                else:
+                    if over.size:
+                        need = top + cfg.obstacle_clearance_margin - self.ground_height
+                        edge = float(np.min(swing_height_reference(s[[over[0], over[-1]]], 1.0)))
+                        height = max(height, need / edge if edge > 0 else np.inf)
+                    heights[nodes, j] = swing_height_reference(s, min(height, cap))
                 if terms is None:
                     continue
                 for row, node in enumerate(nodes.tolist()):
@@ -696,7 +769,41 @@ class WalkingOCP:
                     if shank is not None:
                         shank.active = True
                         shank.cost.residual.reference = top + cfg.obstacle_shank_margin
-        return apex
+        return heights
+
+    @staticmethod
+    def _plateau_phases(region, phases: np.ndarray, path_xy: np.ndarray, yaw: float, points: np.ndarray,
+                        gated_phases: np.ndarray, transition: float) -> tuple[float, float] | None:
+        """Breakpoints (rise_end, fall_start) of a crossing swing's :func:`plateau_height_reference`, or None
+        when no sole point's straight path meets ``region`` (the grown footprint).
+
+        The straight lift-off -> touchdown path is linear in the phase, xy(s) = a + s b: with two distinct
+        node ``phases`` (m,) it is recovered from the nodes' ``path_xy`` (m, 2) [m] and sampled at
+        :data:`PLATEAU_SAMPLES` phases; rise_end is the last sample before any of the ``points`` (n, 3) [m]
+        (foot frame, turned by ``yaw`` [rad]) is in ``region``, fall_start the first after all have left it.
+        With a single node phase the ``gated_phases`` (the nodes over the region) bound the plateau instead.
+        Both are kept within [transition, 1 − transition] (``transition`` in (0, 0.5]: a rise and a fall of at
+        least that fraction of the swing)."""
+        if np.ptp(phases) > 1e-9:
+            first, last = int(np.argmin(phases)), int(np.argmax(phases))
+            direction = (path_xy[last] - path_xy[first]) / (phases[last] - phases[first])
+            origin = path_xy[first] - phases[first] * direction
+            grid = np.linspace(0.0, 1.0, PLATEAU_SAMPLES)
+            centre = origin[None] + grid[:, None] * direction[None]
+            inside = np.zeros(grid.size, dtype=bool)
+            for point in points:
+                inside |= region.contains(_turned_points(centre, np.full(grid.size, yaw), point))
+            hit = np.flatnonzero(inside)
+            if not hit.size:
+                return None
+            rise_end, fall_start = grid[max(hit[0] - 1, 0)], grid[min(hit[-1] + 1, grid.size - 1)]
+        elif gated_phases.size:
+            rise_end, fall_start = float(np.min(gated_phases)), float(np.max(gated_phases))
+        else:
+            return None
+        low, high = float(transition), 1.0 - float(transition)
+        rise_end = float(np.clip(rise_end, low, high))
+        return rise_end, float(np.clip(fall_start, rise_end, high))
 
     def _set_node_spacing(self, spacing) -> None:
         """Give running node k the spacing ``spacing[k]`` [s] (a timed schedule), or ``dt`` (None)."""
