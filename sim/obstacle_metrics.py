@@ -19,6 +19,7 @@ Definitions (world frame, the box of ``params["obstacle_truth"]``, crossed along
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -27,9 +28,9 @@ from sequencer.obstacles import Obstacle
 
 
 def obstacle_from_record(record: dict[str, Any]) -> Obstacle:
-    """An :class:`Obstacle` from :func:`sim.perception.pipeline.obstacle_record`'s plain data."""
-    return Obstacle(center=np.asarray(record["center"], dtype=float), yaw=float(record["yaw"]),
-                    depth=float(record["depth"]), width=float(record["width"]), height=float(record["height"]))
+    """An :class:`Obstacle` from its plain data in a log (``wbmpc.jsonable.to_jsonable`` of one, extra keys
+    such as a detection's ``first_seen`` ignored)."""
+    return Obstacle(**{field.name: record[field.name] for field in dataclasses.fields(Obstacle)})
 
 
 def obstacle_metrics(log) -> dict[str, Any]:

@@ -46,11 +46,18 @@ from sim.falls import ContactSensor, FallCriteria, detect_fall
 from sim.log import RunLog
 from sim.scenarios import make_scenario, scenario_class, scenario_parameters
 from wbmpc.errors import NoSolutionError, ParameterError
+from wbmpc.jsonable import to_jsonable
 from wbmpc.walking.controller import WalkingController
 from wbmpc.walking.interface import Controller
 from wbmpc.walking.measurement import Measurement
 from wbmpc.walking.pd import JointPDController
-from wbmpc.walking.preset import WalkingPreset, available_walking_presets, is_preset_override, load_walking_preset
+from wbmpc.walking.preset import (
+    ALL_SECTIONS,
+    WalkingPreset,
+    available_walking_presets,
+    is_preset_override,
+    load_walking_preset,
+)
 
 CONTROLLERS = ("walking", "pd")
 LOG_CHUNK_TICKS = 10_000  # rows of the tick logs allocated at a time (10 s at 1 kHz, ~7 MB for Bolt)
@@ -160,8 +167,8 @@ def run_scenario(
         is_controller_key = {"kp", "kd"}.__contains__
     unknown = sorted(k for k in params if k not in scenario_keys and k not in runner_keys and not is_controller_key(k))
     if unknown:
-        allowed = ("walking preset overrides: controller fields or 'section.field' (sections planner, ocp, "
-                   "controller, fall, command, footstep_planner, perception)" if controller == "walking" else
+        allowed = ("walking preset overrides: controller fields or 'section.field' (sections "
+                   f"{', '.join(ALL_SECTIONS)})" if controller == "walking" else
                    "controller ['kd', 'kp']" if controller == "pd" else "no controller options (custom controller)")
         raise ParameterError(
             f"run_scenario({name!r}): unknown parameter(s) {unknown}; allowed: scenario {sorted(scenario_keys)}, "
@@ -249,14 +256,13 @@ class _ClosedLoop:
         spec = build_mujoco_spec(robot, link_collisions=True)
         self.scenario.modify_spec(spec, self.rng)
         perception = None if self.preset is None else self.preset.perception
-        if perception is not None and perception.enabled:
+        sensing = perception is not None and perception.enabled
+        if sensing:
             from sim.perception import PerceptionPipeline
 
             PerceptionPipeline.add_to_spec(spec, perception, robot.base_body)
         self.mj_model = spec.compile()
-        self.perception = None
-        if perception is not None and perception.enabled:
-            self.perception = PerceptionPipeline(self.mj_model, perception, self.seed, robot)
+        self.perception = PerceptionPipeline(self.mj_model, perception, self.seed, robot) if sensing else None
         self.mj_data = mujoco.MjData(self.mj_model)
         qpos, qvel = pinocchio_to_mujoco_state(robot, np.asarray(robot.q_reference), np.asarray(robot.v_reference))
         self.mj_data.qpos[:] = qpos
@@ -453,9 +459,7 @@ class _ClosedLoop:
             log.params["perception"] = self.perception.summary()
         true_obstacles = getattr(self.scenario, "true_obstacles", None)
         if true_obstacles is not None and getattr(self, "robot", None) is not None:
-            from sim.perception.pipeline import obstacle_record
-
-            log.params["obstacle_truth"] = [obstacle_record(o) for o in true_obstacles()]
+            log.params["obstacle_truth"] = [to_jsonable(o) for o in true_obstacles()]
         try:
             log.metrics = compute_metrics(log)
         except Exception as err:  # metrics must never hide the run's own outcome

@@ -17,6 +17,7 @@ import pinocchio as pin
 from sequencer.obstacles import Obstacle
 from sim.perception.rangefinder import RangefinderArray, add_rangefinders
 from sim.perception.terrain import TerrainEstimator
+from wbmpc.jsonable import to_jsonable
 from wbmpc.walking.perception_config import PerceptionConfig
 
 RNG_STREAM = 15  # the perception's generator: np.random.default_rng((seed, RNG_STREAM)), apart from the run's
@@ -110,13 +111,8 @@ class PerceptionPipeline:
             "n_returns": estimator.n_returns,
             "n_dropped_near": estimator.n_dropped_near,
             "ground_level": estimator.ground,
-            "detections": [obstacle_record(track.obstacle) | {"first_seen": track.first_seen,
-                                                              "n_returns": track.n_returns}
+            "detections": [to_jsonable(track.obstacle) | {"first_seen": track.first_seen,
+                                                          "n_returns": track.n_returns}
                            for track in estimator.tracks],
         }
 
-
-def obstacle_record(obstacle: Obstacle) -> dict[str, Any]:
-    """An :class:`Obstacle` as plain data: center [x, y] [m], yaw [rad], depth, width, height [m]."""
-    return {"center": [float(v) for v in obstacle.center], "yaw": float(obstacle.yaw), "depth": float(obstacle.depth),
-            "width": float(obstacle.width), "height": float(obstacle.height)}
