@@ -96,7 +96,7 @@ def register(subparsers) -> None:
     obstacles = commands.add_parser("obstacles", help="step over a box across the path, by height (issue 15, seed 000 "
                                                       "Fig. 5.13)")
     obstacles.add_argument("--heights", type=POSITIVE, nargs="+", default=list(OBSTACLE_HEIGHTS),
-                           help="box heights [m] (default 0.1 0.2 0.3 0.4)")
+                           help=f"box heights [m] (default {' '.join(map(str, OBSTACLE_HEIGHTS))})")
     obstacles.add_argument("--trials", type=COUNT, default=OBSTACLE_TRIALS,
                            help=f"seeds per height: box distance, depth, friction (default {OBSTACLE_TRIALS})")
     add_trial_options(obstacles, None, robot_default="h1")
