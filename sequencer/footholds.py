@@ -24,8 +24,9 @@ bound of the QP. The choice is made per step, by the planner, not by the QP:
    nominal step; stepping in place crosses nothing), one step can reach it and the DCM can carry that
    step (its offset at touchdown within ``obstacle_offset_tolerance`` of the nominal one):
    b <= max(l_max, obstacle_step_length_max), the crossing step's own length bound, with the
-   duration T >= max(t_min, obstacle_step_duration_min) (a crossing swing lifts higher and takes
-   longer); otherwise it stays *before* it (ℓ <= a: the last step
+   duration T in [max(t_min, obstacle_step_duration_min), max(t_max, obstacle_step_duration_max)] (a
+   crossing swing lifts higher and takes longer, and its DCM needs longer to travel the long step);
+   otherwise it stays *before* it (ℓ <= a: the last step
    before the obstacle, its toe ``obstacle_margin`` before the near edge at most). That last step
    aims at the DCM offset the crossing step needs (a point-foot LIPM cannot make a step four times
    the nominal one from the nominal offset: from 4.7 cm the H1's DCM needs 0.76 s to travel a 0.48 m
@@ -34,8 +35,20 @@ bound of the QP. The choice is made per step, by the planner, not by the QP:
 3. stepping *beside* the obstacle (w <= c or w >= d, within the width bounds) is the other
    candidate; of the candidates that are feasible, the one of least QP cost is taken;
 4. repeat while the new foothold lies in another obstacle's box (bounds only tighten, except the
-   crossing step's longer length), and lengthen a step whose swing passes over an obstacle (the
-   trailing foot's, which lands beyond with a nominal step) to the crossing duration.
+   crossing step's longer length and duration), and give a step whose swing passes over an obstacle
+   (the trailing foot's, which lands beyond with a nominal step) the crossing durations and, with
+   ``obstacle_swing_length_max`` > 0, a foothold within that travel of its lift-off along the heading:
+   ℓ <= ℓ_lift + s_max, ℓ_lift = (lift-off - p_0) · heading. A nominal step from the lead foot, which
+   landed a crossing step ahead, asked the H1's trailing foot a 1.0 m swing.
+
+**Two steps ahead.** With that travel bound the lead crossing step (length ℓ_c from the stance p_0,
+the trailing foot's lift-off) knows the trailing step that follows it: ℓ_t = min(|l_nom|,
+max(0, s_max - |ℓ_c|)) from the lead foothold, lasting T_c,min. The lead step therefore aims at the
+DCM offset from which that step ends at the nominal offset b_nom, b_c = (ℓ_t + b_nom) exp(-ω T_c,min)
+(eq. 1b; signs along the direction of travel), not at b_nom: aiming at b_nom, the DCM runs a nominal
+offset ahead of the lead foot and the short trailing step cannot catch it. The DCM check of step 2
+compares the crossing's offset with that aim; the last step before the obstacle aims at
+(ℓ_c + b_c) exp(-ω T_c,min).
 
 "Cross when one step can reach beyond, else stop at the safe distance" rather than "the cheaper
 side": from the last foothold before an obstacle the cheaper step is always in place (the crossing
@@ -81,6 +94,10 @@ class FootholdGeometry:
         offset_tolerance: a step crosses only if its DCM offset at touchdown, along the heading, is within
             this of the nominal one [m] (else the robot takes one more step before the obstacle, aiming at
             the offset the crossing needs).
+        step_duration_max: duration upper bound of a crossing step [s] (the planner uses max(t_max, this); 0:
+            the walking bound).
+        swing_length_max: the travel bound of a crossing foot from lift-off to touchdown along the heading [m]
+            (0: none; see "Two steps ahead" in the module docstring).
         halt_double_support: > 0: a quasi-static crossing (``SequencerParams.obstacle_double_support`` [s]): the
             crossing swing lifts off after this long a double support that settles the DCM on the stance foot,
             so a step crosses whatever its DCM offset (no tolerance) and the last step before the obstacle
@@ -96,6 +113,8 @@ class FootholdGeometry:
     offset_tolerance: float = math.inf
     approach_margin: float = 0.0
     halt_double_support: float = 0.0
+    step_duration_max: float = 0.0
+    swing_length_max: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -134,8 +153,8 @@ class StepCandidate:
     duration: float
 
 
-StepBounds = tuple[float, float, float, float, float]
-"""(ℓ_min, ℓ_max, w_min, w_max, T_min) of one step, heading frame [m, m, m, m, s]."""
+StepBounds = tuple[float, float, float, float, float, float]
+"""(ℓ_min, ℓ_max, w_min, w_max, T_min, T_max) of one step, heading frame [m, m, m, m, s, s]."""
 
 
 def forbidden_box(obstacle: Obstacle, p0, yaw: float, geometry: FootholdGeometry,
@@ -240,18 +259,16 @@ class FootholdConstraints:
     Args:
         obstacles: the obstacles (world frame).
         geometry: margins, the crossing step's bounds and the sole.
-        t_max: the step duration upper bound [s] (a crossing duration bound above it is refused).
         omega: the LIPM's natural frequency [1/s] (the DCM offset the last step before an obstacle aims at).
     """
 
-    def __init__(self, obstacles: Sequence[Obstacle], geometry: FootholdGeometry, t_max: float, omega: float) -> None:
+    def __init__(self, obstacles: Sequence[Obstacle], geometry: FootholdGeometry, omega: float) -> None:
         obstacles = tuple(obstacles)
         for obstacle in obstacles:
             if not isinstance(obstacle, Obstacle):
                 raise ParameterError(f"obstacles must be sequencer.obstacles.Obstacle, got {type(obstacle).__name__}")
         self.obstacles = obstacles
         self.geometry = geometry
-        self.t_max = float(t_max)
         self.omega = float(omega)
 
     def choose(self, p0, yaw: float, bounds: StepBounds, nominal: StepCandidate,
@@ -278,10 +295,12 @@ class FootholdConstraints:
             hit = next((box for box in boxes if box[0] < candidate.dx < box[1] and box[2] < candidate.dy < box[3]),
                        None)
             if hit is None:
-                if lengthened or not self._crosses(p0, yaw, candidate, liftoff) or \
-                        candidate.duration >= self.geometry.step_duration_min - 1e-12:
+                if lengthened or not self._crosses(p0, yaw, candidate, liftoff):
                     return candidate, changed
-                bounds = (*bounds[:4], max(bounds[4], self.geometry.step_duration_min))
+                trailing = self._trailing_bounds(bounds, p0, yaw, liftoff)
+                if trailing[0] <= candidate.dx <= trailing[1] and candidate.duration >= trailing[4] - 1e-12:
+                    return candidate, changed
+                bounds = trailing
                 candidate, changed, lengthened = solve(bounds, aim), True, True
                 continue
             along, beside = self._options(hit, bounds, step_length_nominal, offset_nominal)
@@ -289,9 +308,11 @@ class FootholdConstraints:
                 if cross is None and self.geometry.halt_double_support > 0.0:
                     late = False  # quasi-static: the double support before the swing settles the DCM
                 elif cross is None:
-                    crossing = solve(*along[0][:2])
+                    crossing, _, crossing_aim = self._solve_option(solve, along[0][0], None, True, step_length_nominal,
+                                                                   offset_nominal)
                     sign = 1.0 if step_length_nominal > 0.0 else -1.0
-                    late = sign * (offset_nominal - crossing.hx) > self.geometry.offset_tolerance
+                    target = offset_nominal if crossing_aim is None else crossing_aim
+                    late = sign * (target - crossing.hx) > self.geometry.offset_tolerance
                 else:
                     late = not cross
                 along = along[1:2] if late and len(along) > 1 else along[:1]
@@ -300,8 +321,8 @@ class FootholdConstraints:
                 raise FootholdInfeasible(
                     f"no foothold outside the obstacle box (a, b, c, d) = {tuple(round(v, 4) for v in hit)} m "
                     f"within the step bounds {tuple(round(v, 4) for v in bounds)} (stance p0={p0.tolist()} m)")
-            solved = [self._solve_option(solve, option, far, step_length_nominal, offset_nominal)
-                      for option, far, _ in options]
+            solved = [self._solve_option(solve, option, far, crossing, step_length_nominal, offset_nominal)
+                      for option, far, crossing in options]
             candidate, bounds, aim = min(solved, key=lambda triple: triple[0].objective)
             changed = True
         raise FootholdInfeasible(f"the footholds of the stance p0={p0.tolist()} m did not settle outside the "
@@ -315,8 +336,9 @@ class FootholdConstraints:
         before it (both sides, no crossing, when the stance sole is itself within the box); beside it, either
         side within the width bounds."""
         a, b, c, d = box
-        l_lo, l_hi, w_lo, w_hi, t_lo = bounds
+        l_lo, l_hi, w_lo, w_hi, t_lo, t_hi = bounds
         reach, t_cross = self.geometry.step_length_max, max(t_lo, self.geometry.step_duration_min)
+        t_cross_hi = max(t_hi, self.geometry.step_duration_max)
         inside = a < 0.0 < b and c < 0.0 < d  # the stance sole itself is within the grown footprint
         ahead = a + b > 0.0  # the box's middle ahead of the stance along the heading
         prepare = None  # the far side the next step crosses, when this may be the last step before it
@@ -324,40 +346,70 @@ class FootholdConstraints:
                 and self.geometry.halt_double_support == 0.0:
             prepare = b if ahead else a  # crossable from the foothold at the safe distance
         if inside:  # either side, no crossing step
-            along = [((l_lo, min(l_hi, a), w_lo, w_hi, t_lo), None, False),
-                     ((max(l_lo, b), l_hi, w_lo, w_hi, t_lo), None, False)]
+            along = [((l_lo, min(l_hi, a), w_lo, w_hi, t_lo, t_hi), None, False),
+                     ((max(l_lo, b), l_hi, w_lo, w_hi, t_lo, t_hi), None, False)]
         elif ahead:  # beyond (crossing, when walking forwards) or before
-            along = [((max(l_lo, b), max(l_hi, reach), w_lo, w_hi, t_cross), None, True)] \
+            along = [((max(l_lo, b), max(l_hi, reach), w_lo, w_hi, t_cross, t_cross_hi), None, True)] \
                 if step_length_nominal > 0.0 else []
-            along.append(((l_lo, min(l_hi, a), w_lo, w_hi, t_lo), prepare, False))
+            along.append(((l_lo, min(l_hi, a), w_lo, w_hi, t_lo, t_hi), prepare, False))
         else:  # behind: beyond it backwards (walking backwards), or stay
-            along = [((min(l_lo, -reach), min(l_hi, a), w_lo, w_hi, t_cross), None, True)] \
+            along = [((min(l_lo, -reach), min(l_hi, a), w_lo, w_hi, t_cross, t_cross_hi), None, True)] \
                 if step_length_nominal < 0.0 else []
-            along.append(((max(l_lo, b), l_hi, w_lo, w_hi, t_lo), prepare, False))
-        beside = [(l_lo, l_hi, w_lo, min(w_hi, c), t_lo), (l_lo, l_hi, max(w_lo, d), w_hi, t_lo)]
+            along.append(((max(l_lo, b), l_hi, w_lo, w_hi, t_lo, t_hi), prepare, False))
+        beside = [(l_lo, l_hi, w_lo, min(w_hi, c), t_lo, t_hi), (l_lo, l_hi, max(w_lo, d), w_hi, t_lo, t_hi)]
         return ([option for option in along if self._feasible(option[0])],
                 [(option, None, False) for option in beside if self._feasible(option)])
 
-    def _solve_option(self, solve, bounds: StepBounds, far: float | None, step_length_nominal: float,
+    def _solve_option(self, solve, bounds: StepBounds, far: float | None, crossing: bool, step_length_nominal: float,
                       offset_nominal: float) -> tuple[StepCandidate, StepBounds, float | None]:
         """(candidate, bounds, aimed offset) of one option. ``far`` (the far side b of the obstacle the next step
         crosses, relative to this stance [m]) marks the last step before it: that step aims at the DCM offset
-        that makes the crossing step from its foothold ℓ (length |b - ℓ|, the crossing duration) end at the
-        nominal offset, b_x = (|b - ℓ| + offset_nominal) exp(-ω T_cross) (eq. 1b; three fixed-point passes,
-        the foothold moves with the aim)."""
-        if far is None:
+        that makes the crossing step from its foothold ℓ (length |b - ℓ|, within its longest duration) end at
+        the offset the crossing aims at, b_x = (|b - ℓ| + b_c) exp(-ω T_c,max) (eq. 1b), and at least the
+        nominal offset (the walk's own: a larger aim leans the robot into a short step, and the H1's DCM ran
+        13 cm past the foot that should have stopped it). ``crossing`` (a step
+        beyond, with a swing travel bound) aims at b_c of "Two steps ahead" in the module docstring. Three
+        fixed-point passes: the foothold moves with the aim."""
+        if far is None and not (crossing and self.geometry.swing_length_max > 0.0):
             return solve(bounds, None), bounds, None
         sign = 1.0 if step_length_nominal > 0.0 else -1.0
-        decay = math.exp(-self.omega * max(bounds[4], self.geometry.step_duration_min))
-        foothold, aim, candidate = bounds[1] if sign > 0.0 else bounds[0], None, None
+        decay = math.exp(-self.omega * self.geometry.step_duration_max)
+        foothold = bounds[1] if sign > 0.0 else bounds[0]
+        aim, candidate = None, None
         for _ in range(3):
-            aim = sign * (abs(far - foothold) + sign * offset_nominal) * decay
+            if far is None:  # the crossing itself
+                aim = self._crossing_aim(abs(foothold), sign, step_length_nominal, offset_nominal)
+            else:  # the last step before it: at least the nominal offset
+                crossing_length = abs(far - foothold)
+                target = self._crossing_aim(crossing_length, sign, step_length_nominal, offset_nominal) \
+                    if self.geometry.swing_length_max > 0.0 else offset_nominal
+                aim = sign * max((crossing_length + sign * target) * decay, sign * offset_nominal)
             candidate = solve(bounds, aim)
             foothold = candidate.dx
         return candidate, bounds, aim
 
+    def _crossing_aim(self, crossing_length: float, sign: float, step_length_nominal: float,
+                      offset_nominal: float) -> float:
+        """b_c [m], heading frame: the DCM offset at the touchdown of a crossing step of ``crossing_length`` [m]
+        from which the trailing step, ℓ_t = min(|l_nom|, max(0, s_max - crossing_length)) long and lasting the
+        crossing's least duration, ends at ``offset_nominal``: sign (ℓ_t + sign b_nom) exp(-ω T_c,min)."""
+        trailing = min(abs(step_length_nominal), max(0.0, self.geometry.swing_length_max - crossing_length))
+        return sign * (trailing + sign * offset_nominal) * math.exp(-self.omega * self.geometry.step_duration_min)
+
+    def _trailing_bounds(self, bounds: StepBounds, p0, yaw: float, liftoff) -> StepBounds:
+        """``bounds`` of a step whose swing passes over an obstacle with a foothold outside it (the trailing foot):
+        the crossing durations and, with a swing travel bound s_max and a known ``liftoff`` (world (x, y) [m]),
+        ℓ within ℓ_lift ± s_max (ℓ_lift = (liftoff - p0) · heading; never tighter than the step's other bound)."""
+        l_lo, l_hi = bounds[0], bounds[1]
+        reach = self.geometry.swing_length_max
+        if reach > 0.0 and liftoff is not None:
+            along = float((np.asarray(liftoff, dtype=float) - p0) @ np.array([math.cos(yaw), math.sin(yaw)]))
+            l_lo, l_hi = min(max(l_lo, along - reach), l_hi), max(min(l_hi, along + reach), l_lo)
+        return (l_lo, l_hi, bounds[2], bounds[3], max(bounds[4], self.geometry.step_duration_min),
+                max(bounds[5], self.geometry.step_duration_max))
+
     def _feasible(self, bounds: StepBounds) -> bool:
-        return bounds[0] <= bounds[1] and bounds[2] <= bounds[3] and bounds[4] <= self.t_max
+        return bounds[0] <= bounds[1] and bounds[2] <= bounds[3] and bounds[4] <= bounds[5]
 
     def _crosses(self, p0, yaw: float, candidate: StepCandidate, liftoff) -> bool:
         c, s = math.cos(yaw), math.sin(yaw)

@@ -435,7 +435,7 @@ class FootstepSequencer:
         params = self.params
         constraints = None
         if len(obstacles):
-            constraints = FootholdConstraints(obstacles, params.foothold_geometry(), params.t_max, self._omega)
+            constraints = FootholdConstraints(obstacles, params.foothold_geometry(), self._omega)
             if params.obstacle_double_support > 0.0 and self.backend_name != "exact":
                 raise ParameterError(f"obstacle_double_support={params.obstacle_double_support} s (a quasi-static "
                                      f"crossing) is planned by the 'exact' backend only, not {self.backend_name!r}")
@@ -589,9 +589,10 @@ class FootstepSequencer:
 
             def solve(bounds, aim):
                 low = math.exp(omega * max(bounds[4], elapsed, duration_min))
+                high = max(math.exp(omega * bounds[5]), low)
                 bx_nom = bnx if aim is None else aim
                 dx, dy, g, hx, hy, b = solve_exact_scalars(
-                    0.0, 0.0, hax, hay, a1, a2, a3, l_nom, w_nom, gamma_nom, bx_nom, bny, *bounds[:4], low, g_hi)
+                    0.0, 0.0, hax, hay, a1, a2, a3, l_nom, w_nom, gamma_nom, bx_nom, bny, *bounds[:4], low, high)
                 cost = a1 * ((dx - l_nom) ** 2 + (dy - w_nom) ** 2) + a2 * (g - gamma_nom) ** 2 \
                     + a3 * ((hx - bx_nom) ** 2 + (hy - bny) ** 2)
                 return StepCandidate(dx, dy, g, hx, hy, b, cost, math.log(g) / omega)
@@ -600,8 +601,8 @@ class FootstepSequencer:
             nominal = StepCandidate(c * rx + s * ry, c * ry - s * rx, gamma, c * bx + s * by, c * by - s * bx,
                                     bits, 0.0, math.log(gamma) / omega)
             chosen, changed = constraints.choose(
-                (p0x, p0y), yaw, (l_min, l_max, w_lo, w_hi, max(params.t_min, duration_min)), nominal, solve, lift,
-                l_nom, bnx, cross)
+                (p0x, p0y), yaw, (l_min, l_max, w_lo, w_hi, max(params.t_min, duration_min), params.t_max), nominal,
+                solve, lift, l_nom, bnx, cross)
             if changed:
                 px, py = p0x + (c * chosen.dx - s * chosen.dy), p0y + (s * chosen.dx + c * chosen.dy)
                 bx, by = c * chosen.hx - s * chosen.hy, s * chosen.hx + c * chosen.hy
@@ -631,7 +632,7 @@ class FootstepSequencer:
             duration, active = solution.duration, tuple(solution.active_names)
             if constraints is not None:  # footholds outside the obstacles (sequencer.footholds)
                 chosen, changed = constraints.choose(
-                    p0, yaw, (*problem.length_bounds, *problem.width_bounds, problem.time_bounds[0]),
+                    p0, yaw, (*problem.length_bounds, *problem.width_bounds, *problem.time_bounds),
                     self._candidate(problem, solution, to_heading, rotate),
                     lambda bounds, aim, problem=problem, to_heading=to_heading: self._solve_bounded(
                         problem, bounds, aim, to_heading, rotate),
@@ -653,10 +654,10 @@ class FootstepSequencer:
         return steps
 
     def _solve_bounded(self, problem: StepProblem, bounds, aim, to_heading: np.ndarray, rotate: bool) -> StepCandidate:
-        """The backend's solution of ``problem`` with the step bounds (ℓ_min, ℓ_max, w_min, w_max, T_min) and,
+        """The backend's solution of ``problem`` with the step bounds (ℓ_min, ℓ_max, w_min, w_max, T_min, T_max) and,
         unless ``aim`` is None, the nominal DCM offset b_x = aim [m] (heading frame)."""
         bounded = dataclasses.replace(problem, length_bounds=(bounds[0], bounds[1]), width_bounds=(bounds[2], bounds[3]),
-                                      time_bounds=(bounds[4], problem.time_bounds[1]))
+                                      time_bounds=(bounds[4], bounds[5]))
         if aim is not None:
             bounded = dataclasses.replace(bounded, b_nominal=np.array((aim, problem.b_nominal[1])))
         return self._candidate(bounded, self.backend.solve(bounded), to_heading, rotate)

@@ -75,6 +75,15 @@ class SequencerParams:
             uses max(l_max, this): the crossing step may be longer than a walking one).
         obstacle_step_duration_min: duration lower bound [s] of a step whose swing passes over an obstacle
             (the planner uses max(t_min, this)), <= t_max.
+        obstacle_step_duration_max: duration upper bound [s] of a step whose swing passes over an obstacle,
+            0 (t_max, the walking bound) or in [max(t_min, obstacle_step_duration_min), 3]: a crossing step is
+            longer than a walking one and its DCM, from a walking offset, needs longer to travel it (from 3 cm,
+            a 0.58 m crossing on the H1's LIPM takes 0.93 s, beyond its t_max of 0.8 s).
+        obstacle_swing_length_max: the travel bound [m] of a foot whose swing passes over an obstacle, from its
+            lift-off to its touchdown along the heading, 0 (none) or > 0: the trailing foot, lifting off before
+            the obstacle, lands beyond it within this of where it lifted off (a nominal step from the lead foot
+            asked the H1 a 1.0 m swing), and the lead crossing step aims at the DCM offset from which that
+            shorter trailing step ends at the nominal offset (:mod:`sequencer.footholds`).
         obstacle_offset_tolerance: a step crosses an obstacle only if its DCM offset at touchdown is at most
             this much behind the nominal one, along the heading [m], >= 0 (else one more step before it,
             aiming at the offset the crossing needs; :mod:`sequencer.footholds`).
@@ -118,6 +127,8 @@ class SequencerParams:
     obstacle_approach_margin: float = 0.0
     obstacle_step_length_max: float = 0.3
     obstacle_step_duration_min: float = 0.0
+    obstacle_step_duration_max: float = 0.0
+    obstacle_swing_length_max: float = 0.0
     obstacle_offset_tolerance: float = 0.03
     obstacle_double_support: float = 0.0
     sole_front: float = 0.0
@@ -170,6 +181,13 @@ class SequencerParams:
         if not 0.0 <= self.obstacle_step_duration_min <= self.t_max:
             raise ParameterError(f"obstacle_step_duration_min={self.obstacle_step_duration_min} s must be in "
                                  f"[0, t_max={self.t_max} s]")
+        crossing_min = max(self.t_min, self.obstacle_step_duration_min)
+        if not (self.obstacle_step_duration_max == 0.0 or crossing_min <= self.obstacle_step_duration_max <= 3.0):
+            raise ParameterError(f"obstacle_step_duration_max={self.obstacle_step_duration_max} s must be 0 or in "
+                                 f"[max(t_min, obstacle_step_duration_min)={crossing_min} s, 3 s]")
+        if not (math.isfinite(self.obstacle_swing_length_max) and self.obstacle_swing_length_max >= 0.0):
+            raise ParameterError(f"obstacle_swing_length_max={self.obstacle_swing_length_max} m must be 0 (none) "
+                                 f"or a finite number > 0")
         if not (self.obstacle_double_support == 0.0 or self.double_support <= self.obstacle_double_support <= 5.0):
             raise ParameterError(f"obstacle_double_support={self.obstacle_double_support} s must be 0 or in "
                                  f"[double_support={self.double_support} s, 5 s]")
@@ -206,11 +224,12 @@ class SequencerParams:
 
     def foothold_geometry(self) -> FootholdGeometry:
         """The obstacle margins, the crossing step's bounds and the sole of these parameters
-        (:class:`sequencer.footholds.FootholdGeometry`; effective crossing bounds: max with l_max, t_min)."""
+        (:class:`sequencer.footholds.FootholdGeometry`; effective crossing bounds: max with l_max, t_min, t_max)."""
         return FootholdGeometry(self.obstacle_margin, max(self.l_max, self.obstacle_step_length_max),
                                 max(self.t_min, self.obstacle_step_duration_min), self.sole_front, self.sole_rear,
                                 self.sole_half_width, self.obstacle_offset_tolerance, self.obstacle_approach_margin,
-                                self.obstacle_double_support)
+                                self.obstacle_double_support, max(self.t_max, self.obstacle_step_duration_max),
+                                self.obstacle_swing_length_max)
 
     # ------------------------------------------------------------------ velocity commands
     def velocity_range(self) -> dict[str, tuple[float, float]]:

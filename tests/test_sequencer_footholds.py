@@ -280,3 +280,67 @@ def test_quasi_static_crossing_bad_input():
     stance, measured = _start(planner)
     with pytest.raises(ParameterError, match="exact"):
         planner.plan(0.0, stance, measured, COMMAND, obstacles=(Obstacle(np.array([1.0, 0.0]), 0.0, 0.1, 1.0, 0.1),))
+
+
+TWO_STEPS = dataclasses.replace(H1, obstacle_step_duration_max=1.1, obstacle_swing_length_max=0.7)
+"""The H1 geometry with a crossing duration bound above t_max and a swing travel bound (two steps ahead)."""
+
+
+def _crossings(plan, start_along: float = 0.0):
+    """(lead, trailing) indices of the first two crossing steps, and the footholds along x with the stance first."""
+    crossings = [k for k, step in enumerate(plan.steps) if step.crossing is not None]
+    assert len(crossings) >= 2, crossings
+    assert crossings[1] == crossings[0] + 1
+    return crossings[0], crossings[1], np.concatenate([[start_along], _along(plan, 0.0)])
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_the_trailing_swing_stays_within_its_travel_bound(seed):
+    rng = np.random.default_rng(100 + seed)
+    distance, depth = rng.uniform(0.4, 1.0), rng.uniform(0.08, 0.2)
+    obstacle = Obstacle(np.array([distance + 0.5 * depth, 0.0]), 0.0, depth, 1.2, 0.1)
+    geometry = TWO_STEPS.foothold_geometry()
+    travels = {}
+    for name, params in (("unbounded", H1), ("bounded", TWO_STEPS)):
+        planner = DcmFootstepPlanner(params)
+        stance, measured = _start(planner)
+        plan = planner.plan(0.0, stance, measured, COMMAND, obstacles=(obstacle,))
+        assert _sole_overlaps(plan, obstacle, params.foothold_geometry()) == []
+        lead, trailing, along = _crossings(plan)
+        travels[name] = along[trailing + 1] - along[trailing - 1]  # the trailing foot lifts off at the lead's stance
+        if name == "bounded":
+            for k in (lead, trailing):
+                assert geometry.step_duration_min - 1e-9 <= plan.steps[k].duration <= 1.1 + 1e-9
+    assert travels["bounded"] <= TWO_STEPS.obstacle_swing_length_max + 1e-9
+    assert travels["bounded"] <= travels["unbounded"] + 1e-9
+
+
+def test_the_lead_crossing_step_aims_at_the_offset_the_trailing_step_can_carry():
+    """b_c = (ℓ_t + b_nom) exp(-ω T_c,min), ℓ_t = min(l_nom, s_max - ℓ_c) (module docstring, "Two steps ahead"):
+    a box where the crossing is within the DCM's reach."""
+    obstacle = Obstacle(np.array([0.9, 0.0]), 0.0, 0.1, 1.2, 0.1)
+    planner = DcmFootstepPlanner(TWO_STEPS)
+    stance, measured = _start(planner)
+    plan = planner.plan(0.0, stance, measured, COMMAND, obstacles=(obstacle,))
+    lead, trailing, along = _crossings(plan)
+    crossing_length = along[lead + 1] - along[lead - 1]  # from the stance before it (the other foot)
+    gait = planner.sequencer.nominal_gait((COMMAND.v_x, COMMAND.v_y), None)
+    trailing_length = min(gait.step_length, TWO_STEPS.obstacle_swing_length_max - crossing_length)
+    b_nominal = float(gait.dcm_offset(plan.steps[trailing].foot)[0])
+    expected = (trailing_length + b_nominal) * np.exp(-TWO_STEPS.omega * TWO_STEPS.obstacle_step_duration_min)
+    assert expected < b_nominal - 0.01  # the aim is not the nominal offset
+    assert plan.steps[lead].dcm_offset[0] == pytest.approx(expected, abs=3e-3)
+    # the trailing step then lands at the nominal offset, within its travel
+    assert plan.steps[trailing].dcm_offset[0] == pytest.approx(b_nominal, abs=3e-3)
+    assert along[trailing + 1] - along[trailing - 1] <= TWO_STEPS.obstacle_swing_length_max + 1e-9
+
+
+def test_crossing_duration_and_travel_bad_input():
+    with pytest.raises(ParameterError, match="obstacle_step_duration_max"):
+        dataclasses.replace(H1, obstacle_step_duration_max=0.4)  # below the crossing's lower bound 0.5 s
+    with pytest.raises(ParameterError, match="obstacle_step_duration_max"):
+        dataclasses.replace(H1, obstacle_step_duration_max=4.0)
+    with pytest.raises(ParameterError, match="obstacle_swing_length_max"):
+        dataclasses.replace(H1, obstacle_swing_length_max=-0.1)
+    with pytest.raises(ParameterError, match="obstacle_swing_length_max"):
+        dataclasses.replace(H1, obstacle_swing_length_max=float("nan"))

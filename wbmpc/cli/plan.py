@@ -55,6 +55,8 @@ _HELP = {
     "obstacle_approach_margin": "an obstacle's near side grown by this much more [m]",
     "obstacle_step_length_max": "length bound of a step beyond an obstacle (with l_max) [m]",
     "obstacle_step_duration_min": "duration lower bound of a step over an obstacle (with t_min) [s]",
+    "obstacle_step_duration_max": "duration upper bound of a step over an obstacle (with t_max; 0: t_max) [s]",
+    "obstacle_swing_length_max": "travel bound of a foot swinging over an obstacle, lift-off to touchdown (0: none) [m]",
     "obstacle_offset_tolerance": "a step crosses only with its DCM offset this close to the nominal one [m]",
     "sole_front": "sole extent ahead of the foot frame [m]",
     "sole_rear": "sole extent behind the foot frame [m]",
