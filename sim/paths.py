@@ -3,8 +3,8 @@
 A :class:`PlanarPath` is a closed polyline in the ground plane (world frame, x-y [m]). Every
 computation on it is here, once: the closest point to a position (global, for the metrics, or
 near a previous arc length, for a follower that must not jump across the path), the point and
-the tangent heading at an arc length, and the corners (vertices where the heading turns by more
-than ``CORNER_TURN``).
+the tangent heading at an arc length, the heading change at each vertex, and the corners
+(vertices where the heading turns by more than ``CORNER_TURN``).
 
 Arc lengths ``s`` [m] are measured from the first vertex along the path's direction. A follower's
 progress is an *unwrapped* arc length: it keeps growing past ``length`` on the second lap;
@@ -70,11 +70,21 @@ class PlanarPath:
 
     # ------------------------------------------------------------------ geometry
     @property
+    def vertex_arc_lengths(self) -> np.ndarray:
+        """Arc length of each vertex [m], in [0, length), shape (n,)."""
+        return self._starts.copy()
+
+    @property
+    def vertex_turns(self) -> np.ndarray:
+        """Signed change of the tangent heading at each vertex [rad] (segment i-1 -> i; > 0 turns
+        left), in [-pi, pi), shape (n,): 2 pi / CIRCLE_SEGMENTS on the circle, +-pi/2 at the square's corners."""
+        return wrap_angle(self._headings - np.roll(self._headings, 1))
+
+    @property
     def corners(self) -> np.ndarray:
         """Arc lengths [m] of the vertices where the tangent heading turns by more than
         ``CORNER_TURN``, shape (k,) (none on the circle, four on the square)."""
-        turn = wrap_angle(self._headings - np.roll(self._headings, 1))  # at vertex i: segment i-1 -> i
-        return self._starts[np.abs(turn) > CORNER_TURN].copy()
+        return self._starts[np.abs(self.vertex_turns) > CORNER_TURN].copy()
 
     def _segment(self, s) -> tuple[np.ndarray, np.ndarray]:
         """Segment index and distance along it [m] of the (unwrapped) arc lengths ``s``."""

@@ -104,16 +104,21 @@ def test_follower_walks_ahead_on_the_path_and_steers_back_to_it():
     assert v_y == pytest.approx(0.1) and yaw_rate == 0.0 and -0.05 < v_x < 0.0  # turning left, slightly back
 
 
-def walk_kinematically(follower, duration, dt=0.01, pose=(0.0, 0.0, 0.0)):
-    """Integrate the follower's commands on a robot that moves exactly as commanded (heading frame)."""
+def walk_kinematically(follower, duration, dt=0.01, pose=(0.0, 0.0, 0.0), lag=0.0, turn_drift=(0.0, 0.0)):
+    """Integrate the follower's commands on a robot that moves as commanded (heading frame), through a
+    first-order lag of ``lag`` [s] (0: exactly), drifting by ``turn_drift`` [m/rad] (heading frame) times
+    its |yaw rate| (the G1 turning in place at 0.3 rad/s drifted back and right at ~0.05 m/s)."""
     x, y, yaw = pose
+    velocity = np.zeros(3)  # the robot's (v_x, v_y, yaw_rate), heading frame
     trajectory = []
     for k in range(int(round(duration / dt))):
-        v_x, v_y, yaw_rate = follower.command((x, y, yaw), speed_scale=min(1.0, k * dt / 1.0))
+        command = follower.command((x, y, yaw), speed_scale=min(1.0, k * dt / 1.0))
+        velocity += (1.0 if lag == 0.0 else dt / lag) * (np.array(command) - velocity)
+        v_x, v_y = velocity[:2] + abs(velocity[2]) * np.array(turn_drift)
         x += dt * (math.cos(yaw) * v_x - math.sin(yaw) * v_y)
         y += dt * (math.sin(yaw) * v_x + math.cos(yaw) * v_y)
-        yaw += dt * yaw_rate
-        trajectory.append((x, y, yaw, v_x, v_y, yaw_rate))
+        yaw += dt * velocity[2]
+        trajectory.append((x, y, yaw, *command))
     return np.array(trajectory)
 
 
@@ -132,15 +137,81 @@ def test_follower_goes_round_the_circle_heading_along_it_and_stops_at_the_end():
     assert np.abs(trajectory[-1, 3:5]).max() < 0.01  # stopped at the end
 
 
-def test_follower_turns_the_square_corners_within_the_yaw_rate_range():
+def test_follower_turns_the_square_corners_in_place_within_the_yaw_rate_range():
     square = make_path("square")
-    follower = PathFollower(square, speed=0.25, look_ahead=0.3, heading_gain=1.0, command_range=G1_RANGE)
-    trajectory = walk_kinematically(follower, duration=50.0)  # slower at the corners: turning at 0.3 rad/s at most
+    follower = PathFollower(square, speed=0.25, look_ahead=0.3, heading_gain=1.0, laps=0.5, command_range=G1_RANGE)
+    trajectory = walk_kinematically(follower, duration=40.0)  # two corners, turning at 0.3 rad/s at most
     assert np.all(np.abs(trajectory[:, 5]) <= 0.3 + 1e-12) and np.all(np.abs(trajectory[:, 4]) <= 0.15 + 1e-12)
-    metrics = path_metrics(square, trajectory[:, :2], trajectory[:, 2])
+    metrics = path_metrics(square, trajectory[:, :2], trajectory[:, 2], laps=0.5)
     assert metrics["path_completion"] == pytest.approx(1.0, abs=0.01)
-    assert metrics["path_deviation_max"] < 0.15  # cuts the corners by the look-ahead's pull
-    assert metrics["heading_error_max"] < 0.3  # the turn is over by HEADING_CORNER_MARGIN past a corner
+    assert metrics["path_deviation_max"] < 0.005  # stops at each corner, turns there, walks on along the next side
+    assert metrics["heading_error_max"] < 0.1  # the turn is over by HEADING_CORNER_MARGIN past a corner
+
+
+def test_follower_slows_down_toward_a_corner_to_the_speed_its_yaw_rate_turns_within_corner_deviation():
+    square = make_path("square")
+    follower = PathFollower(square, 0.25, 0.3, 1.0, command_range=G1_RANGE, corner_deviation=0.05, corner_rate=0.5)
+    cos_half = math.cos(0.25 * math.pi)  # the square turns by 90 degrees at each corner
+    corner_speed = 0.3 * 0.05 * cos_half / (1.0 - cos_half)  # [m/s], 0.036: radius 0.12 m at 0.3 rad/s
+    np.testing.assert_allclose(follower.corner_arc_lengths, [1.0, 3.0, 5.0, 7.0])
+    np.testing.assert_allclose(follower.corner_speeds, corner_speed)
+    for to_corner in (0.8, 0.5, 0.3, 0.1, 0.05):  # on the first side, heading along it
+        follower.progress = 1.0 - to_corner
+        expected = min(0.25, corner_speed + 0.5 * max(0.0, to_corner - corner_speed / 1.0))
+        assert follower.command((1.0 - to_corner, 0.0, 0.0)) == pytest.approx((expected, 0.0, 0.0)), to_corner
+    for past_corner in (0.05, 0.1, 0.3, 0.8):  # on the second side, turned: it speeds up again at the same rate
+        follower.progress = 1.0 + past_corner
+        expected = min(0.25, corner_speed + 0.5 * max(0.0, past_corner - corner_speed / 1.0))
+        assert follower.command((1.0, past_corner, 0.5 * math.pi)) == pytest.approx((expected, 0.0, 0.0)), past_corner
+    # within corner_speed / heading_gain of the corner the heading's preview is past it: it turns in place
+    follower.progress = 0.98
+    v_x, v_y, yaw_rate = follower.command((0.98, 0.0, 0.0))
+    assert yaw_rate == pytest.approx(0.3) and abs(v_x) < 1e-12 and abs(v_y) < 1e-12
+    # a faster-turning robot may take the corner faster; the circle's vertices (0.5 degrees) ask for no slowdown
+    faster = PathFollower(square, 0.25, 0.3, 1.0, command_range={**G1_RANGE, "yaw_rate": (-0.6, 0.6)})
+    np.testing.assert_allclose(faster.corner_speeds, 2.0 * corner_speed)
+    assert len(PathFollower(make_path("circle"), 0.25, 0.3, 1.0, command_range=G1_RANGE).corner_speeds) == 0
+    # a robot that cannot turn (Bolt) keeps walking at its speed toward a corner
+    bolt = PathFollower(square, 0.25, 0.3, 1.0, command_range=BOLT_RANGE)
+    assert len(bolt.corner_speeds) == 0
+    bolt.progress = 0.9
+    assert bolt.command((0.9, 0.0, 0.0)) == pytest.approx((0.25, 0.0, 0.0))
+
+
+def test_follower_comes_back_to_the_path_while_it_turns_in_place():
+    # 5 cm outside the first side, near the corner, half-way round: it barely progresses (cos of the
+    # heading error, the yaw rate saturated), and still comes back at speed / look_ahead x the distance
+    square = make_path("square")
+    follower = PathFollower(square, 0.25, 0.3, 1.0, command_range=G1_RANGE)
+    follower.progress = 0.98
+    yaw = 0.5
+    v_x, v_y, yaw_rate = follower.command((0.98, -0.05, yaw))
+    assert yaw_rate == pytest.approx(0.3)
+    world = (math.cos(yaw) * v_x - math.sin(yaw) * v_y, math.sin(yaw) * v_x + math.cos(yaw) * v_y)
+    assert world[1] == pytest.approx(0.25 / 0.3 * 0.05)  # toward the side, as fast as at full speed
+    assert 0.0 < world[0] < 0.01  # along it, hardly
+
+
+def test_follower_keeps_a_lagging_drifting_robot_within_the_corner_deviation_on_the_square():
+    # a robot that follows its commands 0.5 s late and drifts back and right while it turns, as the G1 does
+    square = make_path("square")
+    follower = PathFollower(square, speed=0.25, look_ahead=0.3, heading_gain=1.0, laps=0.5, command_range=G1_RANGE)
+    trajectory = walk_kinematically(follower, duration=45.0, lag=0.5, turn_drift=(-0.1, -0.1))
+    metrics = path_metrics(square, trajectory[:, :2], trajectory[:, 2], laps=0.5)
+    assert metrics["path_completion"] == pytest.approx(1.0, abs=0.01)
+    assert metrics["path_deviation_max"] < 0.06  # 0.095 m when the return to the path slowed down with the progress
+
+
+def test_follower_refuses_a_bad_corner_deviation_or_corner_rate_in_one_line():
+    square = make_path("square")
+    with pytest.raises(ParameterError, match=r"^corner_deviation=0.0 must be a finite number > 0$"):
+        PathFollower(square, 0.25, 0.3, 1.0, corner_deviation=0.0)
+    with pytest.raises(ParameterError, match=r"^corner_rate=1.0 1/s must be in \(0, heading_gain=1.0\) 1/s$"):
+        PathFollower(square, 0.25, 0.3, 1.0, corner_rate=1.0)
+    with pytest.raises(ParameterError, match=r"^corner_deviation=2.0 m must be in \[0.001, 1.0\] m$"):
+        make_scenario("waypoints", corner_deviation=2.0)
+    with pytest.raises(ParameterError, match=r"^corner_rate=-0.1 1/s must be in \(0, heading_gain=2.0\) 1/s$"):
+        make_scenario("waypoints", corner_rate=-0.1, heading_gain=2.0)
 
 
 def test_follower_walks_slower_round_a_curve_tighter_than_its_yaw_rate_allows():

@@ -18,7 +18,8 @@ from sim import run_scenario
 from sim.plots import save_figures
 
 # (robot, path, duration [s]): a lap at 0.25 m/s, with the time Bolt needs sideways (v_y <= 0.1 m/s)
-WAYPOINT_RUNS = [("g1", "circle", 45.0), ("g1", "square", 55.0), ("bolt", "circle", 50.0), ("bolt", "square", 65.0)]
+# and the G1 its turns in place at the square's corners
+WAYPOINT_RUNS = [("g1", "circle", 45.0), ("g1", "square", 80.0), ("bolt", "circle", 50.0), ("bolt", "square", 65.0)]
 # G1 pushes at the pelvis, 0.1 s while walking at 0.3 m/s: (force [N], direction [deg], push time [s])
 PUSH_RUNS = [(30.0, 90.0, 4.0), (60.0, 90.0, 4.0), (60.0, 0.0, 4.0)]
 PATH_METRICS = ("path_deviation_max", "path_deviation_mean", "heading_error_max", "heading_error_mean",

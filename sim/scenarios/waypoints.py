@@ -2,7 +2,8 @@
 
 The command comes from the measured base pose through a pure-pursuit follower
 (:class:`sim.path_follower.PathFollower`), kept within the controller's command range: a robot
-that can turn (G1: +-0.3 rad/s) turns with the path; one that cannot (Bolt: yaw rate 0) keeps
+that can turn (G1: +-0.3 rad/s) turns with the path, slowing down toward a corner to the speed
+its yaw-rate limit turns within ``corner_deviation`` of it; one that cannot (Bolt: yaw rate 0) keeps
 its heading and walks sideways and backwards where the path asks it to, as fast as its v_x and
 v_y ranges allow. The paths start at the robot's standing position, along its heading
 (:mod:`sim.paths`); the metrics (``path_deviation_*``, ``heading_error_max``, ``path_completion``)
@@ -34,6 +35,8 @@ class Waypoints(Scenario):
     laps: float = 1.0  # [-], times round the path
     look_ahead: float = 0.3  # [m], along the path, to the point the robot walks toward
     heading_gain: float = 1.0  # [1/s], yaw rate per heading error
+    corner_deviation: float = 0.05  # [m], how far a turn at the yaw-rate limit may cut a corner (the corner speed)
+    corner_rate: float = 0.5  # [1/s], of the slowdown toward a corner and the speed-up after it, below heading_gain
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -46,11 +49,12 @@ class Waypoints(Scenario):
         _check_range("laps", self.laps, 1e-3, 100.0, "")
         _check_range("look_ahead", self.look_ahead, 0.01, 10.0, "m")
         _check_range("heading_gain", self.heading_gain, 0.01, 100.0, "1/s")
+        _check_range("corner_deviation", self.corner_deviation, 1e-3, 1.0, "m")
         self._set_follower(None)
 
     def _set_follower(self, command_range) -> None:
         follower = PathFollower(path_from_parameters(vars(self)), self.speed, self.look_ahead, self.heading_gain,
-                                self.laps, command_range)
+                                self.laps, command_range, self.corner_deviation, self.corner_rate)
         object.__setattr__(self, "follower", follower)  # the run's state (progress), not a parameter
 
     def setup(self, robot, command_range) -> None:
