@@ -22,15 +22,17 @@ bound of the QP. The choice is made per step, by the planner, not by the QP:
 2. else, along the heading, the step goes *beyond* the obstacle (ℓ >= b, the far side seen from
    p_0; ℓ <= a walking backwards) when the obstacle lies in the direction of travel (the sign of the
    nominal step; stepping in place crosses nothing), one step can reach it and the DCM can carry that
-   step (its offset at touchdown within ``obstacle_offset_tolerance`` of the nominal one):
+   step (its offset at touchdown within ``obstacle_offset_tolerance`` of the one it aims at: the
+   nominal one, or b_c below):
    b <= max(l_max, obstacle_step_length_max), the crossing step's own length bound, with the
    duration T in [max(t_min, obstacle_step_duration_min), max(t_max, obstacle_step_duration_max)] (a
    crossing swing lifts higher and takes longer, and its DCM needs longer to travel the long step);
    otherwise it stays *before* it (ℓ <= a: the last step
    before the obstacle, its toe ``obstacle_margin`` before the near edge at most). That last step
-   aims at the DCM offset the crossing step needs (a point-foot LIPM cannot make a step four times
-   the nominal one from the nominal offset: from 4.7 cm the H1's DCM needs 0.76 s to travel a 0.48 m
-   crossing, and the planned crossing ended with the DCM behind the foot); a robot that cannot
+   aims at the DCM offset from which the crossing step reaches its own aim within its longest
+   duration, and at least at the nominal offset (a point-foot LIPM cannot make a step four times
+   the nominal one from the nominal offset within a walking step's duration: from 4.7 cm the H1's
+   DCM needs 0.76 s to travel a 0.48 m crossing); a robot that cannot
    reach beyond from there steps in place before the obstacle (a safe stop);
 3. stepping *beside* the obstacle (w <= c or w >= d, within the width bounds) is the other
    candidate; of the candidates that are feasible, the one of least QP cost is taken;
@@ -48,7 +50,7 @@ DCM offset from which that step ends at the nominal offset b_nom, b_c = (ℓ_t +
 (eq. 1b; signs along the direction of travel), not at b_nom: aiming at b_nom, the DCM runs a nominal
 offset ahead of the lead foot and the short trailing step cannot catch it. The DCM check of step 2
 compares the crossing's offset with that aim; the last step before the obstacle aims at
-(ℓ_c + b_c) exp(-ω T_c,min).
+max((ℓ_c + b_c) exp(-ω T_c,max), b_nom).
 
 "Cross when one step can reach beyond, else stop at the safe distance" rather than "the cheaper
 side": from the last foothold before an obstacle the cheaper step is always in place (the crossing
@@ -304,15 +306,15 @@ class FootholdConstraints:
                 candidate, changed, lengthened = solve(bounds, aim), True, True
                 continue
             along, beside = self._options(hit, bounds, step_length_nominal, offset_nominal)
+            checked = None  # (candidate, bounds, aim) of the crossing option, once solved
             if along and along[0][2]:  # cross, unless the DCM cannot carry it: then one more step before
                 if cross is None and self.geometry.halt_double_support > 0.0:
                     late = False  # quasi-static: the double support before the swing settles the DCM
                 elif cross is None:
-                    crossing, _, crossing_aim = self._solve_option(solve, along[0][0], None, True, step_length_nominal,
-                                                                   offset_nominal)
+                    checked = self._solve_option(solve, along[0][0], None, True, step_length_nominal, offset_nominal)
                     sign = 1.0 if step_length_nominal > 0.0 else -1.0
-                    target = offset_nominal if crossing_aim is None else crossing_aim
-                    late = sign * (target - crossing.hx) > self.geometry.offset_tolerance
+                    target = offset_nominal if checked[2] is None else checked[2]
+                    late = sign * (target - checked[0].hx) > self.geometry.offset_tolerance
                 else:
                     late = not cross
                 along = along[1:2] if late and len(along) > 1 else along[:1]
@@ -321,7 +323,8 @@ class FootholdConstraints:
                 raise FootholdInfeasible(
                     f"no foothold outside the obstacle box (a, b, c, d) = {tuple(round(v, 4) for v in hit)} m "
                     f"within the step bounds {tuple(round(v, 4) for v in bounds)} (stance p0={p0.tolist()} m)")
-            solved = [self._solve_option(solve, option, far, crossing, step_length_nominal, offset_nominal)
+            solved = [checked if checked is not None and option is checked[1]  # solved for the DCM check
+                      else self._solve_option(solve, option, far, crossing, step_length_nominal, offset_nominal)
                       for option, far, crossing in options]
             candidate, bounds, aim = min(solved, key=lambda triple: triple[0].objective)
             changed = True
