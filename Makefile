@@ -4,13 +4,15 @@ PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
+# The versions the suite last passed with (.ci/constraints.txt); `make setup UNPINNED=1` takes the newest instead.
+CONSTRAINTS := $(if $(UNPINNED),,-c .ci/constraints.txt)
 
 .PHONY: setup demo test bench clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml .ci/constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test,bench,h1]'
+	$(PY) -m pip install --quiet $(CONSTRAINTS) -e '.[test,bench,h1]'
 	touch $(STAMP)
 
 setup: $(STAMP)

@@ -97,12 +97,17 @@ def test_yaw_error_is_only_measured_after_a_recovery():
 
 
 def test_g1_walking_pelvis_yaw_rate_jumps_under_the_torso_moment():
-    """A few simulated seconds: the G1 starts walking and its torso is turned by 120 N·m at 1.2 s."""
-    log = run_scenario("yaw_push", robot="g1", duration=2.0, push_time=1.2, moment=120.0, progress=False)
+    """A few simulated seconds: the G1 starts walking and its torso is turned by 80 N·m at 1.2 s.
+
+    80 N·m is inside what the G1 survives at every phase (docs/campaigns.md, "The G1's yaw disturbances": 4/4
+    up to 80 N·m): the pelvis turns by ~0.27 rad and the walk goes on. 120 N·m at 1.2 s, still in the command's
+    ramp, spun it by 2.1 rad and walked or fell with the dependency versions (mujoco 3.11 / 4.0, CI's set).
+    """
+    log = run_scenario("yaw_push", robot="g1", duration=2.0, push_time=1.2, moment=80.0, progress=False)
     metrics = log.metrics
     assert log.status == "completed", log.summary()
     assert metrics["yaw_push_rate_peak"] > 3.0 * metrics["yaw_push_rate_before"], metrics
-    assert metrics["yaw_push_error_peak"] > 0.01  # [rad]
+    assert 0.01 < metrics["yaw_push_error_peak"] < 1.0  # [rad]: turned, not spun around
     assert metrics["yaw_push_error"] is None  # 0.75 s after the push: not yet "after recovery"
 
 
