@@ -41,7 +41,8 @@ class RunLog:
         robot: robot name.
         seed: random seed of the run.
         params: scenario, controller and runner parameters actually used (JSON-able).
-        status: "completed", "fell", "error" or "interrupted".
+        status: "completed", "fell", "failed" (the controller had nothing to follow: its first solve failed,
+            or its planner failed until the kept plan ran out; ``error`` says which), "error" or "interrupted".
         fall_time: time of the fall [s] (None if no fall).
         fall_reason: why the run counts as a fall (None if no fall).
         error: "ExceptionType: message" if the run ended with an exception.

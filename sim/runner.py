@@ -396,7 +396,13 @@ class _ClosedLoop:
                 if i % self.replan_every == 0:
                     tic = time.perf_counter()
                     self.controller.set_velocity_command(command)
-                    record = self.controller.replan(t, measurement)
+                    try:
+                        record = self.controller.replan(t, measurement)
+                    except NoSolutionError as err:  # e.g. the planner failed until its last plan ran out
+                        if log.status == "running":  # a fall recorded before stays the outcome
+                            log.status = "failed"
+                        log.error = str(err)
+                        break
                     replan_rows.append({"t": t, **record})
                     timing["replan"] += time.perf_counter() - tic
                 tic = time.perf_counter()

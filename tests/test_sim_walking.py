@@ -108,3 +108,30 @@ def test_a_command_the_robot_cannot_follow_is_refused_before_the_run():
         run_scenario("walk", duration=0.1, speed=0.65)
     with pytest.raises(ParameterError, match=r"and \['lateral_speed'\] both set the command: give one"):
         run_scenario("walk", duration=0.1, velocity_command=(0.0, 0.1, 0.0), lateral_speed=0.3)
+
+
+
+def test_a_planner_failing_until_its_last_plan_runs_out_ends_the_run_with_the_reason_and_the_log(monkeypatch):
+    """Every replan's step QP fails from t = 1 s on: the controller follows the last good plan while it covers
+    the MPC's horizon, then the run ends with the reason, its log up to then kept (Bolt, blind, falls on the
+    way: the fall stays the outcome, recorded first)."""
+    from sequencer.dcm_planner import DcmFootstepPlanner
+    from wbmpc.errors import SolverError
+
+    healthy = DcmFootstepPlanner.plan
+
+    def failing_after_one_second(self, t, *args, **kwargs):
+        if t >= 1.0 - 1e-9:
+            raise SolverError("footstep QP failed: injected")
+        return healthy(self, t, *args, **kwargs)
+
+    monkeypatch.setattr(DcmFootstepPlanner, "plan", failing_after_one_second)
+    log = run_scenario("walk", duration=4.0, seed=0, stop_on_fall=False, progress=False)
+    assert log.status == "fell" and 1.0 < log.fall_time, (log.status, log.fall_reason, log.error)
+    assert log.error.startswith("the footstep planner has failed at every replan since t=1.000 s"), log.error
+    assert "SolverError: footstep QP failed: injected" in log.error and "nothing left to follow" in log.error
+    replans = log.replans
+    after = replans["t"] >= 1.0 - 1e-9
+    assert np.all(replans["sequencer_ok"][after] == 0.0) and np.all(replans["sequencer_ok"][~after] == 1.0)
+    t_end = replans["t"][-1]
+    assert 1.5 < t_end < 4.0 - 0.5 and log.ticks["t"][-1] >= t_end  # the kept plan's steps ran out

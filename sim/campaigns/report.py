@@ -54,6 +54,7 @@ def _stats(records: list[dict[str, Any]]) -> dict[str, Any]:
         "n_success": n_success,
         "n_fell": sum(r["status"] == "fell" for r in records),
         "n_error": sum(r["status"] == "error" for r in records),
+        "n_failed": sum(r["status"] == "failed" for r in records),  # the controller had nothing left to follow
         "success_rate": n_success / n if n else None,
     }
 
@@ -230,7 +231,7 @@ def format_summary(summary: dict[str, Any]) -> str:
     for variant, s in summary["variants"].items():
         lines.append(
             f"  {variant:<12} success {pct(s['success_rate'])}  ({s['n_success']}/{s['n']}; fell {s['n_fell']}, "
-            f"errors {s['n_error']})"
+            f"failed {s['n_failed']}, errors {s['n_error']})"
         )
     for variant, s in summary.get("unpushed", {}).items():
         if s["n"] and s["n_success"] < s["n"]:

@@ -286,7 +286,7 @@ def run_trial(trial: Trial) -> dict[str, Any]:
 
     Record keys: key, index, campaign, variant, params, arguments (the resolved ``run_scenario``
     arguments, e.g. the sequencer parameters of a step-timing variant), seed, success (the run completed its
-    duration without a fall or an error), status ("completed", "fell", "error"), fall_time [s],
+    duration without a fall or an error), status ("completed", "fell", "failed", "error"), fall_time [s],
     fall_reason, error (exception text or None), traceback, metrics (``sim.metrics`` plus
     ``push_phase_measured``), wall_time [s], cpu_time [s] (CPU time of the worker process during
     the trial; below wall_time when the cores are shared), host, pid, finished_at (UTC, ISO 8601).

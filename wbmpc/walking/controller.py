@@ -168,6 +168,14 @@ class WalkingController:
         tic = time.perf_counter()
         plan, measured, record = self.planning.update(t, x, measurement.foot_in_contact, measurement.obstacles)
         self.timers.sequencer += record["sequencer_time"]
+        planning = self.planning
+        if planning.failing_since is not None and not self.reference_stage.covers(plan, t):
+            raise NoSolutionError(
+                f"the footstep planner has failed at every replan since t={planning.failing_since:.3f} s "
+                f"({planning.failure_count} replans; last: {planning.last_failure}) and the last good plan's "
+                f"steps end at {plan.touchdown_times[-1]:.3f} s, before the end of the MPC's horizon "
+                f"{t + self.reference_stage.horizon:.3f} s: nothing left to follow"
+            )
         tic = time.perf_counter()
         reference = self.reference_stage.sample(plan, t, measured.com[:2], measurement.foot_in_contact)
         if cfg.touchdown_detection == "contact":

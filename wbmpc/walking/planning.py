@@ -6,7 +6,9 @@ switches the stance on a touchdown (:class:`~wbmpc.walking.stance.StanceTracker`
 updates the online estimates (:mod:`wbmpc.walking.estimators`) and asks the footstep planner
 for a plan from the current stance with the velocity command (plus the speed integral's
 correction). A planner failure (:class:`wbmpc.errors.SolverError`, e.g. an infeasible step QP)
-keeps the previous plan and is reported in the record; it never stops the loop.
+keeps the previous plan and is reported in the record; it never stops the loop by itself
+(``failing_since`` and ``failure_count`` say since when it has failed at every replan, for the
+controller, which ends the run once the kept plan no longer covers the MPC's horizon).
 
 Perceived obstacles switch the mode walking -> negotiation -> walking
 (:mod:`wbmpc.walking.negotiation`); in negotiation the planner gets the obstacles of the negotiation and
@@ -93,6 +95,9 @@ class PlanningStage:
         self.swing_liftoff = None  # world (x, y) [m] where the swinging foot lifted off
         self.plan = None
         self.planner_time = 0.0  # [s], total wall time in the planner
+        self.failing_since: float | None = None  # [s] first of the replans that have all failed until now
+        self.failure_count = 0  # replans failed in a row
+        self.last_failure = ""  # the last failure's message
 
     # ------------------------------------------------------------------ measurements
     def feet_position(self, q: np.ndarray) -> np.ndarray:
@@ -120,6 +125,7 @@ class PlanningStage:
         self.negotiation.reset()
         self.set_command(command)
         self.plan = None
+        self.failing_since, self.failure_count, self.last_failure = None, 0, ""
 
     def set_command(self, command: VelocityCommand) -> None:
         """The velocity command of the next plans (heading frame).
@@ -226,10 +232,16 @@ class PlanningStage:
                 self.plan = self.planner.plan(t, planned_stance, measured, command, obstacles=planned_obstacles)
             else:  # the planner's own call, as without perception
                 self.plan = self.planner.plan(t, planned_stance, measured, command)
-        except SolverError:  # e.g. an infeasible step QP: keep following the last plan
+        except SolverError as err:  # e.g. an infeasible step QP: keep following the last plan
             if self.plan is None:
                 raise
             record["sequencer_ok"] = 0.0
+            if self.failing_since is None:
+                self.failing_since = t
+            self.failure_count += 1
+            self.last_failure = f"{type(err).__name__}: {err}".splitlines()[0]
+        else:
+            self.failing_since, self.failure_count, self.last_failure = None, 0, ""
         elapsed = time.perf_counter() - tic
         self.planner_time += elapsed
         record["sequencer_time"] = elapsed

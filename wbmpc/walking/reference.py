@@ -119,6 +119,17 @@ class OcpReferenceStage:
         self.wait_for_contact, self.wait_nodes = bool(wait_for_contact), int(wait_nodes)
         self.wait_depth = float(wait_depth)
 
+    @property
+    def horizon(self) -> float:
+        """The OCP grid's length n_nodes * node_dt [s]."""
+        return self.n_nodes * self.node_dt
+
+    def covers(self, plan: Any, t: float) -> bool:
+        """Whether ``plan`` holds a touchdown after the end of the grid that starts at ``t`` [s] (the
+        contact schedule needs one; waiting for a late touchdown only moves touchdowns later)."""
+        touchdowns = plan.touchdown_times
+        return len(touchdowns) > 0 and touchdowns[-1] > t + self.horizon
+
     def sample(self, plan: Any, t: float, com_xy: np.ndarray, foot_in_contact: np.ndarray) -> OcpReference:
         """The OCP reference of the update at ``t`` [s] from ``plan``; ``com_xy`` (2,) [m] is the
         measured CoM, ``foot_in_contact`` (n_feet,) the measured contacts."""
