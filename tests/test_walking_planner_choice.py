@@ -38,9 +38,12 @@ def test_the_preset_chooses_the_planner_and_the_alip_gets_the_robots_double_supp
     assert alip.footstep_planner.kind == "alip"
     controller = WalkingController(alip)
     assert isinstance(controller.planner, AlipFootstepPlanner) and isinstance(controller.planner, FootstepPlanner)
-    # the ALIP preset's model and bounds, the contact schedule's double support of the robot's preset
+    # the ALIP preset's model and bounds, the contact schedule's double support of the robot's preset and the
+    # walking preset's own [footstep_planner.alip] fields (the G1's wider catch step) over them
     preset_params = AlipParams.preset("g1")
-    assert alip.footstep_planner.alip == dataclasses.replace(preset_params, double_support=dcm.planner.double_support)
+    assert alip.footstep_planner.alip == dataclasses.replace(preset_params, double_support=dcm.planner.double_support,
+                                                             width_max=0.5)
+    assert preset_params.width_max == 0.40 and controller.planner.params.width_max == 0.5
     assert preset_params.double_support == 0.0 and controller.planner.double_support == 0.1
     assert controller.omega == pytest.approx(preset_params.omega) == alip.omega != dcm.omega
     assert alip.step_period == preset_params.t_des and dcm.step_period == dcm.planner.t_nom
