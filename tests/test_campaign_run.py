@@ -154,3 +154,20 @@ def test_a_trial_that_raises_is_recorded_with_its_error_and_the_campaign_goes_on
     summary = summarize(spec, list(records.values()))
     assert summary["variants"]["default"]["n_error"] == 1
     assert summary["errors"][0]["count"] == 1 and "no_such_body" in summary["errors"][0]["error"]
+
+
+def test_every_record_names_the_code_it_ran_and_the_report_warns_on_a_mix(tmp_path, inline_reference):
+    from sim.campaigns.report import format_summary, summarize
+    from sim.campaigns.trial import code_version
+
+    _, records = inline_reference
+    head = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, check=True).stdout.strip()
+    assert code_version().split("-")[0] == head  # the checkout the tests import from (maybe "-dirty")
+    assert {r["code"] for r in records} == {code_version()}
+    store = ResultStore(tmp_path)
+    store.write_spec(small_push_map().to_dict())
+    for i, record in enumerate(records):  # half of them as if written by an older session's code
+        store.append({**record, "code": "0" * 40} if i % 2 else {k: v for k, v in record.items() if k != "code"})
+    summary = summarize(small_push_map(), store.records())
+    assert {v["code"]: v["count"] for v in summary["code_versions"]} == {"0" * 40: 4, "not recorded": 4}
+    assert "WARNING the trials ran on 2 code versions" in format_summary(summary)

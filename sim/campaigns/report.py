@@ -186,6 +186,9 @@ def summarize(spec: CampaignSpec, records: list[dict[str, Any]]) -> dict[str, An
 
     errors = Counter(r["error"] for _, r in rows if r["status"] == "error")
     summary["errors"] = [{"error": text, "count": count} for text, count in errors.most_common(MAX_ERROR_KINDS)]
+    # the code each trial ran (sim.campaigns.trial.code_version; records written before it have none)
+    versions = Counter(r.get("code", "not recorded") for _, r in rows)
+    summary["code_versions"] = [{"code": code, "count": count} for code, count in versions.most_common()]
     return summary
 
 
@@ -280,6 +283,10 @@ def format_summary(summary: dict[str, Any]) -> str:
             )
     for e in summary.get("errors", []):
         lines.append(f"  error x{e['count']}: {e['error']}")
+    versions = summary.get("code_versions", [])
+    if len(versions) > 1:
+        lines.append("  WARNING the trials ran on " + str(len(versions)) + " code versions: "
+                     + ", ".join(f"{v['code']} x{v['count']}" for v in versions))
     for path in summary.get("files", []):
         lines.append(f"  wrote {path}")
     return "\n".join(lines)

@@ -37,9 +37,12 @@ import json
 import math
 import os
 import socket
+import subprocess
 import time
 import traceback
 from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -288,7 +291,7 @@ def run_trial(trial: Trial) -> dict[str, Any]:
     arguments, e.g. the sequencer parameters of a step-timing variant), seed, success (the run completed its
     duration without a fall or an error), status ("completed", "fell", "failed", "error"), fall_time [s],
     fall_reason, error (exception text or None), traceback, metrics (``sim.metrics`` plus
-    ``push_phase_measured``), wall_time [s], cpu_time [s] (CPU time of the worker process during
+    ``push_phase_measured``), code (:func:`code_version`), wall_time [s], cpu_time [s] (CPU time of the worker process during
     the trial; below wall_time when the cores are shared), host, pid, finished_at (UTC, ISO 8601).
     """
     from sim.runner import run_scenario
@@ -338,6 +341,7 @@ def run_trial(trial: Trial) -> dict[str, Any]:
             metrics=_jsonable(metrics),
         )
     record.update(
+        code=code_version(),
         wall_time=time.perf_counter() - tic,
         cpu_time=time.process_time() - cpu_tic,
         host=socket.gethostname(),
@@ -345,6 +349,26 @@ def run_trial(trial: Trial) -> dict[str, Any]:
         finished_at=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
     )
     return record
+
+
+@lru_cache(maxsize=1)
+def code_version() -> str:
+    """The code a trial ran: the git commit of the checkout the ``sim`` package is imported from, with
+    ``-dirty`` when its tracked files differ from the commit, or ``unknown`` outside a git checkout (an
+    installed wheel). A campaign resumed in a later session can thus tell its trials' code versions apart;
+    computed once per worker process (its modules are imported once too)."""
+    root = Path(__file__).resolve().parents[2]
+
+    def git(*args: str) -> str:
+        return subprocess.run(["git", "-C", str(root), *args], capture_output=True, text=True, timeout=10,
+                              check=True).stdout.strip()
+
+    try:
+        commit = git("rev-parse", "HEAD")
+        dirty = bool(git("status", "--porcelain", "--untracked-files=no"))
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return f"{commit}-dirty" if dirty else commit
 
 
 def measured_gait_phase(replans: dict[str, np.ndarray], t: float, t_nom: float | None = None) -> float | None:
