@@ -105,6 +105,13 @@ class ContactSchedule:
         return self.t0 + np.concatenate([[0.0], np.cumsum(self.node_spacing)])
 
 
+def plan_covers_grid(plan, t0: float, dt: float, n_nodes: int) -> bool:
+    """Whether ``plan`` holds a touchdown after the grid's end t0 + n_nodes dt [s], as
+    :func:`contact_schedule` needs (the last interval must end beyond the last node)."""
+    touchdowns = plan.touchdown_times
+    return len(touchdowns) > 0 and t0 + dt * n_nodes < touchdowns[-1]
+
+
 def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "next") -> ContactSchedule:
     """Sample a :class:`sequencer.horizon.FootstepPlan` on the OCP grid ``t0 + k dt``, k = 0..n_nodes.
 
@@ -162,7 +169,7 @@ def contact_schedule(plan, t0: float, dt: float, n_nodes: int, rounding: str = "
         raise ParameterError(f"the plan's stance and steps use feet {unknown} that are not in its feet {feet}") from None
     times = t0 + dt * np.arange(n_nodes + 1)
     touchdowns = plan.touchdown_times
-    if times[-1] >= touchdowns[-1]:
+    if not plan_covers_grid(plan, t0, dt, n_nodes):
         raise ParameterError(
             f"the grid ends at t0 + n_nodes*dt = {times[-1]:.4g} s, at or after the plan's last touchdown "
             f"{touchdowns[-1]:.4g} s: plan with a longer horizon or use fewer nodes"

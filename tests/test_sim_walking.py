@@ -110,7 +110,6 @@ def test_a_command_the_robot_cannot_follow_is_refused_before_the_run():
         run_scenario("walk", duration=0.1, velocity_command=(0.0, 0.1, 0.0), lateral_speed=0.3)
 
 
-
 def test_a_planner_failing_until_its_last_plan_runs_out_ends_the_run_with_the_reason_and_the_log(monkeypatch):
     """Every replan's step QP fails from t = 1 s on: the controller follows the last good plan while it covers
     the MPC's horizon, then the run ends with the reason, its log up to then kept (Bolt, blind, falls on the

@@ -95,9 +95,7 @@ class PlanningStage:
         self.swing_liftoff = None  # world (x, y) [m] where the swinging foot lifted off
         self.plan = None
         self.planner_time = 0.0  # [s], total wall time in the planner
-        self.failing_since: float | None = None  # [s] first of the replans that have all failed until now
-        self.failure_count = 0  # replans failed in a row
-        self.last_failure = ""  # the last failure's message
+        self._clear_failures()
 
     # ------------------------------------------------------------------ measurements
     def feet_position(self, q: np.ndarray) -> np.ndarray:
@@ -125,7 +123,13 @@ class PlanningStage:
         self.negotiation.reset()
         self.set_command(command)
         self.plan = None
-        self.failing_since, self.failure_count, self.last_failure = None, 0, ""
+        self._clear_failures()
+
+    def _clear_failures(self) -> None:
+        """No planner failure since the last good plan."""
+        self.failing_since: float | None = None  # [s] first of the replans that have all failed until now
+        self.failure_count = 0  # replans failed in a row
+        self.last_failure = ""  # the last failure's message
 
     def set_command(self, command: VelocityCommand) -> None:
         """The velocity command of the next plans (heading frame).
@@ -241,7 +245,7 @@ class PlanningStage:
             self.failure_count += 1
             self.last_failure = f"{type(err).__name__}: {err}".splitlines()[0]
         else:
-            self.failing_since, self.failure_count, self.last_failure = None, 0, ""
+            self._clear_failures()
         elapsed = time.perf_counter() - tic
         self.planner_time += elapsed
         record["sequencer_time"] = elapsed

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from sequencer.schedule import ContactSchedule, contact_schedule
+from sequencer.schedule import ContactSchedule, contact_schedule, plan_covers_grid
 from wbmpc.walking.stance import delay_to_touchdown, ground_waiting_nodes
 
 
@@ -125,10 +125,9 @@ class OcpReferenceStage:
         return self.n_nodes * self.node_dt
 
     def covers(self, plan: Any, t: float) -> bool:
-        """Whether ``plan`` holds a touchdown after the end of the grid that starts at ``t`` [s] (the
-        contact schedule needs one; waiting for a late touchdown only moves touchdowns later)."""
-        touchdowns = plan.touchdown_times
-        return len(touchdowns) > 0 and touchdowns[-1] > t + self.horizon
+        """Whether ``plan`` can be sampled on the grid that starts at ``t`` [s]
+        (:func:`~sequencer.schedule.plan_covers_grid`; waiting for a late touchdown only moves touchdowns later)."""
+        return plan_covers_grid(plan, t, self.node_dt, self.n_nodes)
 
     def sample(self, plan: Any, t: float, com_xy: np.ndarray, foot_in_contact: np.ndarray) -> OcpReference:
         """The OCP reference of the update at ``t`` [s] from ``plan``; ``com_xy`` (2,) [m] is the
