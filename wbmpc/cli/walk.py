@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import ast
 import os
+import tomllib
 
 from wbmpc.cli.arguments import DURATION, FINITE, NON_NEGATIVE, SEED, output_directory
 from wbmpc.cli.output import add_output_arguments, print_json
@@ -28,13 +29,18 @@ from wbmpc.errors import ParameterError
 
 
 def _parse_assignment(text: str) -> tuple[str, object]:
+    """``NAME=VALUE`` -> (NAME, value): VALUE read as a TOML value (the presets' syntax: ``true``, ``[0.1, 0.2]``,
+    ``"alip"``), else as a Python literal (``True``, ``(0.1, 0.2)``), else kept as the string."""
     if "=" not in text:
         raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected NAME=VALUE")
     name, raw = text.split("=", 1)
     try:
-        value = ast.literal_eval(raw)
-    except (ValueError, SyntaxError):
-        value = raw
+        value = tomllib.loads(f"value = {raw}")["value"]
+    except tomllib.TOMLDecodeError:
+        try:
+            value = ast.literal_eval(raw)
+        except (ValueError, SyntaxError):
+            value = raw
     return name.strip(), value
 
 
