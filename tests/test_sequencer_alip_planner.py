@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from robot_extras import needs_h1_extra
 
 from sequencer import FootstepPlanner, ReducedState, StanceState, VelocityCommand, contact_schedule
 from sequencer.alip.nlp import AlipSolverError
@@ -176,3 +177,18 @@ def test_g1_preset_matches_the_robot():
     assert PARAMS.com_height <= com[2] and com[2] - PARAMS.com_height < 0.05
     feet = robot.foot_positions_reference()
     assert PARAMS.width_min < feet["left"][1] - feet["right"][1] < PARAMS.width_max
+
+
+@needs_h1_extra
+def test_h1_preset_matches_the_robot():
+    robots = pytest.importorskip("robots.registry")
+    pin = pytest.importorskip("pinocchio")
+    params = AlipParams.preset("h1")
+    robot = robots.load_robot("h1")
+    model = robot.pinocchio_model
+    assert params.mass == pytest.approx(pin.computeTotalMass(model), abs=0.01)
+    com = pin.centerOfMass(model, model.createData(), robot.q_reference)
+    assert params.com_height == pytest.approx(com[2], abs=0.005)
+    feet = robot.foot_positions_reference()
+    assert params.width_offset == pytest.approx(feet["left"][1] - feet["right"][1], abs=0.001)
+    assert params.width_min < params.width_offset < params.width_max
