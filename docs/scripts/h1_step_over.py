@@ -42,6 +42,8 @@ def main() -> None:
                         help="walking-preset override, e.g. planner.obstacle_swing_length_max=0.75")
     parser.add_argument("--plans", action="store_true",
                         help="print the plan at the start of every stance from x = 0.5 m on")
+    parser.add_argument("--terms", action="store_true",
+                        help="print the OCP's four largest cost terms every 0.1 s once a crossing is in its horizon")
     args = parser.parse_args()
     overrides = {key: _value(value) for key, _, value in (item.partition("=") for item in args.set)}
     warnings.simplefilter("ignore")  # the node-wise evaluation warning (the KKT backend)
@@ -49,6 +51,18 @@ def main() -> None:
     preset = load_walking_preset("h1", overrides)
     controller = KnownObstacleController(preset, (box.obstacle(),))
     contacts = BoxContacts(box)
+    terms = []  # (t, the OCP's largest cost terms after the update) with --terms
+    if args.terms:
+        replan = controller.replan
+
+        def replan_with_terms(t, measurement):
+            record = replan(t, measurement)
+            if record.get("crossing_nodes", 0) > 0 and round(t / 0.02) % 5 == 0:
+                costs = controller.mpc.problem.term_costs()
+                terms.append((t, sorted(costs.items(), key=lambda item: -item[1])[:4]))
+            return record
+
+        controller.replan = replan_with_terms
     plans = []  # (t, the plan) at the first replan of every stance: what the planner asked for then
 
     def on_tick(model, data) -> None:
@@ -80,6 +94,14 @@ def main() -> None:
                       f"T {step.duration:.3f} at {step.touchdown_time:.3f} offset x {step.dcm_offset[0]:+.3f}"
                       + (f" lift-off x {step.crossing.liftoff[0]:.3f} CROSSING" if step.crossing is not None else "")
                       + ("" if step.double_support is None else f" settled {step.double_support:.2f} s"))
+    crossing = np.flatnonzero(r["crossing_nodes"] > 0)
+    if crossing.size:  # the MPC from the first replan whose horizon holds a crossing swing, every 0.1 s
+        rows = range(int(crossing[0]), len(r["t"]), 5)
+        print("  MPC (t, cost, ok, crossing nodes): " + "  ".join(
+            f"{r['t'][i]:.2f} {r['mpc_cost'][i]:.1e} {int(r['mpc_ok'][i])} {int(r['crossing_nodes'][i])}"
+            for i in rows))
+    for t, top in terms:
+        print(f"  terms at {t:.2f}: " + ", ".join(f"{name} {value:.1e}" for name, value in top))
     failed = r["t"][r["mpc_ok"] < 0.5]
     cost = r["mpc_cost"]
     big = r["t"][np.isfinite(cost) & (cost > 1e7)]
