@@ -487,9 +487,6 @@ class FootstepSequencer:
         # a settle before the trailing crossing swing (and the step resuming the walk after it) only
         halt_trailing = constraints.geometry.trailing_double_support if constraints is not None else 0.0
         resume_next = first_resume  # the step ending the current stance resumes the walk after a crossing
-        # the trailing settle is planned once the lead swing has lifted off (or the lead foot is down): planned
-        # earlier, it changed the MPC's approach to the obstacle (the H1's last step before it, docs/ocp.md)
-        trailing_settle = True
         for _ in range(self._max_steps):
             lift = liftoff if not steps else (vectors[-2][:2] if len(steps) >= 2 else p0_first)
             cross_kept = None if steps else first_crossing
@@ -509,8 +506,9 @@ class FootstepSequencer:
                 # the trailing crossing: its stance foot has crossed already (lift-off -> stance passes over it)
                 trailing = crosses and crossing_of(constraints.obstacles, lift, (p0x, p0y), yaw,
                                                    constraints.geometry) is not None
-                if crosses:
-                    own_halt = halt_trailing if trailing and halt_trailing > 0.0 and trailing_settle else halt
+                if crosses:  # the trailing settle once the lead foot is down (the plan's first step): planned
+                    # earlier, it changed the H1's approach to the box or its lead swing (docs/ocp.md)
+                    own_halt = halt_trailing if trailing and halt_trailing > 0.0 and not steps else halt
                 else:  # resuming the walk after the trailing crossing
                     own_halt = halt_trailing if halt_trailing > 0.0 else halt
                 if (crosses or resume_next) and own_halt > 0.0:
@@ -541,10 +539,6 @@ class FootstepSequencer:
                 # quasi-static: the walk resumes after the trailing crossing (the step after the lead crosses too);
                 # a trailing settle alone: after the settled trailing crossing
                 resume_next = crosses if halt > 0.0 else (trailing and own_halt > 0.0)
-            if halt_trailing > 0.0:  # the lead swing in progress (its double support over) or not begun yet
-                trailing_settle = not steps and (crossing_of(constraints.obstacles, lift, (px, py), yaw,
-                                                             constraints.geometry) is None
-                                                 or elapsed_true >= params.double_support)
             duration = math.log(gamma) / omega
             touchdown = max(start_qp + duration, t) if settle is not None else start_qp + duration
             yaw = yaw + yaw_rate * (duration if settle is None else touchdown - stance_start)

@@ -100,6 +100,8 @@ class SequencerParams:
             the straight path from its lift-off to the stance foothold passes over the obstacle) lifts off this
             long after the lead touchdown, with the same settled model as ``obstacle_double_support`` (the DCM
             on the lead foothold along the heading), and so does the step after it, which resumes the walk.
+            It is planned once the lead foot is down (the trailing swing is the plan's first step); before that
+            the plan is the dynamic one (planned from the lead lift-off on, the H1's lead foot touched the box).
             With ``obstacle_double_support`` = 0 only that swing halts (the lead crossing stays dynamic: a
             halt before the lead swing left the H1 without the DCM velocity to reach beyond the box); with both
             > 0 this one replaces ``obstacle_double_support`` for the trailing swing and the step after it.
