@@ -44,6 +44,8 @@ def main() -> None:
                         help="print the plan at the start of every stance from x = 0.5 m on")
     parser.add_argument("--terms", action="store_true",
                         help="print the OCP's four largest cost terms every 0.1 s once a crossing is in its horizon")
+    parser.add_argument("--cold-restart", action="store_true",
+                        help="diagnostic: the MPC update after a failed one starts cold (not in the library)")
     args = parser.parse_args()
     overrides = {key: _value(value) for key, _, value in (item.partition("=") for item in args.set)}
     warnings.simplefilter("ignore")  # the node-wise evaluation warning (the KKT backend)
@@ -52,6 +54,16 @@ def main() -> None:
     controller = KnownObstacleController(preset, (box.obstacle(),))
     contacts = BoxContacts(box)
     terms = []  # (t, the OCP's largest cost terms after the update) with --terms
+    if args.cold_restart:  # diagnostic: after a failed update the next one starts cold (quasi-static guess)
+        replan_plain = controller.replan
+
+        def replan_restarting(t, measurement):
+            record = replan_plain(t, measurement)
+            if record.get("mpc_ok", 1.0) < 0.5:
+                controller.mpc.receding.last_good = None
+            return record
+
+        controller.replan = replan_restarting
     if args.terms:
         replan = controller.replan
 
