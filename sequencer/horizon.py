@@ -503,9 +503,11 @@ class FootstepSequencer:
                 tx, ty, *_ = self._exact_step(p0x, p0y, *walking, 0.0, yaw, rotate, stance, per_stance, l_nom,
                                               constraints, lift, cross_kept)
                 crosses = crossing_of(constraints.obstacles, lift, (tx, ty), yaw, constraints.geometry) is not None
-                # the trailing crossing: its stance foot has crossed already (lift-off -> stance passes over it)
+                # the trailing crossing: its stance foot has crossed already (lift-off -> stance passes over it, the
+                # stance sole itself off it: a stance sole within the margin, before the box, is no lead foot)
                 trailing = crosses and crossing_of(constraints.obstacles, lift, (p0x, p0y), yaw,
-                                                   constraints.geometry) is not None
+                                                   constraints.geometry) is not None \
+                    and crossing_of(constraints.obstacles, (p0x, p0y), (p0x, p0y), yaw, constraints.geometry) is None
                 if crosses:  # the trailing settle once the lead foot is down (the plan's first step): planned
                     # earlier, it changed the H1's approach to the box or its lead swing (docs/ocp.md)
                     own_halt = halt_trailing if trailing and halt_trailing > 0.0 and not steps else halt

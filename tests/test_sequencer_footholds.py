@@ -322,6 +322,12 @@ def test_a_trailing_settle_halts_the_trailing_crossing_swing_once_the_lead_foot_
                                np.tile(trailing.settle_dcm, (5, 1)), atol=1e-12)
     schedule = contact_schedule(after, start + 0.01, 0.02, 50, rounding="nearest")
     assert schedule.in_contact[schedule.times < start + 0.6 - 0.011].all()
+    # a stance sole within the margin before the box is no lead foot, nor is a lift-off there a trailing swing: no
+    # settle (closed loop, the H1's preset margin: a lead swing set down short at 0.843 m, the other foot at 0.821 m)
+    short = StanceState("left", np.array([0.843, 0.215]), 0.0, 4.48, swing_liftoff=np.array([0.821, -0.091]))
+    at_short = ReducedState(np.array([0.925, 0.1, 0.97]), np.zeros(3), np.array([0.925, 0.1]))
+    assert all(step.settle_dcm is None for step in DcmFootstepPlanner(dataclasses.replace(
+        settled, obstacle_margin=0.08)).plan(4.48, short, at_short, COMMAND, obstacles=(box,)).steps)
     # without the settle the same stance asks the trailing foot to swing on at the walking double support
     unsettled = DcmFootstepPlanner(dynamic).plan(down.touchdown_time, lead_stance, at_touchdown, COMMAND,
                                                  obstacles=(box,))
