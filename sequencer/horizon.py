@@ -440,6 +440,9 @@ class FootstepSequencer:
             if params.obstacle_double_support > 0.0 and self.backend_name != "exact":
                 raise ParameterError(f"obstacle_double_support={params.obstacle_double_support} s (a quasi-static "
                                      f"crossing) is planned by the 'exact' backend only, not {self.backend_name!r}")
+            if params.obstacle_trailing_double_support > 0.0 and self.backend_name != "exact":
+                raise ParameterError(f"obstacle_trailing_double_support={params.obstacle_trailing_double_support} s "
+                                     f"is planned by the 'exact' backend only, not {self.backend_name!r}")
             if liftoff is not None:
                 liftoff = np.asarray(liftoff, dtype=float)
                 if liftoff.shape != (2,) or not np.all(np.isfinite(liftoff)):

@@ -361,6 +361,10 @@ def test_trailing_settle_and_aim_duration_bad_input():
     for value in (0.2, 0.9, float("nan")):  # the crossing durations are [0.5, 0.8] s
         with pytest.raises(ParameterError, match="obstacle_aim_duration"):
             dataclasses.replace(H1, obstacle_aim_duration=value)
+    planner = DcmFootstepPlanner(dataclasses.replace(H1, obstacle_trailing_double_support=0.6), backend="osqp")
+    stance, measured = _start(planner)
+    with pytest.raises(ParameterError, match="obstacle_trailing_double_support.*exact"):
+        planner.plan(0.0, stance, measured, COMMAND, obstacles=(Obstacle(np.array([1.0, 0.0]), 0.0, 0.1, 1.0, 0.1),))
 
 
 TWO_STEPS = dataclasses.replace(H1, obstacle_step_duration_max=1.1, obstacle_swing_length_max=0.7)
