@@ -50,7 +50,7 @@ DCM offset from which that step ends at the nominal offset b_nom, b_c = (ℓ_t +
 (eq. 1b; signs along the direction of travel), not at b_nom: aiming at b_nom, the DCM runs a nominal
 offset ahead of the lead foot and the short trailing step cannot catch it. The DCM check of step 2
 compares the crossing's offset with that aim; the last step before the obstacle aims at
-max((ℓ_c + b_c) exp(-ω T_c,max), b_nom).
+max((ℓ_c + b_c) exp(-ω T_c,aim), b_nom), T_c,aim = T_c,max unless ``obstacle_aim_duration`` > 0.
 
 "Cross when one step can reach beyond, else stop at the safe distance" rather than "the cheaper
 side": from the last foothold before an obstacle the cheaper step is always in place (the crossing
@@ -104,6 +104,12 @@ class FootholdGeometry:
             crossing swing lifts off after this long a double support that settles the DCM on the stance foot,
             so a step crosses whatever its DCM offset (no tolerance) and the last step before the obstacle
             aims at no particular offset; 0: the dynamic crossing above.
+        trailing_double_support: > 0: the trailing crossing swing (its stance foot already beyond the obstacle)
+            and the step after it lift off after this long a settling double support
+            (``SequencerParams.obstacle_trailing_double_support`` [s]; planned by
+            :class:`sequencer.horizon.FootstepSequencer`, the choice of footholds is unchanged); 0: none.
+        aim_duration: the crossing duration T_c,aim [s] the last step before an obstacle aims for (its offset
+            (ℓ_c + b_c) exp(-ω T_c,aim), at least the nominal one); 0: the crossing's longest, ``step_duration_max``.
     """
 
     margin: float
@@ -117,6 +123,8 @@ class FootholdGeometry:
     halt_double_support: float = 0.0
     step_duration_max: float = 0.0
     swing_length_max: float = 0.0
+    trailing_double_support: float = 0.0
+    aim_duration: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -367,8 +375,9 @@ class FootholdConstraints:
                       offset_nominal: float) -> tuple[StepCandidate, StepBounds, float | None]:
         """(candidate, bounds, aimed offset) of one option. ``far`` (the far side b of the obstacle the next step
         crosses, relative to this stance [m]) marks the last step before it: that step aims at the DCM offset
-        that makes the crossing step from its foothold ℓ (length |b - ℓ|, within its longest duration) end at
-        the offset the crossing aims at, b_x = (|b - ℓ| + b_c) exp(-ω T_c,max) (eq. 1b), and at least the
+        that makes the crossing step from its foothold ℓ (length |b - ℓ|, within T_c,aim: its longest duration
+        unless ``aim_duration`` > 0) end at the offset the crossing aims at, b_x = (|b - ℓ| + b_c) exp(-ω T_c,aim)
+        (eq. 1b), and at least the
         nominal offset (the walk's own: a larger aim leans the robot into a short step, and the H1's DCM ran
         13 cm past the foot that should have stopped it). ``crossing`` (a step
         beyond, with a swing travel bound) aims at b_c of "Two steps ahead" in the module docstring. Three
@@ -376,7 +385,7 @@ class FootholdConstraints:
         if far is None and not (crossing and self.geometry.swing_length_max > 0.0):
             return solve(bounds, None), bounds, None
         sign = 1.0 if step_length_nominal > 0.0 else -1.0
-        decay = math.exp(-self.omega * self.geometry.step_duration_max)
+        decay = math.exp(-self.omega * (self.geometry.aim_duration or self.geometry.step_duration_max))
         foothold = bounds[1] if sign > 0.0 else bounds[0]
         aim, candidate = None, None
         for _ in range(3):

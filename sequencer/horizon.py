@@ -70,7 +70,8 @@ class PlannedStep:
             obstacle, the lift-off point and the part of the path over it), or None: the whole-body OCP lifts
             a crossing swing over the obstacle (``docs/sequencer.md``, "Obstacles").
         double_support: None (the plan's ``double_support``), or this step's own [s]: a *settled* step of a
-            quasi-static crossing (``SequencerParams.obstacle_double_support``): its swing lifts off this long
+            quasi-static crossing (``SequencerParams.obstacle_double_support``), or the trailing crossing swing and
+            the step after it (``SequencerParams.obstacle_trailing_double_support``): its swing lifts off this long
             after the stance began, and until ``double_support - plan.double_support`` after it the planner's
             model holds the DCM (the pendulum's pivot under it): where the touchdown left it for the first half
             of that time, at ``settle_dcm`` for the second (the centre of pressure moving within both soles is
@@ -439,6 +440,9 @@ class FootstepSequencer:
             if params.obstacle_double_support > 0.0 and self.backend_name != "exact":
                 raise ParameterError(f"obstacle_double_support={params.obstacle_double_support} s (a quasi-static "
                                      f"crossing) is planned by the 'exact' backend only, not {self.backend_name!r}")
+            if params.obstacle_trailing_double_support > 0.0 and self.backend_name != "exact":
+                raise ParameterError(f"obstacle_trailing_double_support={params.obstacle_trailing_double_support} s "
+                                     f"is planned by the 'exact' backend only, not {self.backend_name!r}")
             if liftoff is not None:
                 liftoff = np.asarray(liftoff, dtype=float)
                 if liftoff.shape != (2,) or not np.all(np.isfinite(liftoff)):
@@ -483,14 +487,17 @@ class FootstepSequencer:
         zx, zy = float(dcm[0]), float(dcm[1])
         steps, vectors = [], []  # (foot, touchdown, stance start, active bits, yaw), (p_T, b_T, zeta_T)
         halt = constraints.geometry.halt_double_support if constraints is not None else 0.0
+        # a settle before the trailing crossing swing (and the step resuming the walk after it) only
+        halt_trailing = constraints.geometry.trailing_double_support if constraints is not None else 0.0
         resume_next = first_resume  # the step ending the current stance resumes the walk after a crossing
         for _ in range(self._max_steps):
             lift = liftoff if not steps else (vectors[-2][:2] if len(steps) >= 2 else p0_first)
             cross_kept = None if steps else first_crossing
             px, py, gamma, bx, by, bits = self._exact_step(
                 p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom, constraints, lift, cross_kept)
-            settle, start_qp = None, stance_start
-            if halt > 0.0:  # quasi-static crossing (SequencerParams.obstacle_double_support)
+            settle, start_qp, own_halt = None, stance_start, 0.0
+            if halt > 0.0 or halt_trailing > 0.0:  # settled crossing swings (obstacle_double_support,
+                # obstacle_trailing_double_support)
                 c, s = math.cos(yaw), math.sin(yaw)
                 ox, oy = per_stance[other_foot(stance)][1]
                 walking = (p0x + c * ox - s * oy, p0y + s * ox + c * oy)  # the nominal DCM at a stance start
@@ -499,7 +506,17 @@ class FootstepSequencer:
                 tx, ty, *_ = self._exact_step(p0x, p0y, *walking, 0.0, yaw, rotate, stance, per_stance, l_nom,
                                               constraints, lift, cross_kept)
                 crosses = crossing_of(constraints.obstacles, lift, (tx, ty), yaw, constraints.geometry) is not None
-                if crosses or resume_next:
+                # the trailing crossing: its stance foot has crossed already (lift-off -> stance passes over it, the
+                # stance sole itself off it: a stance sole within the margin, before the box, is no lead foot)
+                trailing = crosses and crossing_of(constraints.obstacles, lift, (p0x, p0y), yaw,
+                                                   constraints.geometry) is not None \
+                    and crossing_of(constraints.obstacles, (p0x, p0y), (p0x, p0y), yaw, constraints.geometry) is None
+                if crosses:  # the trailing settle once the lead foot is down (the plan's first step): planned
+                    # earlier, it changed the H1's approach to the box or its lead swing (docs/ocp.md)
+                    own_halt = halt_trailing if trailing and halt_trailing > 0.0 and not steps else halt
+                else:  # resuming the walk after the trailing crossing
+                    own_halt = halt_trailing if halt_trailing > 0.0 else halt
+                if (crosses or resume_next) and own_halt > 0.0:
                     # before a crossing swing on the stance foot along the heading and across it where the crossing
                     # duration's LIPM carries the DCM to its nominal offset at a nominal width, (b_y + w_nom)
                     # exp(-ω T) (held on the stance foot, the QP widened the step to its bound: the H1's lead foot
@@ -508,7 +525,7 @@ class FootstepSequencer:
                     w_nom, (_, bny), _ = per_stance[stance]
                     across = (bny + w_nom) * math.exp(-omega * constraints.geometry.step_duration_min)
                     settle = (p0x - s * across, p0y + c * across) if crosses else walking
-                    shift = halt - params.double_support
+                    shift = own_halt - params.double_support
                     if not steps:
                         stance_start = true_start
                     start_qp = stance_start + shift
@@ -524,13 +541,15 @@ class FootstepSequencer:
                                                 constraints, lift, True, duration_min=t_min,
                                                 length_min=c * (tx - p0x) + s * (ty - p0y))
                     px, py, gamma, bx, by, bits = step
-                resume_next = crosses
+                # quasi-static: the walk resumes after the trailing crossing (the step after the lead crosses too);
+                # a trailing settle alone: after the settled trailing crossing
+                resume_next = crosses if halt > 0.0 else (trailing and own_halt > 0.0)
             duration = math.log(gamma) / omega
             touchdown = max(start_qp + duration, t) if settle is not None else start_qp + duration
             yaw = yaw + yaw_rate * (duration if settle is None else touchdown - stance_start)
             landing = "right" if stance == "left" else "left"
             zx, zy = px + bx, py + by
-            steps.append((landing, touchdown, stance_start, bits, yaw, settle))
+            steps.append((landing, touchdown, stance_start, bits, yaw, settle, own_halt if settle is not None else 0.0))
             vectors.append((px, py, bx, by, zx, zy))
             if touchdown >= t_end:
                 break
@@ -540,8 +559,8 @@ class FootstepSequencer:
             PlannedStep(landing, values[k, 0:2], touchdown, values[k, 2:4], values[k, 4:6], start, _ACTIVE_NAMES[bits], yaw)
             if settle is None else
             PlannedStep(landing, values[k, 0:2], touchdown, values[k, 2:4], values[k, 4:6], start, _ACTIVE_NAMES[bits], yaw,
-                        double_support=halt, settle_dcm=np.array(settle))
-            for k, (landing, touchdown, start, bits, yaw, settle) in enumerate(steps)
+                        double_support=own, settle_dcm=np.array(settle))
+            for k, (landing, touchdown, start, bits, yaw, settle, own) in enumerate(steps)
         ]
 
     def _exact_step(self, p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom,

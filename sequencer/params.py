@@ -95,6 +95,21 @@ class SequencerParams:
             the nominal width; the swing after it lasts at least max(t_min, obstacle_step_duration_min) -
             double_support), and crosses whatever the DCM (no offset tolerance, no aimed last step before the
             obstacle); the step after the trailing crossing resumes the walk after as long a double support.
+        obstacle_trailing_double_support: a settle after the lead crossing [s], 0 (off) or in
+            [double_support, 5]: the *trailing* crossing swing (the one whose stance foot has already crossed:
+            the straight path from its lift-off to the stance foothold passes over the obstacle) lifts off this
+            long after the lead touchdown, with the same settled model as ``obstacle_double_support`` (the DCM
+            on the lead foothold along the heading), and so does the step after it, which resumes the walk.
+            It is planned once the lead foot is down (the trailing swing is the plan's first step); before that
+            the plan is the dynamic one (planned from the lead lift-off on, the H1's lead foot touched the box).
+            With ``obstacle_double_support`` = 0 only that swing halts (the lead crossing stays dynamic: a
+            halt before the lead swing left the H1 without the DCM velocity to reach beyond the box); with both
+            > 0 this one replaces ``obstacle_double_support`` for the trailing swing and the step after it.
+        obstacle_aim_duration: the crossing duration [s] the last step before an obstacle aims for, 0 (the
+            crossing's longest, max(t_max, obstacle_step_duration_max)) or in [max(t_min,
+            obstacle_step_duration_min), that]: that step aims at the DCM offset from which the crossing step
+            reaches its own aim within this long (a shorter one aims further ahead: it leans the robot into the
+            crossing; :mod:`sequencer.footholds`).
         sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m],
             >= 0 (0: a point foot); sole_half_width: its half width [m], >= 0. The footholds keep the whole
             sole rectangle outside the grown footprints.
@@ -131,6 +146,8 @@ class SequencerParams:
     obstacle_swing_length_max: float = 0.0
     obstacle_offset_tolerance: float = 0.03
     obstacle_double_support: float = 0.0
+    obstacle_trailing_double_support: float = 0.0
+    obstacle_aim_duration: float = 0.0
     sole_front: float = 0.0
     sole_rear: float = 0.0
     sole_half_width: float = 0.0
@@ -191,6 +208,15 @@ class SequencerParams:
         if not (self.obstacle_double_support == 0.0 or self.double_support <= self.obstacle_double_support <= 5.0):
             raise ParameterError(f"obstacle_double_support={self.obstacle_double_support} s must be 0 or in "
                                  f"[double_support={self.double_support} s, 5 s]")
+        if not (self.obstacle_trailing_double_support == 0.0
+                or self.double_support <= self.obstacle_trailing_double_support <= 5.0):
+            raise ParameterError(f"obstacle_trailing_double_support={self.obstacle_trailing_double_support} s must "
+                                 f"be 0 or in [double_support={self.double_support} s, 5 s]")
+        crossing_max = max(self.t_max, self.obstacle_step_duration_max)
+        if not (self.obstacle_aim_duration == 0.0 or crossing_min <= self.obstacle_aim_duration <= crossing_max):
+            raise ParameterError(f"obstacle_aim_duration={self.obstacle_aim_duration} s must be 0 or in "
+                                 f"[max(t_min, obstacle_step_duration_min)={crossing_min} s, "
+                                 f"max(t_max, obstacle_step_duration_max)={crossing_max} s]")
         self.check_velocity(self.v_x, self.v_y)
 
     # ------------------------------------------------------------------ derived values
@@ -229,7 +255,9 @@ class SequencerParams:
                                 max(self.t_min, self.obstacle_step_duration_min), self.sole_front, self.sole_rear,
                                 self.sole_half_width, self.obstacle_offset_tolerance, self.obstacle_approach_margin,
                                 self.obstacle_double_support, max(self.t_max, self.obstacle_step_duration_max),
-                                self.obstacle_swing_length_max)
+                                self.obstacle_swing_length_max,
+                                trailing_double_support=self.obstacle_trailing_double_support,
+                                aim_duration=self.obstacle_aim_duration)
 
     # ------------------------------------------------------------------ velocity commands
     def velocity_range(self) -> dict[str, tuple[float, float]]:

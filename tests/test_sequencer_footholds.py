@@ -282,6 +282,91 @@ def test_quasi_static_crossing_bad_input():
         planner.plan(0.0, stance, measured, COMMAND, obstacles=(Obstacle(np.array([1.0, 0.0]), 0.0, 0.1, 1.0, 0.1),))
 
 
+def test_a_trailing_settle_halts_the_trailing_crossing_swing_once_the_lead_foot_is_down():
+    """obstacle_trailing_double_support > 0 (the lead crossing dynamic): the plans before the lead touchdown are the
+    dynamic crossing's, bit for bit; from the lead foot beyond the box, the trailing crossing swing and the step
+    resuming the walk lift off after that long a double support, in which the plan's DCM rests on the lead
+    foothold (along the heading), with both feet on the ground; the trailing foot lands beyond the box."""
+    from sequencer.schedule import contact_schedule
+
+    settled = dataclasses.replace(H1, obstacle_trailing_double_support=0.6, horizon=6.0)
+    dynamic = dataclasses.replace(settled, obstacle_trailing_double_support=0.0)
+    box = Obstacle(np.array([1.05, 0.0]), 0.0, 0.1, 1.2, 0.1)
+    stance, measured = _start(DcmFootstepPlanner(dynamic))
+    plan = DcmFootstepPlanner(dynamic).plan(0.0, stance, measured, COMMAND, obstacles=(box,))
+    same = DcmFootstepPlanner(settled).plan(0.0, stance, measured, COMMAND, obstacles=(box,))
+    assert np.array_equal(same.positions, plan.positions) and np.array_equal(same.touchdown_times, plan.touchdown_times)
+    for x, y in zip(same.steps, plan.steps, strict=True):
+        assert np.array_equal(x.dcm_offset, y.dcm_offset) and x.double_support is None and x.settle_dcm is None
+        assert (x.crossing is None) == (y.crossing is None)
+        assert x.crossing is None or x.crossing.phase_interval == y.crossing.phase_interval
+    lead = next(k for k, step in enumerate(plan.steps) if step.crossing is not None)
+    assert plan.steps[lead + 1].crossing is not None and plan.steps[lead + 1].double_support is None
+    down = plan.steps[lead]  # the lead foot beyond the box, the trailing one lifting off before it
+    lead_stance = StanceState(down.foot, down.position, 0.0, down.touchdown_time,
+                              swing_liftoff=plan.steps[lead - 1].position)
+    at_touchdown = ReducedState(np.array([*down.dcm_at_touchdown, 0.97]), np.zeros(3), down.dcm_at_touchdown)
+    after = DcmFootstepPlanner(settled).plan(down.touchdown_time, lead_stance, at_touchdown, COMMAND,
+                                             obstacles=(box,))
+    trailing, resume = after.steps[0], after.steps[1]
+    assert trailing.crossing is not None and resume.crossing is None
+    assert trailing.double_support == 0.6 and resume.double_support == 0.6
+    assert all(step.double_support is None and step.settle_dcm is None for step in after.steps[2:])
+    np.testing.assert_allclose(trailing.settle_dcm[0], down.position[0], atol=1e-12)
+    assert _sole_overlaps(after, box, settled.foothold_geometry()) == []
+    assert trailing.position[0] > 1.1 + settled.sole_rear  # beyond the grown box
+    swing = trailing.touchdown_time - trailing.stance_start_time - 0.6
+    assert swing >= settled.obstacle_step_duration_min - settled.double_support - 1e-9
+    start, settle_end = trailing.stance_start_time, trailing.stance_start_time + 0.6 - settled.double_support
+    np.testing.assert_allclose(after.dcm_at(np.linspace(0.5 * (start + settle_end), settle_end - 1e-3, 5)),
+                               np.tile(trailing.settle_dcm, (5, 1)), atol=1e-12)
+    schedule = contact_schedule(after, start + 0.01, 0.02, 50, rounding="nearest")
+    assert schedule.in_contact[schedule.times < start + 0.6 - 0.011].all()
+    # a stance sole within the margin before the box is no lead foot, nor is a lift-off there a trailing swing: no
+    # settle (closed loop, the H1's preset margin: a lead swing set down short at 0.843 m, the other foot at 0.821 m)
+    short = StanceState("left", np.array([0.843, 0.215]), 0.0, 4.48, swing_liftoff=np.array([0.821, -0.091]))
+    at_short = ReducedState(np.array([0.925, 0.1, 0.97]), np.zeros(3), np.array([0.925, 0.1]))
+    assert all(step.settle_dcm is None for step in DcmFootstepPlanner(dataclasses.replace(
+        settled, obstacle_margin=0.08)).plan(4.48, short, at_short, COMMAND, obstacles=(box,)).steps)
+    # without the settle the same stance asks the trailing foot to swing on at the walking double support
+    unsettled = DcmFootstepPlanner(dynamic).plan(down.touchdown_time, lead_stance, at_touchdown, COMMAND,
+                                                 obstacles=(box,))
+    assert unsettled.steps[0].double_support is None and unsettled.steps[0].crossing is not None
+
+
+def test_the_last_step_before_an_obstacle_aims_further_ahead_with_a_shorter_aim_duration():
+    """obstacle_aim_duration: the last step before the box aims at (ℓ_c + b_nom) exp(-ω T_aim), at least the nominal
+    offset (0, the default: T_aim = the crossing's longest duration); a shorter T_aim leans that step further
+    ahead (the same foothold along the heading, a larger DCM offset at its touchdown); the steps before are kept."""
+    box = Obstacle(np.array([1.09, 0.0]), 0.0, 0.1, 1.2, 0.1)
+    plans = {}
+    for aim in (0.0, 0.5):
+        planner = DcmFootstepPlanner(dataclasses.replace(H1, obstacle_aim_duration=aim, obstacle_offset_tolerance=0.1))
+        stance, measured = _start(planner)
+        plans[aim] = planner.plan(0.0, stance, measured, COMMAND, obstacles=(box,))
+    leads = {aim: next(k for k, step in enumerate(plan.steps) if step.crossing is not None)
+             for aim, plan in plans.items()}
+    assert leads[0.0] == leads[0.5]
+    last = leads[0.0] - 1
+    np.testing.assert_array_equal(plans[0.0].positions[:last], plans[0.5].positions[:last])
+    assert plans[0.0].positions[last, 0] == plans[0.5].positions[last, 0]  # along the heading (aside: the QP's)
+    assert plans[0.5].steps[last].dcm_offset[0] > plans[0.0].steps[last].dcm_offset[0] + 0.02
+    assert _sole_overlaps(plans[0.5], box, H1.foothold_geometry()) == []
+
+
+def test_trailing_settle_and_aim_duration_bad_input():
+    for value in (0.05, 6.0, float("nan")):
+        with pytest.raises(ParameterError, match="obstacle_trailing_double_support"):
+            dataclasses.replace(H1, obstacle_trailing_double_support=value)
+    for value in (0.2, 0.9, float("nan")):  # the crossing durations are [0.5, 0.8] s
+        with pytest.raises(ParameterError, match="obstacle_aim_duration"):
+            dataclasses.replace(H1, obstacle_aim_duration=value)
+    planner = DcmFootstepPlanner(dataclasses.replace(H1, obstacle_trailing_double_support=0.6), backend="osqp")
+    stance, measured = _start(planner)
+    with pytest.raises(ParameterError, match="obstacle_trailing_double_support.*exact"):
+        planner.plan(0.0, stance, measured, COMMAND, obstacles=(Obstacle(np.array([1.0, 0.0]), 0.0, 0.1, 1.0, 0.1),))
+
+
 TWO_STEPS = dataclasses.replace(H1, obstacle_step_duration_max=1.1, obstacle_swing_length_max=0.7)
 """The H1 geometry with a crossing duration bound above t_max and a swing travel bound (two steps ahead)."""
 

@@ -61,6 +61,9 @@ _HELP = {
     "sole_front": "sole extent ahead of the foot frame [m]",
     "sole_rear": "sole extent behind the foot frame [m]",
     "obstacle_double_support": "quasi-static crossing: double support before a crossing swing [s] (0: off)",
+    "obstacle_trailing_double_support": "double support before the trailing crossing swing and the step after it "
+                                        "[s] (0: off)",
+    "obstacle_aim_duration": "crossing duration the last step before an obstacle aims for [s] (0: the longest)",
     "sole_half_width": "sole half width [m]",
 }
 
