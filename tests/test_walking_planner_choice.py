@@ -57,7 +57,7 @@ def test_the_preset_chooses_the_planner_and_the_alip_gets_the_robots_double_supp
 @pytest.mark.parametrize("overrides, message", [
     ({"footstep_planner.kind": "lipm"}, r"footstep_planner.kind='lipm' must be one of \('dcm', 'alip'\)"),
     ({"footstep_planner.kind": "alip", "footstep_planner.alip_preset": "atlas"},
-     r"footstep_planner.alip_preset='atlas': no ALIP preset of that name \(available: \['g1'\]\)"),
+     r"footstep_planner.alip_preset='atlas': no ALIP preset of that name \(available: \['g1', 'h1'\]\)"),
     ({"footstep_planner.kind": "alip", "footstep_planner.alip.t_min": 0.05},
      r"\[footstep_planner.alip\] over the ALIP preset 'g1': double_support=0.1 s must be in \[0, t_min=0.05 s\)"),
     ({"footstep_planner.kind": "alip", "footstep_planner.alip.steps_k": 3}, r"steps_k"),
