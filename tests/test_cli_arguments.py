@@ -77,17 +77,17 @@ def test_set_with_a_word_for_a_number_is_one_line(capsys):
 
 
 def test_set_reads_values_as_the_presets_write_them():
-    from wbmpc.cli.walk import _parse_assignment
+    from wbmpc.cli.walk import parse_assignment
 
     # TOML values (the presets' syntax), as a user copies them from a preset file
-    assert _parse_assignment("perception.enabled=false") == ("perception.enabled", False)
-    assert _parse_assignment("command.v_x=[-0.2, 1.0]") == ("command.v_x", [-0.2, 1.0])
-    assert _parse_assignment("planner.alpha3=1e6") == ("planner.alpha3", 1e6)
-    assert _parse_assignment('footstep_planner.kind="alip"') == ("footstep_planner.kind", "alip")
+    assert parse_assignment("perception.enabled=false") == ("perception.enabled", False)
+    assert parse_assignment("command.v_x=[-0.2, 1.0]") == ("command.v_x", [-0.2, 1.0])
+    assert parse_assignment("planner.alpha3=1e6") == ("planner.alpha3", 1e6)
+    assert parse_assignment('footstep_planner.kind="alip"') == ("footstep_planner.kind", "alip")
     # Python literals and bare words as before
-    assert _parse_assignment("perception.enabled=True") == ("perception.enabled", True)
-    assert _parse_assignment("ramp_time=.5") == ("ramp_time", 0.5)
-    assert _parse_assignment("footstep_planner.alip_preset=h1") == ("footstep_planner.alip_preset", "h1")
+    assert parse_assignment("perception.enabled=True") == ("perception.enabled", True)
+    assert parse_assignment("ramp_time=.5") == ("ramp_time", 0.5)
+    assert parse_assignment("footstep_planner.alip_preset=h1") == ("footstep_planner.alip_preset", "h1")
 
 
 def test_unknown_robot_is_one_line_on_every_subcommand_that_takes_one(capsys):

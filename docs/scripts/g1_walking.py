@@ -17,6 +17,7 @@ import json
 import warnings
 
 from sim import run_scenario
+from wbmpc.cli.walk import parse_assignment
 
 # name -> ((v_x [m/s], v_y [m/s], yaw_rate [rad/s]), duration [s])
 RUNS = {
@@ -31,14 +32,6 @@ RUNS = {
 NOISE = {"noise_q": 1e-4, "noise_v": 1e-3}  # [rad or m], [rad/s or m/s] std of the measurement noise
 
 
-def _value(text: str):
-    """A --set value: an int, a float, or else the text itself (e.g. footstep_planner.kind=alip)."""
-    for kind in (int, float):
-        try:
-            return kind(text)
-        except ValueError:
-            pass
-    return text
 
 
 def _milli(metrics: dict, key: str):
@@ -51,10 +44,10 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--noise", action="store_true", help="measurement noise (see the module docstring)")
     parser.add_argument("--only", nargs="+", choices=sorted(RUNS), default=None, help="run only these")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", type=parse_assignment,
                         help="walking-preset override, e.g. ocp.wrench_cone_weight=1e3 or footstep_planner.kind=alip")
     args = parser.parse_args()
-    overrides = {key: _value(value) for key, _, value in (item.partition("=") for item in args.set)}
+    overrides = dict(args.set)
     options = NOISE if args.noise else {}
     warnings.simplefilter("ignore")
     for name in args.only or RUNS:

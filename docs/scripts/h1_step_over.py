@@ -20,16 +20,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
 from negotiation_scene import BoxContacts, KnownObstacleController, StepOverBox  # noqa: E402
 
 from sim.runner import run_scenario  # noqa: E402
+from wbmpc.cli.walk import parse_assignment  # noqa: E402
 from wbmpc.walking.preset import load_walking_preset  # noqa: E402
-
-
-def _value(text: str):
-    for kind in (int, float):
-        try:
-            return kind(text)
-        except ValueError:
-            pass
-    return {"true": True, "false": False}.get(text.lower(), text)
 
 
 def main() -> None:
@@ -38,7 +30,7 @@ def main() -> None:
     parser.add_argument("--depth", type=float, default=0.1, help="box depth [m]")
     parser.add_argument("--speed", type=float, default=0.3, help="walking speed [m/s]")
     parser.add_argument("--duration", type=float, default=7.0, help="simulated time [s]")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", type=parse_assignment,
                         help="walking-preset override, e.g. planner.obstacle_swing_length_max=0.75")
     parser.add_argument("--plans", action="store_true",
                         help="print the plan at the start of every stance from x = 0.5 m on")
@@ -47,7 +39,7 @@ def main() -> None:
     parser.add_argument("--cold-restart", action="store_true",
                         help="diagnostic: the MPC update after a failed one starts cold (not in the library)")
     args = parser.parse_args()
-    overrides = {key: _value(value) for key, _, value in (item.partition("=") for item in args.set)}
+    overrides = dict(args.set)
     warnings.simplefilter("ignore")  # the node-wise evaluation warning (the KKT backend)
     box = StepOverBox(height=args.height, depth=args.depth, distance=1.0, speed=args.speed)
     preset = load_walking_preset("h1", overrides)

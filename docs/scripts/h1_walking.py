@@ -15,6 +15,7 @@ import warnings
 import numpy as np
 
 from sim import run_scenario
+from wbmpc.cli.walk import parse_assignment
 
 STAND = {"start_double_support": 10.5}  # both feet down for the whole 10 s run: standing
 RUNS = [((0.0, 0.0, 0.0), 10.0, STAND), ((0.0, 0.0, 0.0), None, {}), ((0.3, 0.0, 0.0), None, {}),
@@ -24,13 +25,10 @@ RUNS = [((0.0, 0.0, 0.0), 10.0, STAND), ((0.0, 0.0, 0.0), None, {}), ((0.3, 0.0,
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=20.0, help="length of the stepping runs [s]")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="walking-preset override (a number), e.g. planner.double_support=0.15")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", type=parse_assignment,
+                        help="walking-preset override (a TOML value), e.g. planner.double_support=0.15")
     args = parser.parse_args()
-    overrides = {}
-    for item in args.set:
-        key, _, value = item.partition("=")
-        overrides[key] = float(value) if "." in value or "e" in value else int(value)
+    overrides = dict(args.set)
     warnings.simplefilter("ignore")  # the node-wise evaluation warning (the KKT backend), once per run
     for command, duration, extra in RUNS:
         duration = args.duration if duration is None else duration

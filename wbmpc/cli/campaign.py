@@ -37,7 +37,7 @@ def register(subparsers) -> None:
     )
     from sim.campaigns.trial import STEP_TIMINGS
     from wbmpc.cli.arguments import COUNT, DURATION, NON_NEGATIVE, PHASE, POSITIVE, output_directory
-    from wbmpc.cli.walk import _parse_assignment, add_planner_arguments, add_robot_argument
+    from wbmpc.cli.walk import add_planner_arguments, add_robot_argument, parse_assignment
 
     campaign = subparsers.add_parser("campaign", help="campaigns of closed-loop trials (push maps, terrain, obstacles), "
                                                               "local or Ray")
@@ -61,7 +61,7 @@ def register(subparsers) -> None:
         add_planner_arguments(parser)
         parser.add_argument("--duration", type=DURATION, default=duration_default, help="simulated time per trial [s]")
         parser.add_argument(
-            "--set", dest="overrides", action="append", type=_parse_assignment, default=[], metavar="NAME=VALUE",
+            "--set", dest="overrides", action="append", type=parse_assignment, default=[], metavar="NAME=VALUE",
             help="a parameter shared by every trial (scenario, runner or controller; repeatable)",
         )
 

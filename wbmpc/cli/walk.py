@@ -28,7 +28,7 @@ from wbmpc.cli.output import add_output_arguments, print_json
 from wbmpc.errors import ParameterError
 
 
-def _parse_assignment(text: str) -> tuple[str, object]:
+def parse_assignment(text: str) -> tuple[str, object]:
     """``NAME=VALUE`` -> (NAME, value): VALUE read as a TOML value (the presets' syntax: ``true``, ``[0.1, 0.2]``,
     ``"alip"``), else as a Python literal (``True``, ``(0.1, 0.2)``), else kept as the string."""
     if "=" not in text:
@@ -81,7 +81,7 @@ def add_run_arguments(parser: argparse.ArgumentParser) -> None:
                         help="render an offscreen video of the run (.mp4 or .gif)")
     parser.add_argument("--viewer", action="store_true", help="show the run live in MuJoCo's viewer (needs a display)")
     parser.add_argument(
-        "--set", dest="overrides", action="append", type=_parse_assignment, default=[], metavar="NAME=VALUE",
+        "--set", dest="overrides", action="append", type=parse_assignment, default=[], metavar="NAME=VALUE",
         help="any other scenario/runner/controller parameter (repeatable)",
     )
     add_output_arguments(parser, plot=True)
