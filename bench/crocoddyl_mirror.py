@@ -55,6 +55,11 @@ def _crocoddyl():
     return crocoddyl
 
 
+class NoCrocoddylTwin(TypeError):
+    """A term, contact or damping of the wbmpc problem that Crocoddyl has no model of (the message names it):
+    the problem cannot be mirrored, so there is no Crocoddyl baseline of it."""
+
+
 class CrocoddylMirror:
     """Crocoddyl models sharing the Pinocchio model of a wbmpc problem.
 
@@ -83,7 +88,7 @@ class CrocoddylMirror:
             return croc.ActivationModelQuadraticBarrier(croc.ActivationBounds(activation.lower, activation.upper))
         if isinstance(activation, ActivationQuad):
             return croc.ActivationModelQuad(activation.nr)
-        raise TypeError(f"no Crocoddyl twin for activation {type(activation).__name__}")
+        raise NoCrocoddylTwin(f"no Crocoddyl twin for activation {type(activation).__name__}")
 
     def _cost(self, cost, nu: int):
         croc = _crocoddyl()
@@ -125,7 +130,7 @@ class CrocoddylMirror:
         elif isinstance(residual, ResidualFrameRotation):
             r = croc.ResidualModelFrameRotation(self.state, residual.frame_id, residual.reference.copy(), nu)
         else:
-            raise TypeError(f"no Crocoddyl twin for residual {type(residual).__name__}")
+            raise NoCrocoddylTwin(f"no Crocoddyl twin for residual {type(residual).__name__}")
         return croc.CostModelResidual(self.state, activation, r), r
 
     def _node(self, node):
@@ -141,7 +146,7 @@ class CrocoddylMirror:
             elif isinstance(c, ContactModel6D):
                 model = croc.ContactModel6D(self.state, c.frame_id, pin.SE3(c.reference), pin.LOCAL, nu, gains)
             else:
-                raise TypeError(f"no Crocoddyl twin for contact {type(c).__name__}")
+                raise NoCrocoddylTwin(f"no Crocoddyl twin for contact {type(c).__name__}")
             contacts.addContact(name, model, True)
         costs = croc.CostModelSum(self.state, nu)
         residuals = {}
@@ -150,7 +155,7 @@ class CrocoddylMirror:
             costs.addCost(name, cost, item.weight, item.active)
             residuals[name] = residual
         if dam._damping_row_scales:  # Crocoddyl damps every row by one JMinvJt_damping
-            raise TypeError("no Crocoddyl twin for a sole-weighted contact damping (contact_damping_moments='sole')")
+            raise NoCrocoddylTwin("no Crocoddyl twin for a sole-weighted contact damping (contact_damping_moments='sole')")
         cdam = croc.DifferentialActionModelContactFwdDynamics(self.state, self.actuation, contacts, costs,
                                                               dam.contact_damping, True)
         iam = croc.IntegratedActionModelEuler(cdam, node.dt)

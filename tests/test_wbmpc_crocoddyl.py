@@ -230,3 +230,21 @@ def test_contact_damping_matches_crocoddyls_jminvjt_damping(backend):
     ours, theirs, _, _ = _solve_both(ocp, mirror, maxiter=3)
     assert ours.iter == theirs.iter
     assert ours.cost == pytest.approx(theirs.cost, rel=1e-8)
+
+
+@needs_h1_extra
+def test_the_h1_preset_has_no_crocoddyl_twin_and_the_loop_bench_says_so():
+    """The H1 preset's sole-weighted contact damping and obstacle clearance (a frame point's height) have no
+    Crocoddyl model: the mirror refuses the problem by name, and ``wbmpc bench loop --robot h1`` reports the
+    baseline as skipped with that reason instead of a traceback."""
+    from bench.crocoddyl_mirror import NoCrocoddylTwin
+    from bench.loop import _crocoddyl_loop
+    from wbmpc.cli import build_parser
+
+    h1 = load_robot("h1")
+    ocp = WalkingOCP(h1, load_walking_preset("h1").ocp, n_nodes=4, dt=0.02)
+    with pytest.raises(NoCrocoddylTwin, match="no Crocoddyl twin for"):
+        CrocoddylMirror(ocp.problem)
+    args = build_parser().parse_args(["bench", "loop", "--robot", "h1", "--duration", "0.05"])
+    result = _crocoddyl_loop(args, None)
+    assert result["skipped"].startswith("robot 'h1': its walking OCP has no Crocoddyl twin for ")
