@@ -77,7 +77,7 @@ def test_set_with_a_word_for_a_number_is_one_line(capsys):
 
 
 def test_set_reads_values_as_the_presets_write_them():
-    from wbmpc.cli.walk import parse_assignment
+    from wbmpc.cli.arguments import parse_assignment
 
     # TOML values (the presets' syntax), as a user copies them from a preset file
     assert parse_assignment("perception.enabled=false") == ("perception.enabled", False)

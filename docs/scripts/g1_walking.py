@@ -17,7 +17,7 @@ import json
 import warnings
 
 from sim import run_scenario
-from wbmpc.cli.walk import parse_assignment
+from wbmpc.cli.arguments import parse_assignment
 
 # name -> ((v_x [m/s], v_y [m/s], yaw_rate [rad/s]), duration [s])
 RUNS = {

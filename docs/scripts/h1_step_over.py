@@ -20,7 +20,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
 from negotiation_scene import BoxContacts, KnownObstacleController, StepOverBox  # noqa: E402
 
 from sim.runner import run_scenario  # noqa: E402
-from wbmpc.cli.walk import parse_assignment  # noqa: E402
+from wbmpc.cli.arguments import parse_assignment  # noqa: E402
 from wbmpc.walking.preset import load_walking_preset  # noqa: E402
 
 

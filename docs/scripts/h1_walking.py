@@ -15,7 +15,7 @@ import warnings
 import numpy as np
 
 from sim import run_scenario
-from wbmpc.cli.walk import parse_assignment
+from wbmpc.cli.arguments import parse_assignment
 
 STAND = {"start_double_support": 10.5}  # both feet down for the whole 10 s run: standing
 RUNS = [((0.0, 0.0, 0.0), 10.0, STAND), ((0.0, 0.0, 0.0), None, {}), ((0.3, 0.0, 0.0), None, {}),

@@ -1,4 +1,5 @@
-"""Checked argument types shared by every subcommand: numbers (finite, in a range) and output paths.
+"""Checked argument types shared by every subcommand: numbers (finite, in a range), output paths and
+``--set NAME=VALUE`` assignments.
 
 Every numeric option of every subcommand uses :func:`number` (``tests/test_cli_arguments.py``
 walks all parsers to hold that), so a bad value is refused while parsing, with one line naming the
@@ -12,9 +13,11 @@ option, the value and what is allowed::
 from __future__ import annotations
 
 import argparse
+import ast
 import math
 import os
 import sys
+import tomllib
 from typing import NoReturn
 
 
@@ -86,6 +89,22 @@ NON_NEGATIVE_INT = number(int, low=0)
 SEED = number(int, low=0, high=2**32 - 1)  # any seed numpy, random and the campaign records take
 DURATION = POSITIVE  # simulated time [s]
 PHASE = number(float, low=0.0, high=1.0, high_open=True)
+
+
+def parse_assignment(text: str) -> tuple[str, object]:
+    """``NAME=VALUE`` -> (NAME, value): VALUE read as a TOML value (the presets' syntax: ``true``, ``[0.1, 0.2]``,
+    ``"alip"``), else as a Python literal (``True``, ``(0.1, 0.2)``), else kept as the string."""
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected NAME=VALUE")
+    name, raw = text.split("=", 1)
+    try:
+        value = tomllib.loads(f"value = {raw}")["value"]
+    except tomllib.TOMLDecodeError:
+        try:
+            value = ast.literal_eval(raw)
+        except (ValueError, SyntaxError):
+            value = raw
+    return name.strip(), value
 
 
 def output_directory(text: str) -> str:

@@ -36,8 +36,8 @@ def register(subparsers) -> None:
         TIMING_FROM,
     )
     from sim.campaigns.trial import STEP_TIMINGS
-    from wbmpc.cli.arguments import COUNT, DURATION, NON_NEGATIVE, PHASE, POSITIVE, output_directory
-    from wbmpc.cli.walk import add_planner_arguments, add_robot_argument, parse_assignment
+    from wbmpc.cli.arguments import COUNT, DURATION, NON_NEGATIVE, PHASE, POSITIVE, output_directory, parse_assignment
+    from wbmpc.cli.walk import add_planner_arguments, add_robot_argument
 
     campaign = subparsers.add_parser("campaign", help="campaigns of closed-loop trials (push maps, terrain, obstacles), "
                                                               "local or Ray")

@@ -19,29 +19,11 @@ Without any of them the scenario's own command applies.
 from __future__ import annotations
 
 import argparse
-import ast
 import os
-import tomllib
 
-from wbmpc.cli.arguments import DURATION, FINITE, NON_NEGATIVE, SEED, output_directory
+from wbmpc.cli.arguments import DURATION, FINITE, NON_NEGATIVE, SEED, output_directory, parse_assignment
 from wbmpc.cli.output import add_output_arguments, print_json
 from wbmpc.errors import ParameterError
-
-
-def parse_assignment(text: str) -> tuple[str, object]:
-    """``NAME=VALUE`` -> (NAME, value): VALUE read as a TOML value (the presets' syntax: ``true``, ``[0.1, 0.2]``,
-    ``"alip"``), else as a Python literal (``True``, ``(0.1, 0.2)``), else kept as the string."""
-    if "=" not in text:
-        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected NAME=VALUE")
-    name, raw = text.split("=", 1)
-    try:
-        value = tomllib.loads(f"value = {raw}")["value"]
-    except tomllib.TOMLDecodeError:
-        try:
-            value = ast.literal_eval(raw)
-        except (ValueError, SyntaxError):
-            value = raw
-    return name.strip(), value
 
 
 def add_robot_argument(parser: argparse.ArgumentParser, default: str | None = "bolt") -> None:
