@@ -242,6 +242,14 @@ def rectangles_overlap(corners, other) -> np.ndarray:
     return overlap
 
 
+def sole_on_obstacle(obstacles: Sequence[Obstacle], position, yaw: float, geometry: FootholdGeometry) -> bool:
+    """Whether a sole at world ``position`` (x, y) [m] with heading ``yaw`` [rad] overlaps the footprint of any of
+    ``obstacles`` grown by the margin (a foothold the planner keeps its steps out of)."""
+    corners = sole_corners(position, yaw, geometry)
+    return any(bool(rectangles_overlap(corners, obstacle.grown(geometry.margin).footprint_corners()))
+               for obstacle in obstacles)
+
+
 def crossing_of(obstacles: Sequence[Obstacle], liftoff, touchdown, yaw: float,
                 geometry: FootholdGeometry) -> Crossing | None:
     """The :class:`Crossing` of a swing from ``liftoff`` to ``touchdown`` (world (x, y) [m]), its sole heading

@@ -39,7 +39,7 @@ import numpy as np
 
 from sequencer.backends import make_backend
 from sequencer.corrections import LipmCorrections
-from sequencer.footholds import Crossing, FootholdConstraints, StepCandidate, crossing_of
+from sequencer.footholds import Crossing, FootholdConstraints, StepCandidate, crossing_of, sole_on_obstacle
 from sequencer.nominal import FEET, NominalGait, other_foot
 from sequencer.params import SequencerParams
 from sequencer.step_qp import CONSTRAINT_NAMES, InfeasibleStep, StepProblem, solve_exact_scalars
@@ -510,7 +510,7 @@ class FootstepSequencer:
                 # stance sole itself off it: a stance sole within the margin, before the box, is no lead foot)
                 trailing = crosses and crossing_of(constraints.obstacles, lift, (p0x, p0y), yaw,
                                                    constraints.geometry) is not None \
-                    and crossing_of(constraints.obstacles, (p0x, p0y), (p0x, p0y), yaw, constraints.geometry) is None
+                    and not sole_on_obstacle(constraints.obstacles, (p0x, p0y), yaw, constraints.geometry)
                 if crosses:  # the trailing settle once the lead foot is down (the plan's first step): planned
                     # earlier, it changed the H1's approach to the box or its lead swing (docs/ocp.md)
                     own_halt = halt_trailing if trailing and halt_trailing > 0.0 and not steps else halt
