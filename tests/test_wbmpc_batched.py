@@ -396,3 +396,50 @@ def test_contact_damping_reaches_the_batched_constraint_dynamics():
         _assert_same(nodes, batched)
         stacked[damping] = batched.Fx.copy()
     assert np.max(np.abs(stacked[1e-3] - stacked[0.0])) > 1e-3 * np.max(np.abs(stacked[0.0]))
+
+
+@needs_h1_extra
+def test_h1_preset_with_its_obstacle_clearance_is_batched_and_matches_both_node_pipelines():
+    """The H1 preset (the "sole" contact damping as each sole's four corner contacts, Pinocchio backend) over a
+    swing that crosses a box (the clearance terms on the toe, heel and knee active): batched without a
+    SlowPathWarning, equal to its node-wise pipeline (values, derivatives, a rollout), and to the KKT backend's
+    node-wise pipeline, which solves the scaled 6D soles with the corners' drift."""
+    from wbmpc_fixtures import crossing_schedule
+
+    h1 = load_robot("h1")
+    config = load_walking_preset("h1").ocp
+    n_nodes = 12
+    schedule, crossings = crossing_schedule(n_nodes)
+    problems = {}
+    for backend in ("pinocchio", "kkt"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error" if backend == "pinocchio" else "ignore", SlowPathWarning)
+            ocp = WalkingOCP(h1, dataclasses.replace(config, dynamics_backend=backend), n_nodes=n_nodes, dt=0.02)
+        assert ocp.evaluation == ("batched" if backend == "pinocchio" else "nodes")
+        ocp.update(standing_state(h1), schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
+        problems[backend] = ocp.problem if backend == "kkt" else _twin_problems(ocp)
+    (nodes, batched), kkt = problems["pinocchio"], problems["kkt"]
+    rng = np.random.default_rng(3)
+    xs = np.array([random_state(h1, rng, 0.02, 0.1) for _ in range(n_nodes + 1)])
+    us = rng.standard_normal((n_nodes, batched.nu))
+    cost = nodes.calc_and_diff(xs, us)
+    assert batched.calcDiff(xs, us) == pytest.approx(cost, rel=1e-13)
+    assert kkt.calc_and_diff(xs, us) == pytest.approx(cost, rel=1e-11)
+    _assert_same(nodes, batched)
+    for name in STACKED:
+        for k in range(n_nodes):
+            ours, theirs = getattr(kkt.running_datas[k], name), getattr(nodes.running_datas[k], name)
+            assert np.max(np.abs(ours - theirs)) <= 1e-9 * max(1.0, np.max(np.abs(theirs))), (name, k)
+    for name in ("right_clearance_sole0", "right_clearance_sole1", "right_clearance_shank", "left_wrench_cone"):
+        assert any(model.differential.costs.costs[name].active for model in nodes.running_models), name
+    assert batched.term_costs()["right_clearance_sole0"] > 0  # the random states put the toe below the clearance
+    solver = SolverFDDP(nodes)
+    solver._set_candidate(xs, us, False)
+    solver._calc_diff()
+    solver._backward_pass()
+    rollouts = []
+    for problem in (nodes, batched):
+        xs_try, us_try, dx = np.zeros_like(xs), np.zeros_like(us), np.zeros((n_nodes, problem.ndx))
+        rollouts.append(problem.forward_rollout(solver.xs, solver.us, solver._k, solver._K, solver.fs, 0.5, xs_try,
+                                                us_try, dx))
+    assert rollouts[1] == pytest.approx(rollouts[0], rel=1e-12)

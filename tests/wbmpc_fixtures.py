@@ -45,3 +45,19 @@ def random_state(robot, rng: np.random.Generator, q_scale: float = 0.1, v_scale:
     model = robot.pinocchio_model
     q = pin.integrate(model, np.asarray(robot.q_reference, dtype=float), q_scale * rng.standard_normal(model.nv))
     return np.concatenate([q, v_scale * rng.standard_normal(model.nv)])
+
+
+def crossing_schedule(n_nodes: int, dt: float = 0.02):
+    """A walking schedule of 0.2 s steps, 0.5 m long, from t = 0 whose right swing passes over a 10 cm high, 10 cm
+    deep box 0.25 m ahead (under the middle of the swing's straight path): (schedule, CrossingSchedule)."""
+    from sequencer.obstacles import Obstacle
+    from wbmpc.walking.reference import CrossingSchedule
+
+    schedule = alternating_schedule(0.0, dt, n_nodes, step_duration=0.2, foot_y=(0.2, -0.2), step_length=0.5)
+    box = Obstacle(np.array([0.25, 0.0]), 0.0, 0.1, 1.0, 0.1)
+    swinging = ~schedule.in_contact
+    index = np.where(swinging, 0, -1)
+    liftoff = np.array([[-0.5, 0.2], [-0.25, -0.2]])  # each foot's lift-off, 0.5 m behind its touchdown
+    phase = np.nan_to_num(schedule.swing_phase)[..., None]
+    path = np.where(swinging[..., None], liftoff[None] + phase * (schedule.touchdown_position - liftoff[None]), np.nan)
+    return schedule, CrossingSchedule((box,), index, path, np.where(swinging, 0.0, np.nan), schedule.feet)

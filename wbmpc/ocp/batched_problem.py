@@ -281,8 +281,10 @@ class BatchedShootingProblem(ShootingProblem):
 
     def _dynamics_of(self, dam) -> tuple:
         """(constraint models or None without contacts, Pinocchio data, constraint datas, proximal
-        settings) of a node's contact set; the data is shared by every node with that set (one per
-        set keeps it in cache)."""
+        settings, force map) of a node's contact set; the data is shared by every node with that set
+        (one per set keeps it in cache). The force map (``dam.force_map``, or None) turns
+        Pinocchio's ``lambda_c`` into the stacked contact forces (a sole's four corners into its
+        wrench)."""
         dam.update_moving_references()
         key = dam.active_key
         entry = self._contact_sets.get(key)
@@ -290,7 +292,8 @@ class BatchedShootingProblem(ShootingProblem):
             return (None,) + entry
         if entry is None:
             pdata = self._pin_model.createData()
-            entry = self._contact_sets[key] = (pdata, dam.create_constraint_datas(pdata), dam.proximal_settings)
+            entry = self._contact_sets[key] = (pdata, dam.create_constraint_datas(pdata), dam.proximal_settings,
+                                               dam.force_map)
         return (dam.active_constraints if dam.nc else None, *entry)
 
     # ----------------------------------------------------------------- preparation
@@ -383,15 +386,14 @@ class BatchedShootingProblem(ShootingProblem):
         """Accelerations of node k by contact-constrained dynamics, then x⁺ by the Euler step.
         The rollout inlines this for speed; it serves the nodes without contact and :meth:`calc`."""
         model, nq = self._pin_model, self.state.nq
-        constraints, pdata, constraint_datas, settings = self._node_dynamics[k]
+        constraints, pdata, constraint_datas, settings, force_map = self._node_dynamics[k]
         q, v = x[:nq], x[nq:]
         tau = self._tau
         tau[6:] = u
         if constraints is not None:
             a = pin.constraintDynamics(model, pdata, q, v, tau, constraints, constraint_datas, settings)
             if self._keep_forces:
-                forces = pdata.lambda_c
-                self._forces[k, :forces.size] = forces
+                _copy_forces(pdata.lambda_c, force_map, self._forces[k])
         else:
             a = pin.aba(model, pdata, q, v, tau)
         free_flyer_euler_step(x, a, self._dt[k], self._euler_dx[k], self.xnext[k])
@@ -410,7 +412,7 @@ class BatchedShootingProblem(ShootingProblem):
         [∂λ/∂x, ∂λ/∂u] into force_jacobians[:nc].
         """
         model, nq, nv = self._pin_model, self.state.nq, self.state.nv
-        constraints, pdata, constraint_datas, settings = entry
+        constraints, pdata, constraint_datas, settings, force_map = entry
         q, v = x[:nq], x[nq:]
         tau = self._tau
         tau[6:] = u
@@ -423,12 +425,18 @@ class BatchedShootingProblem(ShootingProblem):
             free_flyer_euler_step(x, a, dt, euler_dx, xnext)
             da_dq, da_dv, da_dtau, dl_dq, dl_dv, dl_dtau = pin.computeConstraintDynamicsDerivatives(
                 model, pdata, constraints, constraint_datas, settings)
-            if forces is not None:
+            if forces is not None and force_map is None:
                 nc = dl_dq.shape[0]
                 forces[:nc] = pdata.lambda_c
                 force_jacobians[:nc, :nv] = dl_dq
                 force_jacobians[:nc, nv:2 * nv] = dl_dv
                 force_jacobians[:nc, 2 * nv:] = dl_dtau[:, 6:]
+            elif forces is not None:  # the stacked forces from the constraints' rows (sole corners)
+                nc = force_map.shape[0]
+                np.matmul(force_map, pdata.lambda_c, out=forces[:nc])
+                np.matmul(force_map, dl_dq, out=force_jacobians[:nc, :nv])
+                np.matmul(force_map, dl_dv, out=force_jacobians[:nc, nv:2 * nv])
+                np.matmul(force_map, dl_dtau[:, 6:], out=force_jacobians[:nc, 2 * nv:])
         da_dx[:, :nv] = da_dq
         da_dx[:, nv:] = da_dv
         da_du[:] = da_dtau[:, 6:]
@@ -518,15 +526,14 @@ class BatchedShootingProblem(ShootingProblem):
                 tau[6:] = us_try[t]
             elif code == 2:
                 raise RolloutError(f"control not finite at node {t}")
-            constraints, pdata, constraint_datas, settings = dynamics[t]
+            constraints, pdata, constraint_datas, settings, force_map = dynamics[t]
             if constraints is None:
                 self._node_dynamics_calc(t, x_try, us_try[t])
             else:
                 a = constraint_dynamics(model, pdata, x_try[:nq], x_try[nq:], tau, constraints, constraint_datas,
                                         settings)
                 if forces is not None:
-                    lambda_c = pdata.lambda_c
-                    forces[t, :lambda_c.size] = lambda_c
+                    _copy_forces(pdata.lambda_c, force_map, forces[t])
                 free_flyer_euler_step(x_try, a, dts[t], euler_dx[t], xnexts[t])
             xnext = xnexts[t]
         if closing:
@@ -553,6 +560,15 @@ class BatchedShootingProblem(ShootingProblem):
         for name, cost in terminal.term_costs(self.terminal_data.differential.costs).items():
             totals[f"terminal_{name}"] = totals.get(f"terminal_{name}", 0.0) + cost
         return totals
+
+
+def _copy_forces(lambda_c: np.ndarray, force_map: np.ndarray | None, out: np.ndarray) -> None:
+    """The stacked contact forces of a node into out[:nc]: Pinocchio's ``lambda_c`` itself, or
+    ``force_map`` (nc, rows of lambda_c) applied to it."""
+    if force_map is None:
+        out[:lambda_c.size] = lambda_c
+    else:
+        np.matmul(force_map, lambda_c, out=out[:force_map.shape[0]])
 
 
 @njit(cache=True)

@@ -164,7 +164,9 @@ class ContactModel6D(_ContactBase):
         super().__init__(state, frame_id, gains)
         self.reference = pin.SE3(reference_placement)
 
-    def calc(self, data: ContactData, pdata: pin.Data) -> None:
+    def calc(self, data: ContactData, pdata: pin.Data, corners: "SoleCorners | None" = None) -> None:
+        """Jc and a0 at the state of ``pdata``; with ``corners`` the drift is that of the sole as
+        four corner point contacts, a0 + δ (:class:`SoleCorners`)."""
         model = self.state.pinocchio
         fid = self.frame_id
         oMf = pin.updateFramePlacement(model, pdata, fid)
@@ -174,13 +176,16 @@ class ContactModel6D(_ContactBase):
         if kp != 0.0:
             data.rMf = self.reference.actInv(oMf)
             a0 += kp * pin.log6(data.rMf).vector
-        if kd != 0.0:
+        if kd != 0.0 or corners is not None:
             data.velocity = pin.getFrameVelocity(model, pdata, fid, pin.LOCAL)
             a0 += kd * data.velocity.vector
+        if corners is not None:
+            a0 += corners.drift(data.velocity.vector)
         data.Jc[:] = data.fJf
         data.a0[:] = a0
 
-    def calcDiff(self, data: ContactData, pdata: pin.Data) -> None:
+    def calcDiff(self, data: ContactData, pdata: pin.Data, corners: "SoleCorners | None" = None) -> None:
+        """da0_dx after :meth:`calc` (with the same ``corners``) and the RNEA derivatives."""
         model = self.state.pinocchio
         nv = self.state.nv
         v_dq, a_dq, a_dv, _ = pin.getJointAccelerationDerivatives(model, pdata, self.joint_id, pin.LOCAL)
@@ -193,6 +198,10 @@ class ContactModel6D(_ContactBase):
         if kd != 0.0:
             data.da0_dx[:, :nv] += kd * fXj @ v_dq
             data.da0_dx[:, nv:] += kd * data.fJf
+        if corners is not None:  # δ(v_frame), v_frame = fXj v_joint: ∂/∂q = fXj ∂v_joint/∂q, ∂/∂v = fJf
+            d_drift = corners.drift_jacobian(data.velocity.vector)
+            data.da0_dx[:, :nv] += d_drift @ (fXj @ v_dq)
+            data.da0_dx[:, nv:] += d_drift @ data.fJf
 
     def update_force(self, data: ContactData, pdata: pin.Data, force: np.ndarray) -> None:
         """Store the contact wrench (6,) = (force [N], torque [N·m]) in the LOCAL sole frame."""
@@ -214,6 +223,81 @@ class ContactModel6D(_ContactBase):
         """External force on the parent joint (a LOCAL wrench adds no RNEA derivative term)."""
         data.fext = self.joint_placement_frame.act(pin.Force(data.force))
         data.dtau_dq = None
+
+
+class SoleCorners:
+    """A rectangular sole as four point contacts at its corners, each damped by 4 μ: the model of
+    the "sole" contact damping (:mod:`wbmpc.ocp.dynamics`), in the two forms its backends solve.
+
+    For lever arms r = (b, a, √(a² + b²)) [m] (half width, half length, half diagonal:
+    :func:`sole_lever_arms`) the corners are c_i = (±a, ±b, 0) in the sole frame (centred on it).
+    Corner i's velocity is v + ω × c_i = G_i (v, ω) with G_i = [I, −[c_i]×] (the sole's LOCAL
+    velocity (v, ω)), and the sole's wrench is W = Σ G_iᵀ f_i = ``force_map`` · (f_1, ..., f_4),
+    each f_i [N] in the corner's LOCAL frame (the sole's axes). Since Σ G_iᵀ G_i =
+    4 diag(1, 1, 1, r²), the four corner contacts damped by 4 μ, solved for W, are exactly the
+    sole's 6D contact damped by μ S⁻² (S = diag(1, 1, 1, r)) whose drift gains
+
+        δ(v, ω) = (ω × v, diag(1/b², 1/a², 1/(a² + b²)) ((diag(a², b², 0) ω) × ω)),
+
+    the part of the corners' classical accelerations (ω × v_ci) that a spatial 6D drift lacks
+    (zero for a sole at rest). Pinocchio's ``constraintDynamics`` takes the corners
+    (:meth:`constraint_models`, one μ for every row: 4 μ), the KKT backend the scaled 6D contact
+    with δ (:meth:`drift`, :meth:`drift_jacobian`): same results to ~1e-13 (tests).
+
+    Args:
+        lever_arms: (3,) [m], > 0, the third the hypotenuse of the first two.
+    """
+
+    def __init__(self, lever_arms):
+        r = np.asarray(lever_arms, dtype=float).reshape(-1)
+        if r.shape != (3,) or not np.all(np.isfinite(r) & (r > 0)):
+            raise ParameterError(f"lever_arms={np.asarray(lever_arms).tolist()} must be 3 finite lever arms > 0 [m]")
+        if abs(r[2] - np.hypot(r[0], r[1])) > 1e-9 * r[2]:
+            raise ParameterError(f"lever_arms={r.tolist()} are not a rectangle's (half width b, half length a, "
+                                 f"half diagonal sqrt(a^2 + b^2) = {np.hypot(r[0], r[1])})")
+        b, a = r[0], r[1]
+        self.lever_arms = r
+        #: (4, 3) [m] corner positions in the sole frame
+        self.offsets = np.array([[a, b, 0.0], [a, -b, 0.0], [-a, b, 0.0], [-a, -b, 0.0]])
+        #: (6, 12): the sole wrench (force, torque) from the four corner forces
+        self.force_map = np.zeros((6, 12))
+        for i, c in enumerate(self.offsets):
+            self.force_map[:3, 3 * i:3 * i + 3] = np.eye(3)
+            self.force_map[3:, 3 * i:3 * i + 3] = pin.skew(c)
+        self._spread = np.diag([a * a, b * b, 0.0])  # Σ c_i c_iᵀ / 4
+        self._inverse_arms = 1.0 / (r * r)  # diag(1/b², 1/a², 1/(a² + b²))
+
+    def drift(self, velocity: np.ndarray) -> np.ndarray:
+        """δ (6,) [m/s², rad/s²] of the sole's LOCAL velocity (v, ω) (6,) [m/s, rad/s]."""
+        v, w = velocity[:3], velocity[3:]
+        return np.concatenate([np.cross(w, v), self._inverse_arms * np.cross(self._spread @ w, w)])
+
+    def drift_jacobian(self, velocity: np.ndarray) -> np.ndarray:
+        """∂δ/∂(v, ω) (6, 6) at the sole's LOCAL velocity (6,)."""
+        v, w = velocity[:3], velocity[3:]
+        jacobian = np.zeros((6, 6))
+        jacobian[:3, :3] = pin.skew(w)
+        jacobian[:3, 3:] = -pin.skew(v)
+        jacobian[3:, 3:] = self._inverse_arms[:, None] * (pin.skew(self._spread @ w) - pin.skew(w) @ self._spread)
+        return jacobian
+
+    def constraint_models(self, contact: "ContactModel6D") -> list[pin.RigidConstraintModel]:
+        """Pinocchio's four CONTACT_3D LOCAL constraints of ``contact``'s corners, with its Kd
+        (its Kp must be 0: a corner's position error is not the sole's log6)."""
+        kp, kd = contact.gains
+        if kp != 0.0:
+            raise ParameterError(f"Baumgarte Kp={kp} of the sole on frame {contact.frame_id}: the four corner "
+                                 "contacts need Kp = 0 (a corner's position error is not the sole's log6)")
+        model = contact.state.pinocchio
+        frame = model.frames[contact.frame_id]
+        constraints = []
+        for c in self.offsets:
+            corner = pin.SE3(np.eye(3), c)
+            constraint = pin.RigidConstraintModel(pin.ContactType.CONTACT_3D, model, frame.parentJoint,
+                                                  frame.placement * corner, 0, contact.reference * corner, pin.LOCAL)
+            constraint.setBaumgarteCorrectorParameters(pin.BaumgarteCorrectorParameters(0.0, kd))
+            constraints.append(constraint)
+        return constraints
 
 
 def sole_lever_arms(sole_size) -> np.ndarray:

@@ -21,13 +21,15 @@ the force the rigid contact leaves undetermined (its component along the null sp
 regularised system (both backends).
 
 ``damping_lever_arms`` weighs the damping per row: a 6D contact with lever arms r (3,) [m]
-(:func:`wbmpc.ocp.contacts.sole_lever_arms`) gets μ on its force rows and μ / r² on its moment
-rows, i.e. −μ S⁻² in the KKT matrix with S = diag(1, 1, 1, r): the compliance of a sole made of
-four corner point contacts each damped by 4 μ, whose least-squares split of an undetermined
-force keeps the moments, hence the centres of pressure, small (the sole's metric, not the
-Euclidean one of newtons and newton-metres). It is solved as the uniform damping of the scaled
-constraint S Jc a + S a0 = −μ λ̃, λ = S λ̃, so the "kkt" backend only (Pinocchio's
-``constraintDynamics`` damps every row by one μ).
+(:func:`wbmpc.ocp.contacts.sole_lever_arms`) is a sole made of four corner point contacts each
+damped by 4 μ (:class:`~wbmpc.ocp.contacts.SoleCorners`): μ on its force rows and μ / r² on its
+moment rows, i.e. −μ S⁻² in the KKT matrix with S = diag(1, 1, 1, r), whose least-squares split
+of an undetermined force keeps the moments, hence the centres of pressure, small (the sole's
+metric, not the Euclidean one of newtons and newton-metres), and the corners' drift (a0 + δ,
+δ = 0 for a sole at rest). The "kkt" backend solves it as the uniform damping of the scaled
+constraint S Jc a + S (a0 + δ) = −μ λ̃, λ = S λ̃; the "pinocchio" backend as the four corner
+contacts of each sole (``constraintDynamics`` with one damping 4 μ for every row, so there every
+contact of the node must be such a sole, with Baumgarte Kp = 0), the wrench W = Gᵀ (f_1..f_4).
 
 Two interchangeable backends compute it (they agree to ~1e-13, see the tests):
 
@@ -46,6 +48,7 @@ import pinocchio as pin
 
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.actuation import ActuationFloatingBase
+from wbmpc.ocp.contacts import ContactModel6D, SoleCorners
 from wbmpc.ocp.costs import CostModelSum
 from wbmpc.ocp.residuals.base import DataCollector
 from wbmpc.ocp.state import StateMultibody
@@ -70,8 +73,9 @@ class DifferentialActionModelContactFwdDynamics:
         contact_damping: μ of the KKT system above, >= 0 (0: rigid contacts, the default), in
             [m/s² per N] (force rows) and [rad/s² per N·m] (moment rows).
         damping_lever_arms: None (every row damped by μ, Crocoddyl's ``JMinvJt_damping``) or
-            contact name -> lever arms (3,) [m], > 0, of 6D contacts whose moment rows get μ / r²
-            (module docstring); needs backend "kkt".
+            contact name -> lever arms (3,) [m] of rectangular soles (6D contacts) whose moment
+            rows get μ / r² (module docstring); with backend "pinocchio" every contact of the node,
+            each with Kp = 0.
     """
 
     BACKENDS = ("pinocchio", "kkt")
@@ -85,18 +89,27 @@ class DifferentialActionModelContactFwdDynamics:
             raise ParameterError(f"contact_damping={contact_damping!r} must be finite and >= 0")
         self.contact_damping = float(contact_damping)
         self._damping_row_scales = {}  # contact name -> row scales S (nc,) of the damped KKT system
+        self._sole_corners = {}  # contact name -> SoleCorners (the same soles)
         for name, arms in (damping_lever_arms or {}).items():
-            if backend != "kkt":
-                raise ParameterError(f"damping_lever_arms need backend='kkt' (got {backend!r}: Pinocchio's "
-                                     "constraintDynamics damps every row by one mu)")
-            if name not in contacts or contacts[name].nc != 6:
+            if name not in contacts or not isinstance(contacts[name], ContactModel6D):
                 raise ParameterError(f"damping_lever_arms: {name!r} is not a 6D contact of this node "
                                      f"(contacts: {sorted(contacts)})")
-            arms = np.asarray(arms, dtype=float)
-            if arms.shape != (3,) or not np.all(np.isfinite(arms) & (arms > 0)):
-                raise ParameterError(f"damping_lever_arms[{name!r}]={arms.tolist()} must be 3 finite lever arms > 0 [m]")
-            self._damping_row_scales[name] = np.concatenate([np.ones(3), arms])
-        self.damping_lever_arms = {name: s[3:].copy() for name, s in self._damping_row_scales.items()}
+            try:
+                corners = SoleCorners(arms)
+            except ParameterError as err:
+                raise ParameterError(f"damping_lever_arms[{name!r}]: {err}") from None
+            self._sole_corners[name] = corners
+            self._damping_row_scales[name] = np.concatenate([np.ones(3), corners.lever_arms])
+        if self._sole_corners and backend == "pinocchio":
+            plain = sorted(set(contacts) - set(self._sole_corners))
+            if plain:
+                raise ParameterError(f"damping_lever_arms with backend='pinocchio' need every contact given lever arms "
+                                     f"(constraintDynamics damps every row by one mu; {plain} have none): "
+                                     "give them all, or use backend='kkt'")
+            if self.contact_damping == 0.0:
+                raise ParameterError("damping_lever_arms with backend='pinocchio' need contact_damping > 0 (four rigid "
+                                     "corner contacts over-constrain a sole), got 0; or use backend='kkt'")
+        self.damping_lever_arms = {name: c.lever_arms.copy() for name, c in self._sole_corners.items()}
         self.backend = backend
         self.state = state
         self.actuation = actuation
@@ -107,10 +120,14 @@ class DifferentialActionModelContactFwdDynamics:
             raise ParameterError(f"costs were built for nu={costs.nu}, the actuation has nu={self.nu}")
         self._costs_use_force_derivatives = any(
             getattr(item.cost.residual, "uses_contact_forces", False) for item in costs.costs.values())
-        self.constraint_models = {name: c.rigid_constraint_model() for name, c in self.contacts.items()}
+        # contact name -> its Pinocchio constraints (a sole with lever arms: its four corners)
+        self.constraint_models = {
+            name: self._sole_corners[name].constraint_models(c) if name in self._sole_corners and backend == "pinocchio"
+            else [c.rigid_constraint_model()] for name, c in self.contacts.items()}
         # one proximal iteration from λ = 0: the damped KKT solve (mu = 0: the exact one); the
-        # derivatives read settings.iter = 1 and differentiate that same solve
-        self.proximal_settings = pin.ProximalSettings(1e-12, self.contact_damping, 1)
+        # derivatives read settings.iter = 1 and differentiate that same solve. Corners: 4 μ each.
+        corner_damping = 4.0 if self._sole_corners and backend == "pinocchio" else 1.0
+        self.proximal_settings = pin.ProximalSettings(1e-12, corner_damping * self.contact_damping, 1)
         names = list(self.contacts) if active_contacts is None else list(active_contacts)
         self.set_active_contacts(names)
 
@@ -130,11 +147,26 @@ class DifferentialActionModelContactFwdDynamics:
         self.nc = sum(self.contacts[name].nc for name in self.active_contacts)
         self.active_constraints = pin.StdVec_RigidConstraintModel()
         self._active_rows = []  # (contact name, rows in the stacked force vector)
-        row = 0
+        # (contact name, rows of Pinocchio's lambda_c, force map to the contact's force or None)
+        self._constraint_rows = []
+        row = raw = 0
         for name in self.active_contacts:
-            self.active_constraints.append(self.constraint_models[name])
+            constraints = self.constraint_models[name]
+            for constraint in constraints:
+                self.active_constraints.append(constraint)
+            corners = self._sole_corners.get(name) if len(constraints) > 1 else None
+            n_raw = self.contacts[name].nc if corners is None else corners.force_map.shape[1]
+            self._constraint_rows.append((name, slice(raw, raw + n_raw), None if corners is None else corners.force_map))
             self._active_rows.append((name, slice(row, row + self.contacts[name].nc)))
             row += self.contacts[name].nc
+            raw += n_raw
+        #: (nc, rows of lambda_c): the stacked contact forces from Pinocchio's lambda_c (corner
+        #: contacts), None when they are the same rows
+        self.force_map = None
+        if raw != row:
+            self.force_map = np.zeros((row, raw))
+            for (_, raw_rows, force_map), (_, rows) in zip(self._constraint_rows, self._active_rows):
+                self.force_map[rows, raw_rows] = np.eye(rows.stop - rows.start) if force_map is None else force_map
         self._moving_references = [name for name in self.active_contacts if self.contacts[name].gains[0] != 0.0]
         scaled = [name for name in self.active_contacts if name in self._damping_row_scales]
         #: stacked row scales S (nc,) of the active contacts, None when all are 1 (uniform damping)
@@ -144,8 +176,8 @@ class DifferentialActionModelContactFwdDynamics:
     def update_moving_references(self) -> None:
         """Move the Baumgarte position reference of every active contact with Kp > 0 to the
         contact's current reference placement (it may have moved since the last evaluation)."""
-        for name in self._moving_references:
-            self.constraint_models[name].joint2_placement = self.contacts[name].reference_placement()
+        for name in self._moving_references:  # never corners (Kp = 0)
+            self.constraint_models[name][0].joint2_placement = self.contacts[name].reference_placement()
 
     def create_constraint_datas(self, pdata: pin.Data) -> pin.StdVec_RigidConstraintData:
         """Constraint datas of the active contact set, initialised with ``pdata`` for
@@ -187,14 +219,14 @@ class DifferentialActionModelContactFwdDynamics:
         if len(self.active_contacts) == 1:  # one stance foot: its buffers are the stacked ones
             name = self.active_contacts[0]
             cdata = data.contacts[name]
-            self.contacts[name].calc(cdata, pdata)
+            self._contact_calc(name, cdata, pdata)
             data.Jc, data.a0 = cdata.Jc, cdata.a0
         else:
             row = 0
             for name in self.active_contacts:
                 contact = self.contacts[name]
                 cdata = data.contacts[name]
-                contact.calc(cdata, pdata)
+                self._contact_calc(name, cdata, pdata)
                 data.Jc[row:row + contact.nc] = cdata.Jc
                 data.a0[row:row + contact.nc] = cdata.a0
                 row += contact.nc
@@ -220,6 +252,14 @@ class DifferentialActionModelContactFwdDynamics:
             row += contact.nc
         data.cost = self.costs.calc(data.costs, x, u, data.shared)
 
+    def _contact_calc(self, name: str, cdata, pdata) -> None:
+        """KKT path: the contact's Jc and a0 (a sole with lever arms: the corners' drift)."""
+        corners = self._sole_corners.get(name)
+        if corners is None:
+            self.contacts[name].calc(cdata, pdata)
+        else:
+            self.contacts[name].calc(cdata, pdata, corners)
+
     def _calc_constraint_dynamics(self, data, q, v, u) -> None:
         """Pinocchio backend of calc: constraintDynamics with the active RigidConstraintModels."""
         pdata, constraint_datas = data.select_pinocchio(self)
@@ -229,8 +269,11 @@ class DifferentialActionModelContactFwdDynamics:
                                               constraint_datas, self.proximal_settings)
         forces = pdata.lambda_c
         contacts = data.contacts
-        for name, rows in self._active_rows:
-            contacts[name].force[:] = forces[rows]
+        for name, rows, force_map in self._constraint_rows:
+            if force_map is None:
+                contacts[name].force[:] = forces[rows]
+            else:
+                np.matmul(force_map, forces[rows], out=contacts[name].force)
         if data.active_contacts is not self.active_contacts:
             data.active_contacts = self.active_contacts
             data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
@@ -247,11 +290,16 @@ class DifferentialActionModelContactFwdDynamics:
         data.Fu[:] = ddq_dtau[:, 6:]
         if not self._costs_use_force_derivatives:
             return
-        for name, rows in self._active_rows:
+        for name, rows, force_map in self._constraint_rows:
             cdata = data.contacts[name]
-            cdata.df_dx[:, :nv] = dlambda_dq[rows]
-            cdata.df_dx[:, nv:] = dlambda_dv[rows]
-            cdata.df_du[:] = dlambda_dtau[rows, 6:]
+            if force_map is None:
+                cdata.df_dx[:, :nv] = dlambda_dq[rows]
+                cdata.df_dx[:, nv:] = dlambda_dv[rows]
+                cdata.df_du[:] = dlambda_dtau[rows, 6:]
+            else:
+                np.matmul(force_map, dlambda_dq[rows], out=cdata.df_dx[:, :nv])
+                np.matmul(force_map, dlambda_dv[rows], out=cdata.df_dx[:, nv:])
+                np.matmul(force_map, dlambda_dtau[rows, 6:], out=cdata.df_du)
 
     def calcDiff(self, data, x: np.ndarray, u: np.ndarray | None = None) -> None:
         """Fill data.Fx (nv, ndx), Fu (nv, nu), force derivatives and the cost derivatives.
@@ -292,7 +340,11 @@ class DifferentialActionModelContactFwdDynamics:
         for name in self.active_contacts:
             contact = self.contacts[name]
             cdata = data.contacts[name]
-            contact.calcDiff(cdata, pdata)
+            corners = self._sole_corners.get(name)
+            if corners is None:
+                contact.calcDiff(cdata, pdata)
+            else:
+                contact.calcDiff(cdata, pdata, corners)
             da0_dx[row:row + contact.nc] = cdata.da0_dx
             row += contact.nc
         # [∂a/∂x; −∂λ/∂x] = −Kinv [∂τ/∂x (RNEA with contact forces); ∂a0/∂x]
@@ -332,7 +384,9 @@ class DifferentialActionModelContactFwdDynamics:
             _, _, _, dlambda_dq, dlambda_dv, dlambda_dtau = pin.computeConstraintDynamicsDerivatives(
                 self.state.pinocchio, pdata, self.active_constraints, constraint_datas, self.proximal_settings)
             return {name: (np.hstack([dlambda_dq[rows], dlambda_dv[rows]]), dlambda_dtau[rows, 6:].copy())
-                    for name, rows in self._active_rows}
+                    if force_map is None else
+                    (force_map @ np.hstack([dlambda_dq[rows], dlambda_dv[rows]]), force_map @ dlambda_dtau[rows, 6:])
+                    for name, rows, force_map in self._constraint_rows}
         return {name: (data.contacts[name].df_dx.copy(), data.contacts[name].df_du.copy())
                 for name in self.active_contacts}
 

@@ -172,10 +172,11 @@ class WalkingOCPConfig:
             on every row, Crocoddyl's ``JMinvJt_damping``) or "sole" (μ / r² on the moment rows,
             r the sole's lever arms, :func:`wbmpc.ocp.contacts.sole_lever_arms`: the sole as four
             damped corner contacts, whose split of an undetermined force keeps each centre of
-            pressure near its sole's centre; needs dynamics_backend "kkt" and the robot's
-            ``sole_size``).
-        dynamics_backend: "pinocchio" (constraintDynamics and its derivatives, fast) or "kkt"
-            (Crocoddyl's formulas written out); same results (see :mod:`wbmpc.ocp.dynamics`).
+            pressure near its sole's centre; needs the robot's ``sole_size``, and with
+            dynamics_backend "pinocchio" baumgarte_gains Kp = 0).
+        dynamics_backend: "pinocchio" (constraintDynamics and its derivatives, fast, batched; the
+            "sole" damping as each sole's four corner contacts) or "kkt" (Crocoddyl's formulas
+            written out); same results (see :mod:`wbmpc.ocp.dynamics`).
         evaluation: how the horizon is evaluated, same results: "batched" (the Pinocchio calls
             node by node, everything else in one compiled pass, see :mod:`wbmpc.ocp.batched_problem`),
             "nodes" (every node model's calc/calcDiff, the reference pipeline), or "auto"
@@ -301,9 +302,11 @@ class WalkingOCPConfig:
         if self.contact_damping_moments not in CONTACT_DAMPING_MOMENTS:
             raise ParameterError(f"contact_damping_moments={self.contact_damping_moments!r} must be one of "
                                  f"{CONTACT_DAMPING_MOMENTS}")
-        if self.contact_damping_moments == "sole" and self.dynamics_backend != "kkt":
-            raise ParameterError("contact_damping_moments='sole' needs dynamics_backend='kkt' (Pinocchio's "
-                                 f"constraintDynamics damps every row by one mu), got {self.dynamics_backend!r}")
+        if self.contact_damping_moments == "sole" and self.dynamics_backend == "pinocchio" and self.baumgarte_gains[0]:
+            raise ParameterError(f"contact_damping_moments='sole' with dynamics_backend='pinocchio' needs "
+                                 f"baumgarte_gains Kp = 0 (each sole is four corner contacts there, whose position "
+                                 f"error is not the sole's log6), got Kp={self.baumgarte_gains[0]}; or use "
+                                 "dynamics_backend='kkt'")
         if int(self.max_line_search_trials) != self.max_line_search_trials or self.max_line_search_trials < 1:
             raise ParameterError(f"max_line_search_trials={self.max_line_search_trials} must be an integer >= 1")
         if self.dynamics_backend not in ("pinocchio", "kkt"):

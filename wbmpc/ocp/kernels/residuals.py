@@ -89,6 +89,42 @@ def frame_jacobian_rows_many(jacobians, axes, mask, values):
                     values[k, a * nv + c] = jacobians[k, axes[a], c]
 
 
+@njit(cache=True)
+def point_height_row(position, R, point, reference):
+    """Height residual [m] of a point fixed on a frame: (position + R point)[2] − reference, the
+    frame's world position (3,) and rotation R (3, 3), the point (3,) in the frame."""
+    return position[2] + R[2, 0] * point[0] + R[2, 1] * point[1] + R[2, 2] * point[2] - reference
+
+
+@njit(cache=True)
+def point_height_jacobian_row(jacobian, R, point, out):
+    """Its Jacobian row out (nv,) from the frame's LOCAL_WORLD_ALIGNED Jacobian (6, nv) (linear,
+    angular rows): the point's world velocity is v + ω × (R point), whose z row is
+    J_v[2] + w_y J_ω[0] − w_x J_ω[1] with w = R point."""
+    w_x = R[0, 0] * point[0] + R[0, 1] * point[1] + R[0, 2] * point[2]
+    w_y = R[1, 0] * point[0] + R[1, 1] * point[1] + R[1, 2] * point[2]
+    for c in range(out.size):
+        out[c] = jacobian[2, c] + w_y * jacobian[3, c] - w_x * jacobian[4, c]
+
+
+@njit(cache=True)
+def point_height_rows_many(positions, rotations, point, references, mask, r):
+    """:func:`point_height_row` r[k, 0] at the nodes with mask[k]; positions (N, 3), rotations
+    (N, 3, 3), references (N, 1)."""
+    for k in range(mask.size):
+        if mask[k]:
+            r[k, 0] = point_height_row(positions[k], rotations[k], point, references[k, 0])
+
+
+@njit(cache=True)
+def point_height_jacobian_many(jacobians, rotations, point, mask, values):
+    """:func:`point_height_jacobian_row` into values[k] (nv,) at the nodes with mask[k];
+    jacobians (N, 6, nv)."""
+    for k in range(mask.size):
+        if mask[k]:
+            point_height_jacobian_row(jacobians[k], rotations[k], point, values[k])
+
+
 @njit(cache=True, inline="always")
 def _rotation_error(reference, R, E):
     """E (3, 3) = R_refᵀ R, the reference R_ref given row-major as reference (9,)."""
