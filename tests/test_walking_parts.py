@@ -347,10 +347,9 @@ def test_g1_preset_states_every_tuned_number():
 
 def test_h1_preset_states_every_tuned_number():
     preset = _assert_preset_states_every_field("h1", LIPM_CORRECTIONS, obstacles=True)
-    # the soles' undetermined squeeze is split by the sole-weighted damping, on the Pinocchio backend each sole's
-    # four corner contacts (Baumgarte Kp = 0), so that the horizon is evaluated batched
+    # the soles' undetermined squeeze is split by the sole-weighted damping, which the KKT backend solves
     assert preset.ocp.contact_damping > 0 and preset.ocp.contact_damping_moments == "sole"
-    assert preset.ocp.dynamics_backend == "pinocchio" and preset.ocp.baumgarte_gains[0] == 0.0
+    assert preset.ocp.dynamics_backend == "kkt"
     # the stance (sole centres 0.406 m apart) is inside the lateral step bounds
     assert preset.planner.w_right_min < preset.planner.pelvis_width < preset.planner.w_right_max
     assert -preset.planner.w_left_max < preset.planner.pelvis_width < -preset.planner.w_left_min

@@ -399,15 +399,15 @@ def test_contact_damping_reaches_the_batched_constraint_dynamics():
 
 
 @needs_h1_extra
-def test_h1_preset_with_its_obstacle_clearance_is_batched_and_matches_both_node_pipelines():
-    """The H1 preset (the "sole" contact damping as each sole's four corner contacts, Pinocchio backend) over a
+def test_h1_corner_soles_with_the_obstacle_clearance_are_batched_and_match_both_node_pipelines():
+    """The H1 preset with the "corners" contact damping (each sole's four corner contacts, Pinocchio backend) over a
     swing that crosses a box (the clearance terms on the toe, heel and knee active): batched without a
     SlowPathWarning, equal to its node-wise pipeline (values, derivatives, a rollout), and to the KKT backend's
     node-wise pipeline, which solves the scaled 6D soles with the corners' drift."""
     from wbmpc_fixtures import crossing_schedule
 
     h1 = load_robot("h1")
-    config = load_walking_preset("h1").ocp
+    config = dataclasses.replace(load_walking_preset("h1").ocp, contact_damping_moments="corners")
     n_nodes = 12
     schedule, crossings = crossing_schedule(n_nodes)
     problems = {}

@@ -233,6 +233,7 @@ def test_contact_damping_matches_crocoddyls_jminvjt_damping(backend):
 
 
 @needs_h1_extra
+@pytest.mark.filterwarnings("ignore::wbmpc.walking.ocp.SlowPathWarning")  # the H1 is node-wise (its sole damping)
 def test_the_h1_preset_has_no_crocoddyl_twin_and_the_loop_bench_says_so():
     """The H1 preset's sole-weighted contact damping and obstacle clearance (a frame point's height) have no
     Crocoddyl model: the mirror refuses the problem by name, and ``wbmpc bench loop --robot h1`` reports the

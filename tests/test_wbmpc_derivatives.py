@@ -311,15 +311,15 @@ def test_flight_node_after_stance_matches_finite_differences(bolt, backend):
     _assert_blocks_close(data.Fu, numdiff.Fu, "flight Fu", blocks, WHOLE)
 
 
-DAMPINGS = [("pinocchio", "uniform"), ("kkt", "uniform"), ("kkt", "sole"), ("pinocchio", "sole")]
+DAMPINGS = [("pinocchio", "uniform"), ("kkt", "uniform"), ("kkt", "sole"), ("kkt", "corners"), ("pinocchio", "corners")]
 
 
 def _h1_double_support_node(backend: str, damping: float, moments: str = "uniform"):
     """Node 1 of an H1 walking OCP in double support (both soles 6D contacts), with the wrench
     cone on (costs that read the contact forces); Baumgarte Kp = 10 except for the soles as four
-    corner contacts (Pinocchio backend, "sole"), which need Kp = 0."""
+    corner contacts on the Pinocchio backend, which need Kp = 0."""
     h1 = load_robot("h1")
-    kp = 0.0 if (backend, moments) == ("pinocchio", "sole") else 10.0
+    kp = 0.0 if (backend, moments) == ("pinocchio", "corners") else 10.0
     config = WalkingOCPConfig(wrench_cone_weight=1e2, contact_force_weight=1e-3, baumgarte_gains=(kp, 20.0),
                               contact_damping=damping, contact_damping_moments=moments, dynamics_backend=backend,
                               evaluation="nodes")
@@ -355,10 +355,11 @@ def test_damped_contact_dynamics_match_finite_differences(backend, moments):
 @needs_h1_extra
 @pytest.mark.parametrize("backend, moments", DAMPINGS)
 def test_contact_damping_is_a_compliant_contact(backend, moments):
-    """With damping μ the contact accelerations give way by μ λ: Jc a + a0 = −μ λ (uniform), or,
-    for the sole as four corner point contacts each damped by 4 μ, Σ G_iᵀ (a_ci + Kd v_ci) +
-    Kp 4 diag(1, 1, 1, r²) log6(error) = −4 μ W over its corners' classical accelerations (computed
-    here from the sole's spatial motion), and the dynamics hold, M a + b = τ + Jcᵀ λ; the damped
+    """With damping μ the contact accelerations give way by μ λ: Jc a + a0 = −μ λ (uniform), −μ S⁻² λ
+    (sole: S = 1 on the force rows, the sole's lever arms on the moment rows), or, for the sole as
+    four corner point contacts each damped by 4 μ, Σ G_iᵀ (a_ci + Kd v_ci) + Kp 4 diag(1, 1, 1, r²)
+    log6(error) = −4 μ W over its corners' classical accelerations (computed here from the sole's
+    spatial motion), and the dynamics hold, M a + b = τ + Jcᵀ λ; the damped
     split bounds the internal squeeze the rigid contacts leave undetermined (the H1's soles in
     double support)."""
     import pinocchio as pin
@@ -366,16 +367,17 @@ def test_contact_damping_is_a_compliant_contact(backend, moments):
     damping = 1e-3
     h1, ocp, model = _h1_double_support_node(backend, damping, moments)
     dam = model.differential
-    assert bool(dam.damping_lever_arms) == (moments == "sole")
+    assert bool(dam.damping_lever_arms) == (moments != "uniform")
+    compliance = np.concatenate([np.ones(3), dam.damping_lever_arms["left"] ** -2] * 2) if moments == "sole" else 1.0
     rng = np.random.default_rng(7)
     x = random_state(h1, rng, 0.02, 0.1)
     u = rng.standard_normal(model.nu)
     forces = {}
     for mu in (0.0, damping):
         # rigid corners over-constrain a sole: its rigid limit is the 6D contact of the KKT backend
-        corners = (backend, moments) == ("pinocchio", "sole")
+        corners = (backend, moments) == ("pinocchio", "corners")
         dam_mu = type(dam)(dam.state, dam.actuation, dam.contacts, dam.costs, dam.active_contacts,
-                           "kkt" if corners and mu == 0.0 else backend, mu, dam.damping_lever_arms)
+                           "kkt" if corners and mu == 0.0 else backend, mu, dam.damping_lever_arms, dam.sole_corners)
         data = dam_mu.createData()
         dam_mu.calc(data, x, u)
         a = data.xout
@@ -399,7 +401,7 @@ def test_contact_damping_is_a_compliant_contact(backend, moments):
             ac = pin.getFrameAcceleration(pmodel, pdata, c.frame_id, pin.LOCAL)
             vel = pin.getFrameVelocity(pmodel, pdata, c.frame_id, pin.LOCAL)
             err = pin.log6(c.reference_placement().actInv(pdata.oMf[c.frame_id])).vector
-            if moments == "uniform":
+            if moments != "corners":
                 acc.append(ac.vector + kd * vel.vector + kp * err)
                 continue
             b, a_half = dam.damping_lever_arms[n][:2]  # half width, half length
@@ -411,7 +413,8 @@ def test_contact_damping_is_a_compliant_contact(backend, moments):
                 f_c = a_c + kd * v_c
                 lhs += np.concatenate([f_c, np.cross(corner, f_c)])
             acc.append(lhs / 4.0)
-        np.testing.assert_allclose(np.concatenate(acc), -mu * lam, rtol=0, atol=1e-6 * max(1.0, np.max(np.abs(lam))))
+        np.testing.assert_allclose(np.concatenate(acc), -mu * compliance * lam, rtol=0,
+                                   atol=1e-6 * max(1.0, np.max(np.abs(lam))))
         forces[mu] = lam
     # the left sole's lateral force: the rigid solve splits the squeeze arbitrarily (hundreds of N)
     assert abs(forces[damping][1]) < 0.5 * abs(forces[0.0][1])
@@ -449,11 +452,14 @@ def test_sole_damping_is_refused_where_it_cannot_apply(bolt):
     from wbmpc.errors import ParameterError
     from wbmpc.ocp.contacts import sole_lever_arms
 
-    with pytest.raises(ParameterError, match="contact_damping_moments='sole' with dynamics_backend='pinocchio' needs "
+    with pytest.raises(ParameterError, match="contact_damping_moments='sole' needs dynamics_backend='kkt'"):
+        WalkingOCPConfig(contact_damping_moments="sole")
+    with pytest.raises(ParameterError, match="contact_damping_moments='corners' with dynamics_backend='pinocchio' needs "
                        r"baumgarte_gains Kp = 0 .*got Kp=10.0"):
-        WalkingOCPConfig(contact_damping_moments="sole", baumgarte_gains=(10.0, 20.0))
-    with pytest.raises(ParameterError, match=r"contact_damping_moments='corners' must be one of \('uniform', 'sole'\)"):
-        WalkingOCPConfig(contact_damping_moments="corners")
+        WalkingOCPConfig(contact_damping_moments="corners", baumgarte_gains=(10.0, 20.0))
+    with pytest.raises(ParameterError, match=r"contact_damping_moments='points' must be one of \('uniform', 'sole', "
+                                             r"'corners'\)"):
+        WalkingOCPConfig(contact_damping_moments="points")
     with pytest.raises(ParameterError, match="contact_damping_moments='sole' needs flat feet"):
         WalkingOCP(bolt, WalkingOCPConfig(contact_damping_moments="sole", dynamics_backend="kkt"), n_nodes=2, dt=0.01)
     np.testing.assert_allclose(sole_lever_arms((0.2, 0.1)), [0.05, 0.1, 0.5 * np.hypot(0.2, 0.1)])
@@ -461,30 +467,33 @@ def test_sole_damping_is_refused_where_it_cannot_apply(bolt):
 
 @needs_h1_extra
 def test_sole_corners_are_refused_where_they_cannot_apply():
-    """The soles as four corner contacts (the Pinocchio backend's "sole" damping) need every contact of the node
+    """The soles as four corner contacts (the "corners" damping on the Pinocchio backend) need every contact of the node
     to be such a sole (one damping for every row) with Kp = 0, and lever arms of a rectangle."""
     from wbmpc.errors import ParameterError
     from wbmpc.ocp.contacts import SoleCorners
 
-    _, _, model = _h1_double_support_node("pinocchio", 1e-3, "sole")
+    _, _, model = _h1_double_support_node("pinocchio", 1e-3, "corners")
     dam = model.differential
     arms = dam.damping_lever_arms["left"]
+    with pytest.raises(ParameterError, match="with backend='pinocchio' need sole_corners=True"):
+        type(dam)(dam.state, dam.actuation, dam.contacts, dam.costs, backend="pinocchio", contact_damping=1e-3,
+                  damping_lever_arms=dam.damping_lever_arms)
     with pytest.raises(ParameterError, match=r"need every contact given lever arms .*\['right'\] have none"):
         type(dam)(dam.state, dam.actuation, dam.contacts, dam.costs, backend="pinocchio", contact_damping=1e-3,
-                  damping_lever_arms={"left": arms})
+                  damping_lever_arms={"left": arms}, sole_corners=True)
     with pytest.raises(ParameterError, match=r"damping_lever_arms\['left'\]: lever_arms=\[0.01, 0.07, 0.1\] are not a "
                                              "rectangle's"):
         type(dam)(dam.state, dam.actuation, dam.contacts, dam.costs, backend="kkt", contact_damping=1e-3,
                   damping_lever_arms={"left": [0.01, 0.07, 0.1]})
     with pytest.raises(ParameterError, match="need contact_damping > 0 .*got 0"):
         type(dam)(dam.state, dam.actuation, dam.contacts, dam.costs, backend="pinocchio", contact_damping=0.0,
-                  damping_lever_arms=dam.damping_lever_arms)
+                  damping_lever_arms=dam.damping_lever_arms, sole_corners=True)
     with pytest.raises(ParameterError, match="must be 3 finite lever arms > 0"):
         SoleCorners([0.01, -0.07, 0.1])
     kp_contacts = {name: type(c)(c.state, c.frame_id, c.reference, (5.0, 20.0)) for name, c in dam.contacts.items()}
     with pytest.raises(ParameterError, match="Kp=5.0 of the sole on frame .*need Kp = 0"):
         type(dam)(dam.state, dam.actuation, kp_contacts, dam.costs, backend="pinocchio", contact_damping=1e-3,
-                  damping_lever_arms=dam.damping_lever_arms)
+                  damping_lever_arms=dam.damping_lever_arms, sole_corners=True)
 
 
 def _h1_crossing(n_nodes: int = 12):

@@ -21,15 +21,20 @@ the force the rigid contact leaves undetermined (its component along the null sp
 regularised system (both backends).
 
 ``damping_lever_arms`` weighs the damping per row: a 6D contact with lever arms r (3,) [m]
-(:func:`wbmpc.ocp.contacts.sole_lever_arms`) is a sole made of four corner point contacts each
-damped by 4 μ (:class:`~wbmpc.ocp.contacts.SoleCorners`): μ on its force rows and μ / r² on its
-moment rows, i.e. −μ S⁻² in the KKT matrix with S = diag(1, 1, 1, r), whose least-squares split
-of an undetermined force keeps the moments, hence the centres of pressure, small (the sole's
-metric, not the Euclidean one of newtons and newton-metres), and the corners' drift (a0 + δ,
-δ = 0 for a sole at rest). The "kkt" backend solves it as the uniform damping of the scaled
-constraint S Jc a + S (a0 + δ) = −μ λ̃, λ = S λ̃; the "pinocchio" backend as the four corner
-contacts of each sole (``constraintDynamics`` with one damping 4 μ for every row, so there every
-contact of the node must be such a sole, with Baumgarte Kp = 0), the wrench W = Gᵀ (f_1..f_4).
+(:func:`wbmpc.ocp.contacts.sole_lever_arms`) gets μ on its force rows and μ / r² on its moment
+rows, i.e. −μ S⁻² in the KKT matrix with S = diag(1, 1, 1, r): the compliance of a sole made of
+four corner point contacts each damped by 4 μ (:class:`~wbmpc.ocp.contacts.SoleCorners`), whose
+least-squares split of an undetermined force keeps the moments, hence the centres of pressure,
+small (the sole's metric, not the Euclidean one of newtons and newton-metres). Two drifts:
+
+- ``sole_corners=False`` (the "sole" damping): the 6D contact's spatial drift a0, solved as the
+  uniform damping of the scaled constraint S Jc a + S a0 = −μ λ̃, λ = S λ̃: the "kkt" backend only
+  (``constraintDynamics`` damps every row by one μ);
+- ``sole_corners=True`` (the "corners" damping): the four corner point contacts themselves, whose
+  classical accelerations add δ(v, ω) to a0 (zero for a sole at rest). The "kkt" backend solves
+  S Jc a + S (a0 + δ) = −μ λ̃; the "pinocchio" backend the corners (``constraintDynamics`` with
+  one damping 4 μ for every row, so every contact of the node must be such a sole, with Baumgarte
+  Kp = 0 and μ > 0), the wrench W = Gᵀ (f_1..f_4): same numbers, and batched.
 
 Two interchangeable backends compute it (they agree to ~1e-13, see the tests):
 
@@ -75,14 +80,16 @@ class DifferentialActionModelContactFwdDynamics:
         damping_lever_arms: None (every row damped by μ, Crocoddyl's ``JMinvJt_damping``) or
             contact name -> lever arms (3,) [m] of rectangular soles (6D contacts) whose moment
             rows get μ / r² (module docstring); with backend "pinocchio" every contact of the node,
-            each with Kp = 0.
+            each with Kp = 0, and sole_corners.
+        sole_corners: those soles are four corner point contacts (their classical drift, module
+            docstring); False: 6D contacts with the spatial drift (backend "kkt").
     """
 
     BACKENDS = ("pinocchio", "kkt")
 
     def __init__(self, state: StateMultibody, actuation: ActuationFloatingBase, contacts: dict,
                  costs: CostModelSum, active_contacts=None, backend: str = "pinocchio",
-                 contact_damping: float = 0.0, damping_lever_arms: dict | None = None):
+                 contact_damping: float = 0.0, damping_lever_arms: dict | None = None, sole_corners: bool = False):
         if backend not in self.BACKENDS:
             raise ParameterError(f"backend={backend!r} is not one of {self.BACKENDS}")
         if isinstance(contact_damping, bool) or not (np.isfinite(contact_damping) and contact_damping >= 0.0):
@@ -100,6 +107,11 @@ class DifferentialActionModelContactFwdDynamics:
                 raise ParameterError(f"damping_lever_arms[{name!r}]: {err}") from None
             self._sole_corners[name] = corners
             self._damping_row_scales[name] = np.concatenate([np.ones(3), corners.lever_arms])
+        if self._sole_corners and backend == "pinocchio" and not sole_corners:
+            raise ParameterError("damping_lever_arms with backend='pinocchio' need sole_corners=True (constraintDynamics "
+                                 "damps every row by one mu; the soles are then four corner point contacts); or use "
+                                 "backend='kkt'")
+        self.sole_corners = bool(sole_corners) and bool(self._sole_corners)
         if self._sole_corners and backend == "pinocchio":
             plain = sorted(set(contacts) - set(self._sole_corners))
             if plain:
@@ -253,8 +265,8 @@ class DifferentialActionModelContactFwdDynamics:
         data.cost = self.costs.calc(data.costs, x, u, data.shared)
 
     def _contact_calc(self, name: str, cdata, pdata) -> None:
-        """KKT path: the contact's Jc and a0 (a sole with lever arms: the corners' drift)."""
-        corners = self._sole_corners.get(name)
+        """KKT path: the contact's Jc and a0 (a sole of four corner contacts: their drift)."""
+        corners = self._sole_corners.get(name) if self.sole_corners else None
         if corners is None:
             self.contacts[name].calc(cdata, pdata)
         else:
@@ -340,7 +352,7 @@ class DifferentialActionModelContactFwdDynamics:
         for name in self.active_contacts:
             contact = self.contacts[name]
             cdata = data.contacts[name]
-            corners = self._sole_corners.get(name)
+            corners = self._sole_corners.get(name) if self.sole_corners else None
             if corners is None:
                 contact.calcDiff(cdata, pdata)
             else:

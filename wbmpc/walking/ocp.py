@@ -172,11 +172,12 @@ class WalkingOCPConfig:
             on every row, Crocoddyl's ``JMinvJt_damping``) or "sole" (μ / r² on the moment rows,
             r the sole's lever arms, :func:`wbmpc.ocp.contacts.sole_lever_arms`: the sole as four
             damped corner contacts, whose split of an undetermined force keeps each centre of
-            pressure near its sole's centre; needs the robot's ``sole_size``, and with
-            dynamics_backend "pinocchio" baumgarte_gains Kp = 0).
-        dynamics_backend: "pinocchio" (constraintDynamics and its derivatives, fast, batched; the
-            "sole" damping as each sole's four corner contacts) or "kkt" (Crocoddyl's formulas
-            written out); same results (see :mod:`wbmpc.ocp.dynamics`).
+            pressure near its sole's centre; the 6D contact's spatial drift; needs dynamics_backend
+            "kkt" and the robot's ``sole_size``) or "corners" (the same compliance with the four
+            corner point contacts' classical drift, a0 + δ; both backends, the Pinocchio one
+            batched, with baumgarte_gains Kp = 0; docs/ocp.md "Contact damping").
+        dynamics_backend: "pinocchio" (constraintDynamics and its derivatives, fast, batched) or
+            "kkt" (Crocoddyl's formulas written out); same results (see :mod:`wbmpc.ocp.dynamics`).
         evaluation: how the horizon is evaluated, same results: "batched" (the Pinocchio calls
             node by node, everything else in one compiled pass, see :mod:`wbmpc.ocp.batched_problem`),
             "nodes" (every node model's calc/calcDiff, the reference pipeline), or "auto"
@@ -302,11 +303,14 @@ class WalkingOCPConfig:
         if self.contact_damping_moments not in CONTACT_DAMPING_MOMENTS:
             raise ParameterError(f"contact_damping_moments={self.contact_damping_moments!r} must be one of "
                                  f"{CONTACT_DAMPING_MOMENTS}")
-        if self.contact_damping_moments == "sole" and self.dynamics_backend == "pinocchio" and self.baumgarte_gains[0]:
-            raise ParameterError(f"contact_damping_moments='sole' with dynamics_backend='pinocchio' needs "
-                                 f"baumgarte_gains Kp = 0 (each sole is four corner contacts there, whose position "
-                                 f"error is not the sole's log6), got Kp={self.baumgarte_gains[0]}; or use "
-                                 "dynamics_backend='kkt'")
+        if self.contact_damping_moments == "sole" and self.dynamics_backend != "kkt":
+            raise ParameterError("contact_damping_moments='sole' needs dynamics_backend='kkt' (Pinocchio's "
+                                 f"constraintDynamics damps every row by one mu), got {self.dynamics_backend!r}; "
+                                 "'corners' runs on both")
+        if self.contact_damping_moments == "corners" and self.dynamics_backend == "pinocchio" and self.baumgarte_gains[0]:
+            raise ParameterError(f"contact_damping_moments='corners' with dynamics_backend='pinocchio' needs "
+                                 f"baumgarte_gains Kp = 0 (a corner's position error is not the sole's log6), got "
+                                 f"Kp={self.baumgarte_gains[0]}; or use dynamics_backend='kkt'")
         if int(self.max_line_search_trials) != self.max_line_search_trials or self.max_line_search_trials < 1:
             raise ParameterError(f"max_line_search_trials={self.max_line_search_trials} must be an integer >= 1")
         if self.dynamics_backend not in ("pinocchio", "kkt"):
@@ -320,7 +324,7 @@ class WalkingOCPConfig:
 
 
 BASE_YAW_REFERENCES = ("fixed", "footholds")
-CONTACT_DAMPING_MOMENTS = ("uniform", "sole")
+CONTACT_DAMPING_MOMENTS = ("uniform", "sole", "corners")
 
 
 def foothold_heading(in_contact: np.ndarray, contact_yaw: np.ndarray, touchdown_yaw: np.ndarray) -> np.ndarray:
@@ -576,16 +580,18 @@ class WalkingOCP:
                       CostModelResidual(ResidualCoMPosition(state, np.zeros(3), nu)), cfg.com_terminal_weight)
         contacts = {foot: self._contact(foot) for foot in self.feet}
         lever_arms = None
-        if cfg.contact_damping_moments == "sole":
+        moments = cfg.contact_damping_moments
+        if moments != "uniform":
             if self.contact_type != "flat6d":
-                raise ParameterError(f"contact_damping_moments='sole' needs flat feet (robot {self.robot.name!r} has "
-                                     f"{self.contact_type!r} contacts)")
-            lever_arms = {foot: sole_lever_arms(self._sole_size("contact_damping_moments='sole'"))
+                raise ParameterError(f"contact_damping_moments={moments!r} needs flat feet (robot {self.robot.name!r} "
+                                     f"has {self.contact_type!r} contacts)")
+            lever_arms = {foot: sole_lever_arms(self._sole_size(f"contact_damping_moments={moments!r}"))
                           for foot in self.feet}
         dam = DifferentialActionModelContactFwdDynamics(state, self.actuation, contacts, costs,
                                                         backend=cfg.dynamics_backend,
                                                         contact_damping=cfg.contact_damping,
-                                                        damping_lever_arms=lever_arms)
+                                                        damping_lever_arms=lever_arms,
+                                                        sole_corners=moments == "corners")
         return IntegratedActionModelEuler(dam, 0.0 if terminal else self.dt)
 
     def _sole_size(self, needed_by: str) -> tuple[float, float]:
