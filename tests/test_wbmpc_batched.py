@@ -399,37 +399,48 @@ def test_contact_damping_reaches_the_batched_constraint_dynamics():
 
 
 @needs_h1_extra
-def test_h1_corner_soles_with_the_obstacle_clearance_are_batched_and_match_both_node_pipelines():
-    """The H1 preset with the "corners" contact damping (each sole's four corner contacts, Pinocchio backend) over a
-    swing that crosses a box (the clearance terms on the toe, heel and knee active): batched without a
-    SlowPathWarning, equal to its node-wise pipeline (values, derivatives, a rollout), and to the KKT backend's
-    node-wise pipeline, which solves the scaled 6D soles with the corners' drift."""
+@pytest.mark.parametrize("moments", ["sole", "corners"])
+def test_h1_soles_with_the_obstacle_clearance_are_batched_and_match_the_node_pipelines(moments):
+    """The H1 preset over a swing that crosses a box (the clearance terms on the toe, heel and knee active), with
+    its "sole" contact damping (the KKT backend: the batched problem calls each node's own dynamics) or
+    "corners" (each sole's four corner contacts, Pinocchio's constraintDynamics): batched without a
+    SlowPathWarning and equal to the node-wise pipeline (values, derivatives, a rollout, the prepared dynamics);
+    "corners" also to the KKT backend's node-wise pipeline (the scaled 6D soles with the corners' drift)."""
     from wbmpc_fixtures import crossing_schedule
 
     h1 = load_robot("h1")
-    config = dataclasses.replace(load_walking_preset("h1").ocp, contact_damping_moments="corners")
+    backend = "kkt" if moments == "sole" else "pinocchio"
+    config = dataclasses.replace(load_walking_preset("h1").ocp, contact_damping_moments=moments,
+                                 dynamics_backend=backend, evaluation="auto")
     n_nodes = 12
     schedule, crossings = crossing_schedule(n_nodes)
-    problems = {}
-    for backend in ("pinocchio", "kkt"):
-        with warnings.catch_warnings():
-            warnings.simplefilter("error" if backend == "pinocchio" else "ignore", SlowPathWarning)
-            ocp = WalkingOCP(h1, dataclasses.replace(config, dynamics_backend=backend), n_nodes=n_nodes, dt=0.02)
-        assert ocp.evaluation == ("batched" if backend == "pinocchio" else "nodes")
-        ocp.update(standing_state(h1), schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
-        problems[backend] = ocp.problem if backend == "kkt" else _twin_problems(ocp)
-    (nodes, batched), kkt = problems["pinocchio"], problems["kkt"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SlowPathWarning)
+        ocp = WalkingOCP(h1, config, n_nodes=n_nodes, dt=0.02)
+    assert ocp.evaluation == "batched"
+    ocp.update(standing_state(h1), schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
+    nodes, batched = _twin_problems(ocp)
     rng = np.random.default_rng(3)
     xs = np.array([random_state(h1, rng, 0.02, 0.1) for _ in range(n_nodes + 1)])
     us = rng.standard_normal((n_nodes, batched.nu))
     cost = nodes.calc_and_diff(xs, us)
     assert batched.calcDiff(xs, us) == pytest.approx(cost, rel=1e-13)
-    assert kkt.calc_and_diff(xs, us) == pytest.approx(cost, rel=1e-11)
     _assert_same(nodes, batched)
-    for name in STACKED:
-        for k in range(n_nodes):
-            ours, theirs = getattr(kkt.running_datas[k], name), getattr(nodes.running_datas[k], name)
-            assert np.max(np.abs(ours - theirs)) <= 1e-9 * max(1.0, np.max(np.abs(theirs))), (name, k)
+    keys = [model.differential.active_key for model in batched.running_models]
+    assert batched.prepare_dynamics(xs[:n_nodes], us, keys) == n_nodes
+    assert batched.calcDiff(xs, us) == pytest.approx(cost, rel=1e-13)
+    assert batched.prepared_used == n_nodes
+    _assert_same(nodes, batched)
+    if moments == "corners":
+        kkt_ocp = WalkingOCP(h1, dataclasses.replace(config, dynamics_backend="kkt", evaluation="nodes"),
+                             n_nodes=n_nodes, dt=0.02)
+        kkt_ocp.update(standing_state(h1), schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
+        kkt = kkt_ocp.problem
+        assert kkt.calc_and_diff(xs, us) == pytest.approx(cost, rel=1e-11)
+        for name in STACKED:
+            for k in range(n_nodes):
+                ours, theirs = getattr(kkt.running_datas[k], name), getattr(nodes.running_datas[k], name)
+                assert np.max(np.abs(ours - theirs)) <= 1e-9 * max(1.0, np.max(np.abs(theirs))), (name, k)
     for name in ("right_clearance_sole0", "right_clearance_sole1", "right_clearance_shank", "left_wrench_cone"):
         assert any(model.differential.costs.costs[name].active for model in nodes.running_models), name
     assert batched.term_costs()["right_clearance_sole0"] > 0  # the random states put the toe below the clearance

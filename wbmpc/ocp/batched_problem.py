@@ -29,7 +29,7 @@ problem when its weight or activity changes (``CostItem.bind_scale``), and :meth
 the contact sets.
 
 Supported nodes: :class:`~wbmpc.ocp.integrator.IntegratedActionModelEuler` over
-:class:`~wbmpc.ocp.dynamics.DifferentialActionModelContactFwdDynamics` (Pinocchio backend) on a
+:class:`~wbmpc.ocp.dynamics.DifferentialActionModelContactFwdDynamics` (either backend: the "kkt" one computes its nodes' dynamics with its own calc_dynamics and calc_diff_dynamics) on a
 free-flyer robot with 1-dof revolute joints, every running node with the same cost terms
 (switched on and off per node), each term's residual a
 :class:`~wbmpc.ocp.residuals.base.BatchedResidual`. A term without a batched evaluation is an
@@ -88,8 +88,8 @@ def batched_evaluation_support(problem: ShootingProblem) -> str | None:
         if type(model) is not IntegratedActionModelEuler:
             return f"running node {k} is a {type(model).__name__}, not an IntegratedActionModelEuler"
         dam = model.differential
-        if type(dam) is not DifferentialActionModelContactFwdDynamics or dam.backend != "pinocchio":
-            return f"running node {k} is not contact forward dynamics with the Pinocchio backend"
+        if type(dam) is not DifferentialActionModelContactFwdDynamics:
+            return f"running node {k} is not contact forward dynamics"
         items = dam.costs.costs
         if signatures is None:
             for name, item in items.items():
@@ -202,6 +202,7 @@ class BatchedShootingProblem(ShootingProblem):
         self._node_dynamics: list = [None] * N
         self._node_contact_keys: list = [None] * N
         self._contact_sets: dict = {}
+        self._kkt_datas: dict = {}  # contact set -> dynamics data of the "kkt" backend's nodes
         # evaluation buffers
         self._tau = np.zeros(nv)
         self._euler_dx = np.zeros((N, ndx))
@@ -281,20 +282,27 @@ class BatchedShootingProblem(ShootingProblem):
 
     def _dynamics_of(self, dam) -> tuple:
         """(constraint models or None without contacts, Pinocchio data, constraint datas, proximal
-        settings, force map) of a node's contact set; the data is shared by every node with that set
-        (one per set keeps it in cache). The force map (``dam.force_map``, or None) turns
+        settings, force map, KKT) of a node's contact set; the data is shared by every node with that
+        set (one per set keeps it in cache). The force map (``dam.force_map``, or None) turns
         Pinocchio's ``lambda_c`` into the stacked contact forces (a sole's four corners into its
-        wrench)."""
+        wrench). KKT is None, or for a node with contacts on the "kkt" backend (dam, its dynamics
+        data shared by the set): then the node's own dynamics compute it (``calc_dynamics``,
+        ``calc_diff_dynamics``) and the other entries are None."""
         dam.update_moving_references()
         key = dam.active_key
+        if dam.nc and dam.backend == "kkt":
+            data = self._kkt_datas.get(key)
+            if data is None:
+                data = self._kkt_datas[key] = dam.createData()
+            return (None, None, None, None, None, (dam, data))
         entry = self._contact_sets.get(key)
         if entry is not None and not dam.nc:
-            return (None,) + entry
+            return (None,) + entry + (None,)
         if entry is None:
             pdata = self._pin_model.createData()
             entry = self._contact_sets[key] = (pdata, dam.create_constraint_datas(pdata), dam.proximal_settings,
                                                dam.force_map)
-        return (dam.active_constraints if dam.nc else None, *entry)
+        return (dam.active_constraints if dam.nc else None, *entry, None)
 
     # ----------------------------------------------------------------- preparation
     def prepare_dynamics(self, xs: np.ndarray, us: np.ndarray, keys: list, deadline: float | None = None) -> int:
@@ -386,11 +394,13 @@ class BatchedShootingProblem(ShootingProblem):
         """Accelerations of node k by contact-constrained dynamics, then x⁺ by the Euler step.
         The rollout inlines this for speed; it serves the nodes without contact and :meth:`calc`."""
         model, nq = self._pin_model, self.state.nq
-        constraints, pdata, constraint_datas, settings, force_map = self._node_dynamics[k]
+        constraints, pdata, constraint_datas, settings, force_map, kkt = self._node_dynamics[k]
         q, v = x[:nq], x[nq:]
         tau = self._tau
         tau[6:] = u
-        if constraints is not None:
+        if kkt is not None:
+            a = self._kkt_dynamics(kkt, x, u, self._forces[k] if self._keep_forces else None)
+        elif constraints is not None:
             a = pin.constraintDynamics(model, pdata, q, v, tau, constraints, constraint_datas, settings)
             if self._keep_forces:
                 _copy_forces(pdata.lambda_c, force_map, self._forces[k])
@@ -412,10 +422,25 @@ class BatchedShootingProblem(ShootingProblem):
         [∂λ/∂x, ∂λ/∂u] into force_jacobians[:nc].
         """
         model, nq, nv = self._pin_model, self.state.nq, self.state.nv
-        constraints, pdata, constraint_datas, settings, force_map = entry
+        constraints, pdata, constraint_datas, settings, force_map, kkt = entry
         q, v = x[:nq], x[nq:]
         tau = self._tau
         tau[6:] = u
+        if kkt is not None:
+            dam, data = kkt
+            a = self._kkt_dynamics(kkt, x, u, None)
+            free_flyer_euler_step(x, a, dt, euler_dx, xnext)
+            dam.calc_diff_dynamics(data, x, u)
+            da_dx[:] = data.Fx
+            da_du[:] = data.Fu
+            if forces is not None:
+                ndx = self.state.ndx
+                for name, rows in dam._active_rows:
+                    contact = data.contacts[name]
+                    forces[rows] = contact.force
+                    force_jacobians[rows, :ndx] = contact.df_dx
+                    force_jacobians[rows, ndx:] = contact.df_du
+            return
         if constraints is None:
             a = pin.aba(model, pdata, q, v, tau)
             free_flyer_euler_step(x, a, dt, euler_dx, xnext)
@@ -440,6 +465,17 @@ class BatchedShootingProblem(ShootingProblem):
         da_dx[:, :nv] = da_dq
         da_dx[:, nv:] = da_dv
         da_du[:] = da_dtau[:, 6:]
+
+    @staticmethod
+    def _kkt_dynamics(kkt: tuple, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None) -> np.ndarray:
+        """Accelerations (nv,) of a "kkt" backend node, kkt = (dam, data), and its stacked contact
+        forces into ``forces`` (nc_max,) unless None."""
+        dam, data = kkt
+        dam.calc_dynamics(data, x, u)
+        if forces is not None:
+            for name, rows in dam._active_rows:
+                forces[rows] = data.contacts[name].force
+        return data.xout
 
     def _frame_kinematics(self, xs: np.ndarray, jacobians: bool) -> None:
         """Positions, rotations (and LOCAL_WORLD_ALIGNED Jacobians) of the frames of the active
@@ -526,7 +562,7 @@ class BatchedShootingProblem(ShootingProblem):
                 tau[6:] = us_try[t]
             elif code == 2:
                 raise RolloutError(f"control not finite at node {t}")
-            constraints, pdata, constraint_datas, settings, force_map = dynamics[t]
+            constraints, pdata, constraint_datas, settings, force_map, kkt = dynamics[t]
             if constraints is None:
                 self._node_dynamics_calc(t, x_try, us_try[t])
             else:

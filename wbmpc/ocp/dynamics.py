@@ -209,18 +209,25 @@ class DifferentialActionModelContactFwdDynamics:
 
         With ``u=None`` (terminal node) only the kinematics and the state costs are computed.
         """
+        if u is None:
+            model = self.state.pinocchio
+            pdata = data.select_pinocchio(None)
+            pin.computeAllTerms(model, pdata, x[:self.state.nq], x[self.state.nq:])
+            data.cost = self.costs.calc(data.costs, x, None, data.shared)
+            return
+        self.calc_dynamics(data, x, u)
+        data.cost = self.costs.calc(data.costs, x, u, data.shared)
+
+    def calc_dynamics(self, data, x: np.ndarray, u: np.ndarray) -> None:
+        """The dynamics part of :meth:`calc` (no cost): data.xout (nv,) and the contact forces."""
         model = self.state.pinocchio
         nq = self.state.nq
         q, v = x[:nq], x[nq:]
-        if u is not None and self.nc and self.backend == "pinocchio":
+        if self.nc and self.backend == "pinocchio":
             self._calc_constraint_dynamics(data, q, v, u)
-            data.cost = self.costs.calc(data.costs, x, u, data.shared)
             return
         pdata = data.select_pinocchio(None)
         pin.computeAllTerms(model, pdata, q, v)
-        if u is None:
-            data.cost = self.costs.calc(data.costs, x, None, data.shared)
-            return
         self.actuation.calc(data.tau, u)
         nc = self.nc
         if data.active_contacts is not self.active_contacts:
@@ -262,7 +269,6 @@ class DifferentialActionModelContactFwdDynamics:
             contact = self.contacts[name]
             contact.update_force(data.contacts[name], pdata, forces[row:row + contact.nc])
             row += contact.nc
-        data.cost = self.costs.calc(data.costs, x, u, data.shared)
 
     def _contact_calc(self, name: str, cdata, pdata) -> None:
         """KKT path: the contact's Jc and a0 (a sole of four corner contacts: their drift)."""
@@ -318,14 +324,16 @@ class DifferentialActionModelContactFwdDynamics:
 
         Uses what :meth:`calc` stored (accelerations, forces, Jc); call calc first.
         """
-        if u is None:
-            self.costs.calcDiff(data.costs, x, None, data.shared)
-            self._copy_cost_derivatives(data)
-            return
+        if u is not None:
+            self.calc_diff_dynamics(data, x, u)
+        self.costs.calcDiff(data.costs, x, u, data.shared)
+        self._copy_cost_derivatives(data)
+
+    def calc_diff_dynamics(self, data, x: np.ndarray, u: np.ndarray) -> None:
+        """The dynamics part of :meth:`calcDiff` (no cost): data.Fx (nv, ndx), data.Fu (nv, nu)
+        and the contact forces' derivatives; after :meth:`calc_dynamics` (or calc) at (x, u)."""
         if self.nc and self.backend == "pinocchio":
             self._calc_diff_constraint_dynamics(data)
-            self.costs.calcDiff(data.costs, x, u, data.shared)
-            self._copy_cost_derivatives(data)
             return
         model = self.state.pinocchio
         pdata = data.pinocchio
@@ -385,8 +393,6 @@ class DifferentialActionModelContactFwdDynamics:
                 cdata.df_du[:] = df_du[row:row + contact.nc]
                 row += contact.nc
         data.Fu[:] = a_dtau[:, 6:]
-        self.costs.calcDiff(data.costs, x, u, data.shared)
-        self._copy_cost_derivatives(data)
 
     def contact_force_jacobians(self, data) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Derivatives of each active contact's force (world-aligned for point contacts, as
