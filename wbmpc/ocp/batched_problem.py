@@ -29,9 +29,10 @@ problem when its weight or activity changes (``CostItem.bind_scale``), and :meth
 the contact sets.
 
 Supported nodes: :class:`~wbmpc.ocp.integrator.IntegratedActionModelEuler` over
-:class:`~wbmpc.ocp.dynamics.DifferentialActionModelContactFwdDynamics` (either backend: the "kkt" one computes its nodes' dynamics with its own calc_dynamics and calc_diff_dynamics) on a
-free-flyer robot with 1-dof revolute joints, every running node with the same cost terms
-(switched on and off per node), each term's residual a
+:class:`~wbmpc.ocp.dynamics.DifferentialActionModelContactFwdDynamics` (either backend; a "kkt"
+node's dynamics are its own ``calc_dynamics`` and ``calc_diff_dynamics``) on a free-flyer robot
+with 1-dof revolute joints, every running node with the same cost terms (switched on and off per
+node), each term's residual a
 :class:`~wbmpc.ocp.residuals.base.BatchedResidual`. A term without a batched evaluation is an
 error naming it (:func:`batched_evaluation_support` says why a problem does not qualify). The
 terminal node, any model, is evaluated node-wise.
