@@ -47,11 +47,41 @@ def _random_trajectory(robot, n_nodes: int, nu: int, seed: int):
     return xs, us
 
 
+def _batched_walking_ocp(robot, config: WalkingOCPConfig, n_nodes: int) -> WalkingOCP:
+    """A WalkingOCP of 20 ms nodes that evaluates batched (a SlowPathWarning is an error)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SlowPathWarning)
+        ocp = WalkingOCP(robot, config, n_nodes=n_nodes, dt=0.02)
+    assert ocp.evaluation == "batched"
+    return ocp
+
+
+def _small_random_trajectory(robot, n_nodes: int, nu: int, seed: int, q_scale: float, v_scale: float):
+    """States near the standing posture (random_state's scales) and unit-normal torques [N·m]."""
+    rng = np.random.default_rng(seed)
+    xs = np.array([random_state(robot, rng, q_scale, v_scale) for _ in range(n_nodes + 1)])
+    return xs, rng.standard_normal((n_nodes, nu))
+
+
 def _assert_same(nodes: ShootingProblem, batched: BatchedShootingProblem, names=STACKED) -> None:
     for name in names:
         expected, actual = getattr(nodes, name), getattr(batched, name)
         scale = max(1.0, float(np.max(np.abs(expected))))
         assert np.max(np.abs(actual - expected)) <= 1e-12 * scale, name
+
+
+def _assert_same_half_step_rollout(nodes: ShootingProblem, batched: BatchedShootingProblem, xs, us) -> None:
+    """The FDDP rollout with α = 0.5 from the Riccati gains at (xs, us) costs the same on both problems."""
+    solver = SolverFDDP(nodes)
+    solver._set_candidate(xs, us, False)
+    solver._calc_diff()
+    solver._backward_pass()
+    rollouts = []
+    for problem in (nodes, batched):
+        xs_try, us_try, dx = np.zeros_like(xs), np.zeros_like(us), np.zeros((problem.T, problem.ndx))
+        rollouts.append(problem.forward_rollout(solver.xs, solver.us, solver._k, solver._K, solver.fs, 0.5, xs_try,
+                                                us_try, dx))
+    assert rollouts[1] == pytest.approx(rollouts[0], rel=1e-12)
 
 
 def test_walking_ocp_uses_the_batched_problem_when_it_can(bolt):
@@ -115,16 +145,11 @@ def test_g1_preset_flat_feet_match_the_node_pipeline(n_nodes):
     and equal to the node-wise pipeline, values, derivatives and the rollout."""
     g1 = load_robot("g1")
     config = dataclasses.replace(load_walking_preset("g1").ocp, contact_force_weight=1e-4, baumgarte_gains=(10.0, 30.0))
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", SlowPathWarning)
-        ocp = WalkingOCP(g1, config, n_nodes=n_nodes, dt=0.02)
-    assert ocp.evaluation == "batched"
+    ocp = _batched_walking_ocp(g1, config, n_nodes)
     ocp.update(standing_state(g1), alternating_schedule(0.0, 0.02, n_nodes, step_duration=0.4, foot_y=(0.12, -0.12)),
                np.array([0.05, 0.0, 0.7]))
     nodes, batched = _twin_problems(ocp)
-    rng = np.random.default_rng(2)
-    xs = np.array([random_state(g1, rng, 0.05, 0.2) for _ in range(n_nodes + 1)])
-    us = rng.standard_normal((n_nodes, ocp.nu))
+    xs, us = _small_random_trajectory(g1, n_nodes, ocp.nu, seed=2, q_scale=0.05, v_scale=0.2)
     cost = nodes.calc(xs, us)
     assert batched.calc(xs, us) == pytest.approx(cost, rel=1e-13)
     assert batched.calcDiff(xs, us) == pytest.approx(nodes.calc_and_diff(xs, us), rel=1e-13)
@@ -132,16 +157,7 @@ def test_g1_preset_flat_feet_match_the_node_pipeline(n_nodes):
     assert batched.term_costs() == pytest.approx(nodes.term_costs(), rel=1e-12, abs=1e-14)
     active = {name for name, value in batched.term_costs().items() if value > 0}
     assert {"left_wrench_cone", "left_contact_force", "right_orientation"} <= active
-    solver = SolverFDDP(nodes)
-    solver._set_candidate(xs, us, False)
-    solver._calc_diff()
-    solver._backward_pass()
-    rollouts = []
-    for problem in (nodes, batched):
-        xs_try, us_try, dx = np.zeros_like(xs), np.zeros_like(us), np.zeros((n_nodes, problem.ndx))
-        rollouts.append(problem.forward_rollout(solver.xs, solver.us, solver._k, solver._K, solver.fs, 0.5, xs_try,
-                                                us_try, dx))
-    assert rollouts[1] == pytest.approx(rollouts[0], rel=1e-12)
+    _assert_same_half_step_rollout(nodes, batched, xs, us)
 
 
 def test_a_force_term_active_where_its_contact_is_not_is_an_error_naming_it(bolt):
@@ -414,15 +430,10 @@ def test_h1_soles_with_the_obstacle_clearance_are_batched_and_match_the_node_pip
                                  dynamics_backend=backend, evaluation="auto")
     n_nodes = 12
     schedule, crossings = crossing_schedule(n_nodes)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", SlowPathWarning)
-        ocp = WalkingOCP(h1, config, n_nodes=n_nodes, dt=0.02)
-    assert ocp.evaluation == "batched"
+    ocp = _batched_walking_ocp(h1, config, n_nodes)
     ocp.update(standing_state(h1), schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
     nodes, batched = _twin_problems(ocp)
-    rng = np.random.default_rng(3)
-    xs = np.array([random_state(h1, rng, 0.02, 0.1) for _ in range(n_nodes + 1)])
-    us = rng.standard_normal((n_nodes, batched.nu))
+    xs, us = _small_random_trajectory(h1, n_nodes, ocp.nu, seed=3, q_scale=0.02, v_scale=0.1)
     cost = nodes.calc_and_diff(xs, us)
     assert batched.calcDiff(xs, us) == pytest.approx(cost, rel=1e-13)
     _assert_same(nodes, batched)
@@ -444,13 +455,4 @@ def test_h1_soles_with_the_obstacle_clearance_are_batched_and_match_the_node_pip
     for name in ("right_clearance_sole0", "right_clearance_sole1", "right_clearance_shank", "left_wrench_cone"):
         assert any(model.differential.costs.costs[name].active for model in nodes.running_models), name
     assert batched.term_costs()["right_clearance_sole0"] > 0  # the random states put the toe below the clearance
-    solver = SolverFDDP(nodes)
-    solver._set_candidate(xs, us, False)
-    solver._calc_diff()
-    solver._backward_pass()
-    rollouts = []
-    for problem in (nodes, batched):
-        xs_try, us_try, dx = np.zeros_like(xs), np.zeros_like(us), np.zeros((n_nodes, problem.ndx))
-        rollouts.append(problem.forward_rollout(solver.xs, solver.us, solver._k, solver._K, solver.fs, 0.5, xs_try,
-                                                us_try, dx))
-    assert rollouts[1] == pytest.approx(rollouts[0], rel=1e-12)
+    _assert_same_half_step_rollout(nodes, batched, xs, us)
