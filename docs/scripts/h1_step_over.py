@@ -106,7 +106,9 @@ def main() -> None:
     print(f"  crossed (every sole sphere beyond the far edge): {contacts.crossed_time}  "
           f"lowest clearance over the box: {contacts.clearance:.3f} m")
     print(f"  MPC failures: {failed.size}" + (f" from {failed[0]:.3f} s" if failed.size else "")
-          + (f"; cost > 1e7 from {big[0]:.3f} s" if big.size else ""))
+          + (f"; cost > 1e7 from {big[0]:.3f} s" if big.size else "")
+          + (f"; cold restarts at {', '.join(f'{t:.2f}' for t in r['t'][r['mpc_restart'] > 0.5])} s"
+             if "mpc_restart" in r and np.any(r["mpc_restart"] > 0.5) else ""))
     print(f"  status {log.status}  fall {log.fall_time} ({log.fall_reason})  error {log.error}")
     dcm = log.ticks.get("dcm")
     if dcm is not None:
