@@ -315,7 +315,7 @@ class FootholdConstraints:
             if hit is None:
                 if lengthened or not self._crosses(p0, yaw, candidate, liftoff):
                     return candidate, changed
-                trailing = self._trailing_bounds(bounds, p0, yaw, liftoff)
+                trailing = self._trailing_bounds(bounds, p0, yaw, liftoff, boxes, candidate.dx)
                 if trailing[0] <= candidate.dx <= trailing[1] and candidate.duration >= trailing[4] - 1e-12:
                     return candidate, changed
                 bounds = trailing
@@ -416,15 +416,28 @@ class FootholdConstraints:
         trailing = min(abs(step_length_nominal), max(0.0, self.geometry.swing_length_max - crossing_length))
         return sign * (trailing + sign * offset_nominal) * math.exp(-self.omega * self.geometry.step_duration_min)
 
-    def _trailing_bounds(self, bounds: StepBounds, p0, yaw: float, liftoff) -> StepBounds:
+    def _trailing_bounds(self, bounds: StepBounds, p0, yaw: float, liftoff, boxes=(), free: float | None = None
+                         ) -> StepBounds:
         """``bounds`` of a step whose swing passes over an obstacle with a foothold outside it (the trailing foot):
         the crossing durations and, with a swing travel bound s_max and a known ``liftoff`` (world (x, y) [m]),
-        ℓ within ℓ_lift ± s_max (ℓ_lift = (liftoff - p0) · heading; never tighter than the step's other bound)."""
+        ℓ within ℓ_lift ± s_max (ℓ_lift = (liftoff - p0) · heading; never tighter than the step's other bound).
+        A travel bound that would end inside one of ``boxes`` (a, b, c, d) the swing crosses, between the lift-off
+        and ``free`` (the foothold ℓ found without the bound, outside every box), is moved to that box's far side
+        (b forwards, a backwards): a bound shorter than what clears the box put the foothold inside it (the
+        step infeasible, the plan with it: the H1 with s_max = 0.3 m from 2.7 s on)."""
         l_lo, l_hi = bounds[0], bounds[1]
         reach = self.geometry.swing_length_max
         if reach > 0.0 and liftoff is not None:
             along = float((np.asarray(liftoff, dtype=float) - p0) @ np.array([math.cos(yaw), math.sin(yaw)]))
-            l_lo, l_hi = min(max(l_lo, along - reach), l_hi), max(min(l_hi, along + reach), l_lo)
+            upper, lower = along + reach, along - reach
+            if free is not None:
+                for a, b, _, _ in sorted(boxes, key=lambda box: box[1]):  # forwards: the far side b
+                    if along < b <= free + 1e-12 and a < upper < b:
+                        upper = b
+                for a, b, _, _ in sorted(boxes, key=lambda box: -box[0]):  # backwards: the far side a
+                    if free - 1e-12 <= a < along and a < lower < b:
+                        lower = a
+            l_lo, l_hi = min(max(l_lo, lower), l_hi), max(min(l_hi, upper), l_lo)
         return (l_lo, l_hi, bounds[2], bounds[3], max(bounds[4], self.geometry.step_duration_min),
                 max(bounds[5], self.geometry.step_duration_max))
 

@@ -68,6 +68,9 @@ class MPCSolution:
         us: (N, nu) torques [N·m].
         K: (N, nu, ndx) feedback gains ∂u/∂x, library sign (u = u_k + K_k (x̂ ⊖ x_k)); also
             callable, ``K(k)`` = ``K[k]``, like the accessors ``u(k)`` and ``x(k)``.
+        restart: this update was a cold restart after failures (``RecedingHorizonMPC(
+            restart_after_failures=)``): its guess was the quasi-static one, not the last good
+            solution shifted (a failed restart still returns that solution, with ok=False).
     """
 
     ok: bool
@@ -79,6 +82,7 @@ class MPCSolution:
     xs: np.ndarray
     us: np.ndarray
     K: np.ndarray
+    restart: bool = False
 
     def u(self, k: int) -> np.ndarray:
         """Torque of node k (nu,) [N·m]."""
@@ -115,7 +119,12 @@ class RecedingHorizonMPC:
             held over the horizon with the state x; None = zero controls.
         solver: an :class:`MPCSolver` on ``problem``; None = ``SolverFDDP(problem)``.
         max_iterations: solver iterations per update (the paper runs 1).
-        cold_start_iterations: iterations of the first update (no warm start yet).
+        cold_start_iterations: iterations of the first update (no warm start yet) and of a restart.
+        restart_after_failures: after this many consecutive failed updates, the next update
+            starts cold (the quasi-static guess, ``cold_start_iterations``, no time budget)
+            instead of warm from the last good solution, which then fails the same way again and
+            again; the last good plan is kept until a restart succeeds. A failed restart is the
+            first failure of a new count. None or 0 (default): never.
         horizon_end: how the warm start fills the node(s) entering at the end of the shifted
             horizon: "repeat" (default: the last state and control repeated, the usual shift;
             leaves a gap at the end) or "rollout" (the control of the latest node with the same
@@ -136,7 +145,8 @@ class RecedingHorizonMPC:
 
     def __init__(self, problem, dt: float, initial_controls: Callable[[np.ndarray], np.ndarray] | None = None,
                  solver: MPCSolver | None = None, max_iterations: int = 1, cold_start_iterations: int = 20,
-                 horizon_end: str = "repeat", time_budget: float | None = None, blas_threads: int | None = 1):
+                 horizon_end: str = "repeat", time_budget: float | None = None, blas_threads: int | None = 1,
+                 restart_after_failures: int | None = None):
         if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or max_iterations < 1:
             raise ParameterError(f"max_iterations={max_iterations!r} must be an integer >= 1")
         if int(cold_start_iterations) != cold_start_iterations or cold_start_iterations < 1:
@@ -151,6 +161,14 @@ class RecedingHorizonMPC:
         if blas_threads is not None and (isinstance(blas_threads, bool) or not isinstance(blas_threads, int)
                                          or blas_threads < 1):
             raise ParameterError(f"blas_threads={blas_threads!r} must be None or an integer >= 1")
+        if restart_after_failures is not None and (
+                isinstance(restart_after_failures, bool) or int(restart_after_failures) != restart_after_failures
+                or restart_after_failures < 0):
+            raise ParameterError(f"restart_after_failures={restart_after_failures!r} must be None, 0 (never) or an "
+                                 "integer >= 1 (consecutive failed updates)")
+        self.restart_after_failures = int(restart_after_failures or 0)
+        self.failures = 0
+        """Consecutive failed updates since the last good one or the last restart."""
         self.blas_threads = blas_threads
         self.problem = problem
         self.solver = SolverFDDP(problem) if solver is None else solver
@@ -169,7 +187,9 @@ class RecedingHorizonMPC:
         nodes, with x_measured as node 0, and the nodes that enter at the end filled as
         ``horizon_end`` says; a quasi-static guess if there is none. Call after the OCP's update
         (the "rollout" fill reads the new contact sets). Returns (xs_init, us_init, cold)."""
-        last = self.last_good
+        return self._guess(t, x_measured, self.last_good)
+
+    def _guess(self, t: float, x_measured: np.ndarray, last: MPCSolution | None):
         if last is None:
             xs = np.repeat(x_measured[None, :], self.n_nodes + 1, axis=0)
             u0 = np.zeros(self.nu) if self.initial_controls is None else self.initial_controls(x_measured)
@@ -273,13 +293,17 @@ class RecedingHorizonMPC:
             return self._update(tic, t, x_measured, update_problem)
 
     def _update(self, tic: float, t: float, x_measured: np.ndarray, update_problem) -> MPCSolution:
+        restart = (self.restart_after_failures > 0 and self.last_good is not None
+                   and self.failures >= self.restart_after_failures)
+        if restart:
+            self.failures = 0
         try:
             x = self.problem.state.check_state("x_measured", x_measured)
             if update_problem is not None:
                 update_problem(x)
             else:
                 self.problem.set_x0(x)
-            xs_init, us_init, cold = self.warm_start(float(t), x)
+            xs_init, us_init, cold = self._guess(float(t), x, None if restart else self.last_good)
             iterations = self.cold_start_iterations if cold else self.max_iterations
             deadline = None if cold or self.time_budget is None else tic + self.time_budget
             converged = self.solver.solve(xs_init, us_init, maxiter=iterations, is_feasible=False, deadline=deadline)
@@ -295,22 +319,24 @@ class RecedingHorizonMPC:
                 ok=True, status="converged" if converged else "deadline" if solver.deadline_hit else "max_iter",
                 iterations=len(solver.log),
                 cost=float(solver.cost), solve_time=time.perf_counter() - tic, t=float(t),
-                xs=solver.xs.copy(), us=solver.us.copy(), K=K,
+                xs=solver.xs.copy(), us=solver.us.copy(), K=K, restart=restart,
             )
             self.last_good = solution
+            self.failures = 0
             return solution
         except Exception as err:  # the control loop must go on: report and keep the last good plan
-            return self._failed(float(t), x_measured, f"failed: {type(err).__name__}: {err}", tic)
+            self.failures += 1
+            return self._failed(float(t), x_measured, f"failed: {type(err).__name__}: {err}", tic, restart)
 
-    def _failed(self, t: float, x_measured, status: str, tic: float) -> MPCSolution:
+    def _failed(self, t: float, x_measured, status: str, tic: float, restart: bool = False) -> MPCSolution:
         last = self.last_good
         nx, ndx, nu, N = self.nx, self.ndx, self.nu, self.n_nodes
         if last is None:
             x = np.asarray(x_measured, dtype=float).reshape(-1)
             xs = np.repeat(x[None, :], N + 1, axis=0) if x.shape == (nx,) else np.full((N + 1, nx), np.nan)
             return MPCSolution(False, status, len(self.solver.log), float("nan"), time.perf_counter() - tic, t,
-                               xs, np.zeros((N, nu)), np.zeros((N, nu, ndx)))
+                               xs, np.zeros((N, nu)), np.zeros((N, nu, ndx)), restart)
         nodes = int(round((t - last.t) / self.dt))
         return MPCSolution(False, status, len(self.solver.log), last.cost, time.perf_counter() - tic,
                            last.t + max(nodes, 0) * self.dt,
-                           _shift(last.xs, nodes), _shift(last.us, nodes), _shift(last.K, nodes))
+                           _shift(last.xs, nodes), _shift(last.us, nodes), _shift(last.K, nodes), restart)

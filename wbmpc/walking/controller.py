@@ -115,7 +115,8 @@ class WalkingController:
                                                  cfg.touchdown_detection == "contact", cfg.touchdown_wait_nodes,
                                                  cfg.touchdown_wait_depth)
         self.mpc = WalkingMPC(robot, preset.ocp, n_nodes=cfg.n_nodes, dt=cfg.node_dt, max_iterations=cfg.max_iterations,
-                              horizon_end=cfg.mpc_horizon_end, time_budget=cfg.mpc_time_budget, solver=self.mpc_solver)
+                              horizon_end=cfg.mpc_horizon_end, time_budget=cfg.mpc_time_budget, solver=self.mpc_solver,
+                              restart_after_failures=cfg.mpc_restart_after_failures)
         self.feedback = FeedbackLaw(self.mpc.ocp.state, cfg.node_dt, cfg.delay_nodes, cfg.interpolate, cfg.feedback,
                                     cfg.computation_delay)
         self.planning.reset(x0, t0, self.command)
@@ -185,10 +186,12 @@ class WalkingController:
         if injected:
             self._pending_failures.pop(0)
             ok, status, iterations, cost, solve_time = False, "injected_failure", 0, np.nan, 0.0
+            restart = False
         else:
             solution = self.mpc.update(t, x, reference.schedule, reference.com_terminal, reference.touchdown_depth,
                                        reference.crossings)
             ok, status = bool(solution.ok), str(solution.status)
+            restart = bool(solution.restart)
             record["mpc_prepared_used"] = float(getattr(self.mpc.problem, "prepared_used", 0))
             record["mpc_rollouts"] = float(getattr(self.mpc.solver, "rollouts", np.nan))
             iterations, cost, solve_time = int(solution.iterations), float(solution.cost), solution.solve_time
@@ -201,6 +204,7 @@ class WalkingController:
         record.update(
             mpc_ok=float(ok),
             mpc_injected_failure=float(injected),
+            mpc_restart=float(restart),
             mpc_iterations=float(iterations),
             mpc_cost=cost,
             mpc_solve_time=float(solve_time),

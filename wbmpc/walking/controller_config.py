@@ -36,6 +36,10 @@ class WalkingControllerConfig:
         mpc_horizon_end: how the MPC's warm start fills the node entering at the end of the
             horizon: "repeat" (default, as ``wbmpc.ocp.mpc.RecedingHorizonMPC``) or "rollout". Bolt's
             preset uses "rollout": with "repeat", 1 iteration per update falls (see ``max_iterations``).
+        mpc_restart_after_failures: after this many consecutive failed MPC updates the next one
+            starts cold (``RecedingHorizonMPC(restart_after_failures=)``; the replan log's
+            ``mpc_restart`` marks it), or None (default: never, the warm start from the last good
+            solution is retried). Injected failures (``mpc_failure_times``) do not count.
         mpc_prepare: after each update, compute the next update's contact dynamics derivatives
             ahead (``WalkingMPC.prepare``): the same torques, ~2 ms less between measurement and
             torque (the ``mpc_tick_time`` metric), the same work per cycle (``mpc_prepare_time``).
@@ -154,6 +158,7 @@ class WalkingControllerConfig:
     replan_period: float = 0.01
     max_iterations: int = 1
     mpc_horizon_end: str = "repeat"
+    mpc_restart_after_failures: int | None = None
     mpc_prepare: bool = True
     mpc_time_budget: float | None = None
     delay_nodes: int = 1
@@ -247,6 +252,9 @@ class WalkingControllerConfig:
             raise ParameterError(f"first_stance_foot={self.first_stance_foot!r} must be 'left' or 'right'")
         if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
             raise ParameterError(f"max_iterations={self.max_iterations!r} must be an integer >= 1")
+        restart = self.mpc_restart_after_failures
+        if restart is not None and (isinstance(restart, bool) or not isinstance(restart, int) or restart < 0):
+            raise ParameterError(f"mpc_restart_after_failures={restart!r} must be None, 0 (never) or an integer >= 1")
         if self.mpc_horizon_end not in HORIZON_ENDS:
             raise ParameterError(f"mpc_horizon_end={self.mpc_horizon_end!r} must be one of {HORIZON_ENDS}")
         if self.sequencer_params_from is not None:
