@@ -429,7 +429,7 @@ class BatchedShootingProblem(ShootingProblem):
         tau[6:] = u
         if kkt is not None:
             dam, data = kkt
-            a = self._kkt_dynamics(kkt, x, u, None)
+            a = self._kkt_dynamics(kkt, x, u, forces)
             free_flyer_euler_step(x, a, dt, euler_dx, xnext)
             dam.calc_diff_dynamics(data, x, u)
             da_dx[:] = data.Fx
@@ -437,10 +437,8 @@ class BatchedShootingProblem(ShootingProblem):
             if forces is not None:
                 ndx = self.state.ndx
                 for name, rows in dam._active_rows:
-                    contact = data.contacts[name]
-                    forces[rows] = contact.force
-                    force_jacobians[rows, :ndx] = contact.df_dx
-                    force_jacobians[rows, ndx:] = contact.df_du
+                    force_jacobians[rows, :ndx] = data.contacts[name].df_dx
+                    force_jacobians[rows, ndx:] = data.contacts[name].df_du
             return
         if constraints is None:
             a = pin.aba(model, pdata, q, v, tau)

@@ -112,6 +112,8 @@ class DifferentialActionModelContactFwdDynamics:
                                  "damps every row by one mu; the soles are then four corner point contacts); or use "
                                  "backend='kkt'")
         self.sole_corners = bool(sole_corners) and bool(self._sole_corners)
+        # contact name -> SoleCorners whose drift the KKT path adds (the "corners" model), else empty
+        self._drift_corners = self._sole_corners if self.sole_corners else {}
         if self._sole_corners and backend == "pinocchio":
             plain = sorted(set(contacts) - set(self._sole_corners))
             if plain:
@@ -272,7 +274,7 @@ class DifferentialActionModelContactFwdDynamics:
 
     def _contact_calc(self, name: str, cdata, pdata) -> None:
         """KKT path: the contact's Jc and a0 (a sole of four corner contacts: their drift)."""
-        corners = self._sole_corners.get(name) if self.sole_corners else None
+        corners = self._drift_corners.get(name)
         if corners is None:
             self.contacts[name].calc(cdata, pdata)
         else:
@@ -360,7 +362,7 @@ class DifferentialActionModelContactFwdDynamics:
         for name in self.active_contacts:
             contact = self.contacts[name]
             cdata = data.contacts[name]
-            corners = self._sole_corners.get(name) if self.sole_corners else None
+            corners = self._drift_corners.get(name)
             if corners is None:
                 contact.calcDiff(cdata, pdata)
             else:
