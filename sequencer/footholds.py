@@ -52,6 +52,16 @@ offset ahead of the lead foot and the short trailing step cannot catch it. The D
 compares the crossing's offset with that aim; the last step before the obstacle aims at
 max((ℓ_c + b_c) exp(-ω T_c,aim), b_nom), T_c,aim = T_c,max unless ``obstacle_aim_duration`` > 0.
 
+**The approach.** Greedy, the walk takes nominal steps until the next foothold is bounded by the
+obstacle: the remainder before it is whatever is left (on the H1 a short step, then a DCM check that
+added a step in place and overshot). With ``obstacle_approach_distance`` > 0 the sequencer (the
+'exact' backend) plans the approach backwards from the crossing: once the last foothold's bound a
+(:meth:`FootholdConstraints.approach`, along the heading from the stance) is within that distance, the
+n = round(a / l_nom) >= 1 steps up to it each get the nominal length a / n, and their DCM offsets the
+LIPM chain b_{k-1} = (a / n + b_k) / γ_nom ending at the last step's aim b_n
+(:meth:`FootholdConstraints.last_step_aim`, eq. 1b of each step): the crossing begins at the offset it
+needs after even steps, not after a leftover one.
+
 "Cross when one step can reach beyond, else stop at the safe distance" rather than "the cheaper
 side": from the last foothold before an obstacle the cheaper step is always in place (the crossing
 step is far from the nominal one), and a planner choosing by cost would never cross.
@@ -110,6 +120,10 @@ class FootholdGeometry:
             :class:`sequencer.horizon.FootstepSequencer`, the choice of footholds is unchanged); 0: none.
         aim_duration: the crossing duration T_c,aim [s] the last step before an obstacle aims for (its offset
             (ℓ_c + b_c) exp(-ω T_c,aim), at least the nominal one); 0: the crossing's longest, ``step_duration_max``.
+        approach_distance: > 0: within this distance [m] of the last foothold before an obstacle the walk must
+            cross, the steps towards it are spaced evenly and aim at the DCM offsets that end on that foothold
+            with the offset the crossing needs (:meth:`FootholdConstraints.approach`, "The approach" in the
+            module docstring); 0: the greedy approach (each step its nominal one until a foothold is bounded).
     """
 
     margin: float
@@ -125,6 +139,7 @@ class FootholdGeometry:
     swing_length_max: float = 0.0
     trailing_double_support: float = 0.0
     aim_duration: float = 0.0
+    approach_distance: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -393,20 +408,43 @@ class FootholdConstraints:
         if far is None and not (crossing and self.geometry.swing_length_max > 0.0):
             return solve(bounds, None), bounds, None
         sign = 1.0 if step_length_nominal > 0.0 else -1.0
-        decay = math.exp(-self.omega * (self.geometry.aim_duration or self.geometry.step_duration_max))
         foothold = bounds[1] if sign > 0.0 else bounds[0]
         aim, candidate = None, None
         for _ in range(3):
             if far is None:  # the crossing itself
                 aim = self._crossing_aim(abs(foothold), sign, step_length_nominal, offset_nominal)
             else:  # the last step before it: at least the nominal offset
-                crossing_length = abs(far - foothold)
-                target = self._crossing_aim(crossing_length, sign, step_length_nominal, offset_nominal) \
-                    if self.geometry.swing_length_max > 0.0 else offset_nominal
-                aim = sign * max((crossing_length + sign * target) * decay, sign * offset_nominal)
+                aim = self.last_step_aim(abs(far - foothold), sign, step_length_nominal, offset_nominal)
             candidate = solve(bounds, aim)
             foothold = candidate.dx
         return candidate, bounds, aim
+
+    def last_step_aim(self, crossing_length: float, sign: float, step_length_nominal: float,
+                      offset_nominal: float) -> float:
+        """b_x [m], heading frame: the DCM offset the last step before an obstacle aims at, from which the crossing
+        step of ``crossing_length`` [m] reaches its own aim (b_c, or the nominal offset without a travel bound)
+        within T_c,aim, and at least the nominal offset: sign max((ℓ_c + sign b_c) exp(-ω T_c,aim), sign b_nom)."""
+        decay = math.exp(-self.omega * (self.geometry.aim_duration or self.geometry.step_duration_max))
+        target = self._crossing_aim(crossing_length, sign, step_length_nominal, offset_nominal) \
+            if self.geometry.swing_length_max > 0.0 else offset_nominal
+        return sign * max((crossing_length + sign * target) * decay, sign * offset_nominal)
+
+    def approach(self, p0, yaw: float, width_bounds: tuple[float, float],
+                 step_length_nominal: float) -> tuple[float, float] | None:
+        """(a, b) [m] along the heading of ``yaw`` [rad] from the stance ``p0`` (world (x, y) [m]): the bound
+        ℓ <= a of the last foothold before the nearest obstacle ahead that the walk has to cross (its box spans
+        the step's ``width_bounds`` (w_min, w_max) [m]: no foothold beside it; one crossing step reaches beyond
+        it) and its far side ℓ >= b; None without ``approach_distance``, when walking in place or backwards, or
+        when no such obstacle's a lies in (0, approach_distance]."""
+        if self.geometry.approach_distance <= 0.0 or step_length_nominal <= 0.0:
+            return None
+        nearest = None
+        for obstacle in self.obstacles:
+            a, b, c, d = forbidden_box(obstacle, p0, yaw, self.geometry, width_bounds)
+            if 0.0 < a <= self.geometry.approach_distance and c <= width_bounds[0] and d >= width_bounds[1] \
+                    and b - a <= self.geometry.step_length_max and (nearest is None or a < nearest[0]):
+                nearest = (a, b)
+        return nearest
 
     def _crossing_aim(self, crossing_length: float, sign: float, step_length_nominal: float,
                       offset_nominal: float) -> float:

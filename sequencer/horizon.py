@@ -443,6 +443,9 @@ class FootstepSequencer:
             if params.obstacle_trailing_double_support > 0.0 and self.backend_name != "exact":
                 raise ParameterError(f"obstacle_trailing_double_support={params.obstacle_trailing_double_support} s "
                                      f"is planned by the 'exact' backend only, not {self.backend_name!r}")
+            if params.obstacle_approach_distance > 0.0 and self.backend_name != "exact":
+                raise ParameterError(f"obstacle_approach_distance={params.obstacle_approach_distance} m (the even "
+                                     f"approach) is planned by the 'exact' backend only, not {self.backend_name!r}")
             if liftoff is not None:
                 liftoff = np.asarray(liftoff, dtype=float)
                 if liftoff.shape != (2,) or not np.all(np.isfinite(liftoff)):
@@ -494,7 +497,8 @@ class FootstepSequencer:
             lift = liftoff if not steps else (vectors[-2][:2] if len(steps) >= 2 else p0_first)
             cross_kept = None if steps else first_crossing
             px, py, gamma, bx, by, bits = self._exact_step(
-                p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom, constraints, lift, cross_kept)
+                p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom, constraints, lift, cross_kept,
+                approach=self._approach(p0x, p0y, yaw, stance, per_stance, l_nom, constraints))
             settle, start_qp, own_halt = None, stance_start, 0.0
             if halt > 0.0 or halt_trailing > 0.0:  # settled crossing swings (obstacle_double_support,
                 # obstacle_trailing_double_support)
@@ -563,15 +567,39 @@ class FootstepSequencer:
             for k, (landing, touchdown, start, bits, yaw, settle, own) in enumerate(steps)
         ]
 
+    def _approach(self, p0x, p0y, yaw, stance, per_stance, l_nom,
+                  constraints: FootholdConstraints | None) -> tuple[float, float] | None:
+        """(ℓ_nom, b_x,nom) [m], heading frame: the even approach's nominal length and DCM offset for the step
+        from the stance (p0x, p0y) towards the last foothold before an obstacle ("The approach" in
+        :mod:`sequencer.footholds`); None: the gait's (no obstacle within ``obstacle_approach_distance``, or
+        less than half a nominal step before its foothold bound)."""
+        if constraints is None:
+            return None
+        approach = constraints.approach((p0x, p0y), yaw, per_stance[stance][2], l_nom)
+        if approach is None:
+            return None
+        a, b = approach
+        steps = round(a / l_nom)
+        if steps < 1:
+            return None
+        length = a / steps
+        aim = constraints.last_step_aim(b - a, 1.0, l_nom, per_stance[other_foot(stance)][1][0]
+                                        if steps % 2 == 0 else per_stance[stance][1][0])
+        for _ in range(steps - 1):  # eq. 1b backwards: b_{k-1} = (ℓ + b_k) / γ_nom
+            aim = (length + aim) / self._gamma_nom
+        return length, aim
+
     def _exact_step(self, p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom,
                     constraints: FootholdConstraints | None, lift, cross, duration_min: float = 0.0,
-                    length_min: float | None = None) -> tuple:
+                    length_min: float | None = None, approach: tuple[float, float] | None = None) -> tuple:
         """(p_x, p_y, γ, b_x, b_y, active bits) of one step QP (closed form) from the stance foothold (p0x, p0y)
         and the DCM (zx, zy) ``elapsed`` [s] into the stance (world frame [m]), in the heading frame of ``yaw``
         [rad] (``rotate``: else the world frame is the heading frame), with its foothold outside the obstacles
         of ``constraints`` (``lift``: where the swinging foot lifted off; ``cross``: the before/beyond decision
         kept, or None), its duration at least ``duration_min``
-        [s] and its length along the heading at least ``length_min`` [m] (None: ``l_min``)."""
+        [s], its length along the heading at least ``length_min`` [m] (None: ``l_min``) and, with ``approach``
+        (ℓ_nom, b_x,nom) [m] (:meth:`_approach`), that nominal length and DCM offset along the heading in its QP
+        instead of the gait's (the before/beyond choice keeps the gait's)."""
         params = self.params
         omega = self._omega
         a1, a2, a3 = params.alpha1, params.alpha2, params.alpha3
@@ -580,6 +608,9 @@ class FootstepSequencer:
             l_min, l_max = length_min, max(l_max, length_min)
         gamma_nom, g_hi = self._gamma_nom, self._gamma_hi
         w_nom, (bnx, bny), (w_lo, w_hi) = per_stance[stance]
+        l_gait, bnx_gait = l_nom, bnx
+        if approach is not None:
+            l_nom, bnx = approach
         if elapsed > 0.0:
             decay = math.exp(-omega * elapsed)
             g_lo = math.exp(omega * max(params.t_min, elapsed))
@@ -621,7 +652,7 @@ class FootstepSequencer:
                                     bits, 0.0, math.log(gamma) / omega)
             chosen, changed = constraints.choose(
                 (p0x, p0y), yaw, (l_min, l_max, w_lo, w_hi, max(params.t_min, duration_min), params.t_max), nominal,
-                solve, lift, l_nom, bnx, cross)
+                solve, lift, l_gait, bnx_gait, cross)
             if changed:
                 px, py = p0x + (c * chosen.dx - s * chosen.dy), p0y + (s * chosen.dx + c * chosen.dy)
                 bx, by = c * chosen.hx - s * chosen.hy, s * chosen.hx + c * chosen.hy

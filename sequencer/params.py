@@ -110,6 +110,11 @@ class SequencerParams:
             obstacle_step_duration_min), that]: that step aims at the DCM offset from which the crossing step
             reaches its own aim within this long (a shorter one aims further ahead: it leans the robot into the
             crossing; :mod:`sequencer.footholds`).
+        obstacle_approach_distance: > 0 [m]: once the last foothold before an obstacle the walk has to cross
+            lies within this distance ahead of the stance, the steps up to it are spaced evenly (n of them, n
+            the nearest whole number of nominal steps, at least 1) and aim at the DCM offsets that end the last
+            one with the offset the crossing needs ("The approach" in :mod:`sequencer.footholds`; the 'exact'
+            backend only); 0: the greedy approach (nominal steps until a foothold is bounded).
         sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m],
             >= 0 (0: a point foot); sole_half_width: its half width [m], >= 0. The footholds keep the whole
             sole rectangle outside the grown footprints.
@@ -148,6 +153,7 @@ class SequencerParams:
     obstacle_double_support: float = 0.0
     obstacle_trailing_double_support: float = 0.0
     obstacle_aim_duration: float = 0.0
+    obstacle_approach_distance: float = 0.0
     sole_front: float = 0.0
     sole_rear: float = 0.0
     sole_half_width: float = 0.0
@@ -217,6 +223,9 @@ class SequencerParams:
             raise ParameterError(f"obstacle_aim_duration={self.obstacle_aim_duration} s must be 0 or in "
                                  f"[max(t_min, obstacle_step_duration_min)={crossing_min} s, "
                                  f"max(t_max, obstacle_step_duration_max)={crossing_max} s]")
+        if not (math.isfinite(self.obstacle_approach_distance) and self.obstacle_approach_distance >= 0.0):
+            raise ParameterError(f"obstacle_approach_distance={self.obstacle_approach_distance} m must be 0 (the "
+                                 f"greedy approach) or a finite number > 0")
         self.check_velocity(self.v_x, self.v_y)
 
     # ------------------------------------------------------------------ derived values
@@ -257,7 +266,8 @@ class SequencerParams:
                                 self.obstacle_double_support, max(self.t_max, self.obstacle_step_duration_max),
                                 self.obstacle_swing_length_max,
                                 trailing_double_support=self.obstacle_trailing_double_support,
-                                aim_duration=self.obstacle_aim_duration)
+                                aim_duration=self.obstacle_aim_duration,
+                                approach_distance=self.obstacle_approach_distance)
 
     # ------------------------------------------------------------------ velocity commands
     def velocity_range(self) -> dict[str, tuple[float, float]]:

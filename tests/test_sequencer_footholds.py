@@ -429,3 +429,64 @@ def test_crossing_duration_and_travel_bad_input():
         dataclasses.replace(H1, obstacle_swing_length_max=-0.1)
     with pytest.raises(ParameterError, match="obstacle_swing_length_max"):
         dataclasses.replace(H1, obstacle_swing_length_max=float("nan"))
+
+
+def _h1_preset_plan(overrides: dict, box_x: float = 1.0):
+    """The H1 preset's plan (5 s horizon) from a left stance at the origin with the nominal DCM, 0.3 m/s, towards
+    a 10 cm box across the path at ``box_x`` [m] (the deterministic scene of docs/scripts/h1_step_over.py)."""
+    from wbmpc.walking.preset import load_walking_preset
+
+    params = load_walking_preset("h1", {"planner.horizon": 5.0, **overrides}).planner_params
+    planner = DcmFootstepPlanner(params)
+    box = Obstacle(np.array([box_x, 0.0]), 0.0, 0.1, 1.2, 0.1)
+    stance, measured = _start(planner)
+    return params, box, planner.plan(0.0, stance, measured, COMMAND, obstacles=(box,))
+
+
+@pytest.mark.parametrize("box_x", [1.0, 1.05, 1.12])
+def test_without_an_approach_distance_the_plan_is_the_greedy_one(box_x):
+    _, _, greedy = _h1_preset_plan({}, box_x)
+    _, _, zero = _h1_preset_plan({"planner.obstacle_approach_distance": 0.0}, box_x)
+    far = _h1_preset_plan({"planner.obstacle_approach_distance": 0.2}, box_x)[2]  # the box beyond it until the end
+    for a, b in zip(greedy.steps, zero.steps, strict=True):  # bit for bit (their crossings: equal marks)
+        assert (a.foot, a.touchdown_time, a.active, a.crossing is None) == (b.foot, b.touchdown_time, b.active,
+                                                                           b.crossing is None)
+        np.testing.assert_array_equal(np.concatenate((a.position, a.dcm_offset)),
+                                      np.concatenate((b.position, b.dcm_offset)))
+    first = next(k for k, step in enumerate(greedy.steps) if step.position[0] > 0.45)  # where the approach begins
+    np.testing.assert_array_equal(greedy.positions[:first], far.positions[:first])
+
+
+@pytest.mark.parametrize("box_x", [1.0, 1.05, 1.12])
+def test_the_even_approach_ends_on_the_bound_and_crosses_without_a_step_in_place(box_x):
+    """obstacle_approach_distance = 1.5 m with obstacle_aim_duration = 0.6 s: the steps before the box are equal
+    (a / n each), the last one lands on the foothold bound a, its DCM offset is the last step's aim, and the next
+    swing crosses (greedy, the same box costs a short step and a step in place beside the last foothold)."""
+    params, box, plan = _h1_preset_plan({"planner.obstacle_approach_distance": 1.5,
+                                         "planner.obstacle_aim_duration": 0.6}, box_x)
+    geometry = params.foothold_geometry()
+    lead = next(k for k, step in enumerate(plan.steps) if step.crossing is not None)
+    along = plan.positions[:lead, 0]
+    lengths = np.diff(np.concatenate(([0.0], along)))
+    bound = box_x - box.depth / 2 - geometry.margin - geometry.sole_front
+    assert along[-1] == pytest.approx(bound, abs=2e-3)
+    assert np.ptp(lengths[1:]) < 0.01 and lengths.min() > 0.1  # even steps, none in place
+    omega = params.omega
+    aim = (plan.positions[lead, 0] - along[-1] + params.b_nom("left")[0]) * np.exp(-omega * 0.6)
+    assert plan.steps[lead - 1].dcm_offset[0] == pytest.approx(aim, abs=0.01)
+    assert plan.steps[lead - 2].dcm_offset[0] < plan.steps[lead - 1].dcm_offset[0]  # the offsets build up to it
+    assert _sole_overlaps(plan, box, geometry) == []
+    _, _, greedy = _h1_preset_plan({"planner.obstacle_aim_duration": 0.6}, box_x)
+    greedy_lead = next(k for k, step in enumerate(greedy.steps) if step.crossing is not None)
+    greedy_lengths = np.diff(greedy.positions[:greedy_lead, 0])
+    assert greedy_lengths.min() < 0.1 or np.ptp(greedy_lengths) > 0.05  # greedy: a short or an in-place step
+
+
+def test_approach_distance_bad_input():
+    for value in (-0.1, float("nan"), float("inf")):
+        with pytest.raises(ParameterError, match="obstacle_approach_distance"):
+            dataclasses.replace(H1, obstacle_approach_distance=value)
+    planner = DcmFootstepPlanner(dataclasses.replace(H1, obstacle_approach_distance=1.0), backend="osqp")
+    stance, measured = _start(planner)
+    with pytest.raises(ParameterError, match="obstacle_approach_distance.*exact"):
+        planner.plan(0.0, stance, measured, COMMAND, obstacles=(Obstacle(np.array([1.0, 0.0]), 0.0, 0.1, 1.0, 0.1),))
