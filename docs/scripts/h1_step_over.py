@@ -2,7 +2,8 @@
 H1)": tests/negotiation_scene.py's StepOverBox, 1.0 m ahead, 0.3 m/s, the controller given the true box), with
 the H1 preset and ``--set`` overrides; prints every touchdown (foot, x, y, time, measured DCM x and its offset
 from the foot), the planned next step at each, the first box contact, the crossing time, the lowest clearance
-over the box, the MPC failures and the fall. Needs the optional extra ``wbmpc[h1]``.
+over the box, the MPC failures and the fall; with ``--trace T0 T1`` every replan between those times (the planned
+next foothold and touchdown, the measured DCM, both ankles). Needs the optional extra ``wbmpc[h1]``.
 
     PYTHONPATH=. python docs/scripts/h1_step_over.py [--height 0.1] [--duration 7] [--set section.name=value ...]
 """
@@ -36,6 +37,8 @@ def main() -> None:
                         help="print the plan at the start of every stance from x = 0.5 m on")
     parser.add_argument("--terms", action="store_true",
                         help="print the OCP's four largest cost terms every 0.1 s once a crossing is in its horizon")
+    parser.add_argument("--trace", nargs=2, type=float, metavar=("T0", "T1"),
+                        help="print every replan from T0 to T1 [s]: the next foothold and touchdown, the DCM, the ankles")
     parser.add_argument("--cold-restart", action="store_true",
                         help="the MPC update after a failed one starts cold (= --set mpc_restart_after_failures=1)")
     args = parser.parse_args()
@@ -60,9 +63,13 @@ def main() -> None:
 
         controller.replan = replan_with_terms
     plans = []  # (t, the plan) at the first replan of every stance: what the planner asked for then
+    ankles = []  # (t, left ankle x, right ankle x, left z, right z) [s, m] every 20 ms with --trace
 
     def on_tick(model, data) -> None:
         contacts(model, data)
+        if args.trace and args.trace[0] <= data.time <= args.trace[1] and round(data.time * 1000) % 20 == 0:
+            left, right = (data.body(f"{side}_ankle_link").xpos for side in ("left", "right"))
+            ankles.append((float(data.time), left[0], right[0], left[2], right[2]))
         plan = controller.plan if controller.planning is not None else None
         if plan is not None and (not plans or plans[-1][1].stance_foot != plan.stance_foot):
             plans.append((float(data.time), plan))
@@ -90,6 +97,16 @@ def main() -> None:
                       f"T {step.duration:.3f} at {step.touchdown_time:.3f} offset x {step.dcm_offset[0]:+.3f}"
                       + (f" lift-off x {step.crossing.liftoff[0]:.3f} CROSSING" if step.crossing is not None else "")
                       + ("" if step.double_support is None else f" settled {step.double_support:.2f} s"))
+    if args.trace:
+        print("  trace (t, next foot x y at touchdown, DCM x y, ankles x left right, z left right):")
+        at = np.array([a[0] for a in ankles]) if ankles else np.zeros(0)
+        for i in np.flatnonzero((r["t"] >= args.trace[0]) & (r["t"] <= args.trace[1])):
+            k = int(np.argmin(np.abs(at - r["t"][i]))) if at.size else None
+            print(f"    {r['t'][i]:6.3f}  {feet[int(r['next_foot'][i])]:5s} {r['next_x'][i]:6.3f} {r['next_y'][i]:+.3f} "
+                  f"at {r['next_touchdown_time'][i]:.3f}  DCM {r['dcm_x'][i]:6.3f} {r['dcm_y'][i]:+.3f}"
+                  + ("" if k is None else f"  ankles {ankles[k][1]:6.3f} {ankles[k][2]:6.3f}  z {ankles[k][3]:.3f} "
+                                          f"{ankles[k][4]:.3f}")
+                  + ("" if np.isnan(r["next_crossing_height"][i]) else "  X"))
     crossing = np.flatnonzero(r["crossing_nodes"] > 0)
     if crossing.size:  # the MPC from the first replan whose horizon holds a crossing swing, every 0.1 s
         rows = range(int(crossing[0]), len(r["t"]), 5)
