@@ -52,6 +52,15 @@ offset ahead of the lead foot and the short trailing step cannot catch it. The D
 compares the crossing's offset with that aim; the last step before the obstacle aims at
 max((ℓ_c + b_c) exp(-ω T_c,aim), b_nom), T_c,aim = T_c,max unless ``obstacle_aim_duration`` > 0.
 
+**Crossing drift.** A crossing swing carries the swing leg (about 9 kg of the H1's 51 kg) 0.5-0.8 m
+forward, and the whole-body DCM with it: in closed loop the H1's DCM reached 21 cm further than the
+LIPM predicted at the lead touchdown. With ``obstacle_crossing_drift`` κ_c > 0 every swing over an
+obstacle (the lead crossing, the trailing swing) is planned with ξ_T = p_0 + b_0 γ + κ_c d (d its travel
+from lift-off along the heading, the sign of travel): its QP aims the LIPM's offset at b − κ_c d and the
+candidate carries b = h + κ_c d (the DCM check compares that one), and the last step before the obstacle
+aims at max((ℓ_c + b_c − κ_c d_c) exp(-ω T_c,aim), b_nom), d_c the crossing swing's travel from that
+step's stance.
+
 **The approach.** Greedy, the walk takes nominal steps until the next foothold is bounded by the
 obstacle: the remainder before it is whatever is left (on the H1 a short step, then a DCM check that
 added a step in place and overshot). With ``obstacle_approach_distance`` > 0 the sequencer (the
@@ -75,7 +84,7 @@ that swing over the obstacle.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Sequence
 
 import numpy as np
@@ -120,6 +129,9 @@ class FootholdGeometry:
             :class:`sequencer.horizon.FootstepSequencer`, the choice of footholds is unchanged); 0: none.
         aim_duration: the crossing duration T_c,aim [s] the last step before an obstacle aims for (its offset
             (ℓ_c + b_c) exp(-ω T_c,aim), at least the nominal one); 0: the crossing's longest, ``step_duration_max``.
+        crossing_drift: κ_c [-] >= 0: a swing over an obstacle ends with the DCM κ_c d further along the heading than
+            the LIPM's, d [m] its travel from lift-off to touchdown along the heading (the swing leg's mass carried
+            forward: "Crossing drift" in the module docstring); 0: the LIPM's.
         approach_distance: > 0: within this distance [m] of the last foothold before an obstacle the walk must
             cross, the steps towards it are spaced evenly and aim at the DCM offsets that end on that foothold
             with the offset the crossing needs (:meth:`FootholdConstraints.approach`, "The approach" in the
@@ -140,6 +152,7 @@ class FootholdGeometry:
     trailing_double_support: float = 0.0
     aim_duration: float = 0.0
     approach_distance: float = 0.0
+    crossing_drift: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -322,6 +335,9 @@ class FootholdConstraints:
         """
         p0 = np.asarray(p0, dtype=float)
         boxes = [forbidden_box(obstacle, p0, yaw, self.geometry, (bounds[2], bounds[3])) for obstacle in self.obstacles]
+        lift_along = None if liftoff is None else \
+            float((np.asarray(liftoff, dtype=float) - p0) @ np.array([math.cos(yaw), math.sin(yaw)]))
+        sign = 1.0 if step_length_nominal > 0.0 else -1.0
         candidate, changed, aim = nominal, False, None
         lengthened = False
         for _ in range(2 * len(boxes) + 2):
@@ -334,7 +350,8 @@ class FootholdConstraints:
                 if trailing[0] <= candidate.dx <= trailing[1] and candidate.duration >= trailing[4] - 1e-12:
                     return candidate, changed
                 bounds = trailing
-                candidate, changed, lengthened = solve(bounds, aim), True, True
+                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along)
+                changed, lengthened = True, True
                 continue
             along, beside = self._options(hit, bounds, step_length_nominal, offset_nominal)
             checked = None  # (candidate, bounds, aim) of the crossing option, once solved
@@ -342,8 +359,8 @@ class FootholdConstraints:
                 if cross is None and self.geometry.halt_double_support > 0.0:
                     late = False  # quasi-static: the double support before the swing settles the DCM
                 elif cross is None:
-                    checked = self._solve_option(solve, along[0][0], None, True, step_length_nominal, offset_nominal)
-                    sign = 1.0 if step_length_nominal > 0.0 else -1.0
+                    checked = self._solve_option(solve, along[0][0], None, True, step_length_nominal, offset_nominal,
+                                                 lift_along)
                     target = offset_nominal if checked[2] is None else checked[2]
                     late = sign * (target - checked[0].hx) > self.geometry.offset_tolerance
                 else:
@@ -355,7 +372,8 @@ class FootholdConstraints:
                     f"no foothold outside the obstacle box (a, b, c, d) = {tuple(round(v, 4) for v in hit)} m "
                     f"within the step bounds {tuple(round(v, 4) for v in bounds)} (stance p0={p0.tolist()} m)")
             solved = [checked if checked is not None and option is checked[1]  # solved for the DCM check
-                      else self._solve_option(solve, option, far, crossing, step_length_nominal, offset_nominal)
+                      else self._solve_option(solve, option, far, crossing, step_length_nominal, offset_nominal,
+                                              lift_along)
                       for option, far, crossing in options]
             candidate, bounds, aim = min(solved, key=lambda triple: triple[0].objective)
             changed = True
@@ -395,7 +413,8 @@ class FootholdConstraints:
                 [(option, None, False) for option in beside if self._feasible(option)])
 
     def _solve_option(self, solve, bounds: StepBounds, far: float | None, crossing: bool, step_length_nominal: float,
-                      offset_nominal: float) -> tuple[StepCandidate, StepBounds, float | None]:
+                      offset_nominal: float, lift_along: float | None = None
+                      ) -> tuple[StepCandidate, StepBounds, float | None]:
         """(candidate, bounds, aimed offset) of one option. ``far`` (the far side b of the obstacle the next step
         crosses, relative to this stance [m]) marks the last step before it: that step aims at the DCM offset
         that makes the crossing step from its foothold ℓ (length |b - ℓ|, within T_c,aim: its longest duration
@@ -404,30 +423,55 @@ class FootholdConstraints:
         nominal offset (the walk's own: a larger aim leans the robot into a short step, and the H1's DCM ran
         13 cm past the foot that should have stopped it). ``crossing`` (a step
         beyond, with a swing travel bound) aims at b_c of "Two steps ahead" in the module docstring. Three
-        fixed-point passes: the foothold moves with the aim."""
-        if far is None and not (crossing and self.geometry.swing_length_max > 0.0):
-            return solve(bounds, None), bounds, None
+        fixed-point passes: the foothold moves with the aim. A crossing's candidate carries the crossing drift
+        (:meth:`swing_solve`; ``lift_along``: its lift-off along the heading from this stance [m], None: unknown)."""
         sign = 1.0 if step_length_nominal > 0.0 else -1.0
+        if far is None and not (crossing and self.geometry.swing_length_max > 0.0):
+            if crossing:
+                return self.swing_solve(solve, bounds, None, offset_nominal, lift_along), bounds, None
+            return solve(bounds, None), bounds, None
         foothold = bounds[1] if sign > 0.0 else bounds[0]
         aim, candidate = None, None
         for _ in range(3):
             if far is None:  # the crossing itself
                 aim = self._crossing_aim(abs(foothold), sign, step_length_nominal, offset_nominal)
-            else:  # the last step before it: at least the nominal offset
-                aim = self.last_step_aim(abs(far - foothold), sign, step_length_nominal, offset_nominal)
-            candidate = solve(bounds, aim)
+                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along)
+            else:  # the last step before it: at least the nominal offset; the crossing lifts off this stance
+                aim = self.last_step_aim(abs(far - foothold), sign, step_length_nominal, offset_nominal,
+                                         travel=abs(far))
+                candidate = solve(bounds, aim)
             foothold = candidate.dx
         return candidate, bounds, aim
 
+    def swing_solve(self, solve, bounds: StepBounds, aim: float | None, offset_nominal: float,
+                    lift_along: float | None) -> StepCandidate:
+        """``solve(bounds, aim)`` for a swing over an obstacle with the crossing drift κ_c d ("Crossing drift" in
+        the module docstring; d = ℓ - ``lift_along`` [m], the swing's signed travel along the heading, ℓ with
+        the lift-off unknown): the QP's LIPM offset aimed at b - κ_c d (b = ``aim``, or ``offset_nominal`` for
+        None), the candidate's offset h + κ_c d (two fixed-point passes: d moves with the foothold). κ_c = 0:
+        ``solve(bounds, aim)``."""
+        kappa = self.geometry.crossing_drift
+        candidate = solve(bounds, aim)
+        if kappa <= 0.0:
+            return candidate
+        target = offset_nominal if aim is None else aim
+        drift = 0.0
+        for _ in range(2):
+            drift = kappa * (candidate.dx - (0.0 if lift_along is None else lift_along))
+            candidate = solve(bounds, target - drift)
+        return replace(candidate, hx=candidate.hx + drift)
+
     def last_step_aim(self, crossing_length: float, sign: float, step_length_nominal: float,
-                      offset_nominal: float) -> float:
+                      offset_nominal: float, travel: float = 0.0) -> float:
         """b_x [m], heading frame: the DCM offset the last step before an obstacle aims at, from which the crossing
         step of ``crossing_length`` [m] reaches its own aim (b_c, or the nominal offset without a travel bound)
-        within T_c,aim, and at least the nominal offset: sign max((ℓ_c + sign b_c) exp(-ω T_c,aim), sign b_nom)."""
+        within T_c,aim, and at least the nominal offset: sign max((ℓ_c + sign b_c - κ_c d_c) exp(-ω T_c,aim),
+        sign b_nom), d_c = ``travel`` [m] the crossing swing's travel from its lift-off (the crossing drift)."""
         decay = math.exp(-self.omega * (self.geometry.aim_duration or self.geometry.step_duration_max))
         target = self._crossing_aim(crossing_length, sign, step_length_nominal, offset_nominal) \
             if self.geometry.swing_length_max > 0.0 else offset_nominal
-        return sign * max((crossing_length + sign * target) * decay, sign * offset_nominal)
+        drift = self.geometry.crossing_drift * abs(travel)
+        return sign * max((crossing_length + sign * target - drift) * decay, sign * offset_nominal)
 
     def approach(self, p0, yaw: float, width_bounds: tuple[float, float],
                  step_length_nominal: float) -> tuple[float, float] | None:

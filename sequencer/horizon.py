@@ -584,7 +584,8 @@ class FootstepSequencer:
             return None
         length = a / steps
         aim = constraints.last_step_aim(b - a, 1.0, l_nom, per_stance[other_foot(stance)][1][0]
-                                        if steps % 2 == 0 else per_stance[stance][1][0])
+                                        if steps % 2 == 0 else per_stance[stance][1][0],
+                                        travel=b - length * (steps - 1))  # the crossing lifts off step n - 1
         for _ in range(steps - 1):  # eq. 1b backwards: b_{k-1} = (ℓ + b_k) / γ_nom
             aim = (length + aim) / self._gamma_nom
         return length, aim

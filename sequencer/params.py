@@ -115,6 +115,9 @@ class SequencerParams:
             the nearest whole number of nominal steps, at least 1) and aim at the DCM offsets that end the last
             one with the offset the crossing needs ("The approach" in :mod:`sequencer.footholds`; the 'exact'
             backend only); 0: the greedy approach (nominal steps until a foothold is bounded).
+        obstacle_crossing_drift: κ_c [-] in [0, 1): a swing over an obstacle (the lead crossing, the trailing
+            swing) ends with the DCM κ_c d further than the LIPM's, d its travel from lift-off along the heading
+            (the swing leg's mass carried forward; "Crossing drift" in :mod:`sequencer.footholds`); 0: the LIPM's.
         sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m],
             >= 0 (0: a point foot); sole_half_width: its half width [m], >= 0. The footholds keep the whole
             sole rectangle outside the grown footprints.
@@ -154,6 +157,7 @@ class SequencerParams:
     obstacle_trailing_double_support: float = 0.0
     obstacle_aim_duration: float = 0.0
     obstacle_approach_distance: float = 0.0
+    obstacle_crossing_drift: float = 0.0
     sole_front: float = 0.0
     sole_rear: float = 0.0
     sole_half_width: float = 0.0
@@ -226,6 +230,9 @@ class SequencerParams:
         if not (math.isfinite(self.obstacle_approach_distance) and self.obstacle_approach_distance >= 0.0):
             raise ParameterError(f"obstacle_approach_distance={self.obstacle_approach_distance} m must be 0 (the "
                                  f"greedy approach) or a finite number > 0")
+        if not (0.0 <= self.obstacle_crossing_drift < 1.0):
+            raise ParameterError(f"obstacle_crossing_drift={self.obstacle_crossing_drift} must be in [0, 1) "
+                                 f"(0: the LIPM's crossing)")
         self.check_velocity(self.v_x, self.v_y)
 
     # ------------------------------------------------------------------ derived values
@@ -267,7 +274,8 @@ class SequencerParams:
                                 self.obstacle_swing_length_max,
                                 trailing_double_support=self.obstacle_trailing_double_support,
                                 aim_duration=self.obstacle_aim_duration,
-                                approach_distance=self.obstacle_approach_distance)
+                                approach_distance=self.obstacle_approach_distance,
+                                crossing_drift=self.obstacle_crossing_drift)
 
     # ------------------------------------------------------------------ velocity commands
     def velocity_range(self) -> dict[str, tuple[float, float]]:

@@ -490,3 +490,34 @@ def test_approach_distance_bad_input():
     stance, measured = _start(planner)
     with pytest.raises(ParameterError, match="obstacle_approach_distance.*exact"):
         planner.plan(0.0, stance, measured, COMMAND, obstacles=(Obstacle(np.array([1.0, 0.0]), 0.0, 0.1, 1.0, 0.1),))
+
+
+def test_the_crossing_drift_adds_the_swing_legs_dcm_gain_to_every_swing_over_the_box():
+    """obstacle_crossing_drift κ_c: each swing over the box (the lead crossing, the trailing swing) ends with its DCM
+    κ_c d past the LIPM's, ξ_T = p_0 + (ξ_0 - p_0) γ + κ_c d (d its travel from lift-off along the heading), and
+    the crossing no longer waits for a step in place (the DCM check counts the swing's gain: the greedy plan of
+    the same box steps in place beside the last foothold first)."""
+    params, box, plan = _h1_preset_plan({"planner.obstacle_crossing_drift": 0.25}, 1.05)
+    _, _, lipm = _h1_preset_plan({}, 1.05)
+    omega = params.omega
+    swings = [k for k, step in enumerate(plan.steps) if step.crossing is not None]
+    assert len(swings) >= 2
+    positions = np.vstack((np.array([[0.0, -0.203], [0.0, 0.203]]), plan.positions))  # lift-off, stance, steps
+    for k in swings[:2]:
+        step, previous = plan.steps[k], plan.steps[k - 1]
+        stance, liftoff = positions[k + 1], positions[k]
+        gamma = np.exp(omega * (step.touchdown_time - step.stance_start_time))
+        lipm_dcm = stance[0] + (previous.dcm_at_touchdown[0] - stance[0]) * gamma
+        travel = step.position[0] - liftoff[0]
+        assert step.dcm_at_touchdown[0] == pytest.approx(lipm_dcm + 0.25 * travel, abs=1e-9), k
+    lead = swings[0]
+    assert plan.positions[lead - 1, 0] - plan.positions[lead - 2, 0] > 0.05  # the last step before it is a step
+    lipm_lead = next(k for k, step in enumerate(lipm.steps) if step.crossing is not None)
+    assert abs(lipm.positions[lipm_lead - 1, 0] - lipm.positions[lipm_lead - 2, 0]) < 0.01  # greedy: in place
+    assert _sole_overlaps(plan, box, params.foothold_geometry()) == []
+
+
+def test_crossing_drift_bad_input():
+    for value in (-0.1, 1.0, float("nan")):
+        with pytest.raises(ParameterError, match="obstacle_crossing_drift"):
+            dataclasses.replace(H1, obstacle_crossing_drift=value)
