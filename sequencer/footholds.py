@@ -220,6 +220,12 @@ def forbidden_box(obstacle: Obstacle, p0, yaw: float, geometry: FootholdGeometry
             float(polygon[:, 1].max()) + geometry.sole_half_width)
 
 
+def along_heading(point, p0, yaw: float) -> float:
+    """(point - p0) · heading [m]: how far the world (x, y) ``point`` [m] lies ahead of ``p0`` along the
+    heading of ``yaw`` [rad]."""
+    return float((np.asarray(point, dtype=float) - p0) @ np.array([math.cos(yaw), math.sin(yaw)]))
+
+
 def _clip_slab(polygon: np.ndarray, low: float, high: float) -> np.ndarray:
     """The convex ``polygon`` (n, 2) cut to low <= y <= high (Sutherland-Hodgman, two half-planes); (0, 2) if empty."""
     for sign, bound in ((1.0, low), (-1.0, high)):  # keep sign * (y - bound) >= 0
@@ -335,8 +341,7 @@ class FootholdConstraints:
         """
         p0 = np.asarray(p0, dtype=float)
         boxes = [forbidden_box(obstacle, p0, yaw, self.geometry, (bounds[2], bounds[3])) for obstacle in self.obstacles]
-        lift_along = None if liftoff is None else \
-            float((np.asarray(liftoff, dtype=float) - p0) @ np.array([math.cos(yaw), math.sin(yaw)]))
+        lift_along = None if liftoff is None else along_heading(liftoff, p0, yaw)
         sign = 1.0 if step_length_nominal > 0.0 else -1.0
         candidate, changed, aim = nominal, False, None
         lengthened = False
@@ -425,11 +430,11 @@ class FootholdConstraints:
         beyond, with a swing travel bound) aims at b_c of "Two steps ahead" in the module docstring. Three
         fixed-point passes: the foothold moves with the aim. A crossing's candidate carries the crossing drift
         (:meth:`swing_solve`; ``lift_along``: its lift-off along the heading from this stance [m], None: unknown)."""
-        sign = 1.0 if step_length_nominal > 0.0 else -1.0
         if far is None and not (crossing and self.geometry.swing_length_max > 0.0):
             if crossing:
                 return self.swing_solve(solve, bounds, None, offset_nominal, lift_along), bounds, None
             return solve(bounds, None), bounds, None
+        sign = 1.0 if step_length_nominal > 0.0 else -1.0
         foothold = bounds[1] if sign > 0.0 else bounds[0]
         aim, candidate = None, None
         for _ in range(3):
@@ -510,7 +515,7 @@ class FootholdConstraints:
         l_lo, l_hi = bounds[0], bounds[1]
         reach = self.geometry.swing_length_max
         if reach > 0.0 and liftoff is not None:
-            along = float((np.asarray(liftoff, dtype=float) - p0) @ np.array([math.cos(yaw), math.sin(yaw)]))
+            along = along_heading(liftoff, p0, yaw)
             upper, lower = along + reach, along - reach
             if free is not None:
                 for a, b, _, _ in sorted(boxes, key=lambda box: box[1]):  # forwards: the far side b

@@ -45,6 +45,10 @@ from sequencer.params import SequencerParams
 from sequencer.step_qp import CONSTRAINT_NAMES, InfeasibleStep, StepProblem, solve_exact_scalars
 from wbmpc.errors import ParameterError
 
+# the obstacle options only the 'exact' backend plans: (SequencerParams field, its value's unit and what it plans)
+EXACT_ONLY_OPTIONS = (("obstacle_double_support", "s (a quasi-static crossing)"),
+                      ("obstacle_trailing_double_support", "s"),
+                      ("obstacle_approach_distance", "m (the even approach)"))
 _ACTIVE_NAMES = tuple(tuple(CONSTRAINT_NAMES[i] for i in range(6) if (bits >> i) & 1) for bits in range(64))
 
 
@@ -437,15 +441,11 @@ class FootstepSequencer:
         constraints = None
         if len(obstacles):
             constraints = FootholdConstraints(obstacles, params.foothold_geometry(), self._omega)
-            if params.obstacle_double_support > 0.0 and self.backend_name != "exact":
-                raise ParameterError(f"obstacle_double_support={params.obstacle_double_support} s (a quasi-static "
-                                     f"crossing) is planned by the 'exact' backend only, not {self.backend_name!r}")
-            if params.obstacle_trailing_double_support > 0.0 and self.backend_name != "exact":
-                raise ParameterError(f"obstacle_trailing_double_support={params.obstacle_trailing_double_support} s "
-                                     f"is planned by the 'exact' backend only, not {self.backend_name!r}")
-            if params.obstacle_approach_distance > 0.0 and self.backend_name != "exact":
-                raise ParameterError(f"obstacle_approach_distance={params.obstacle_approach_distance} m (the even "
-                                     f"approach) is planned by the 'exact' backend only, not {self.backend_name!r}")
+            for name, unit in EXACT_ONLY_OPTIONS:
+                value = getattr(params, name)
+                if value > 0.0 and self.backend_name != "exact":
+                    raise ParameterError(f"{name}={value} {unit} is planned by the 'exact' backend only, "
+                                         f"not {self.backend_name!r}")
             if liftoff is not None:
                 liftoff = np.asarray(liftoff, dtype=float)
                 if liftoff.shape != (2,) or not np.all(np.isfinite(liftoff)):
