@@ -8,6 +8,10 @@ thread). The references are copied into the twin before each solve; that copy is
 C++ user would not have, so it is timed apart (``mirror_seconds``) and taken out of the
 baseline's wall time. Both loops take the same controls to ~1e-8 N·m per update, so they walk
 the same way and the comparison is the solver's cost in the closed loop.
+
+A preset whose walking OCP has no Crocoddyl twin (the H1's: its sole-weighted contact damping and
+obstacle clearance terms) is compared on its twin-able variant instead, the preset with only the
+options the mirror refuses replaced (:func:`crocoddyl_twinnable_variant`); both loops then run it.
 """
 
 from __future__ import annotations
@@ -18,8 +22,51 @@ from typing import Any
 
 import numpy as np
 
+from bench.crocoddyl_mirror import NoCrocoddylTwin
 from wbmpc.walking.controller import WalkingController
 from wbmpc.walking.preset import WalkingPreset, load_walking_preset
+
+#: scenarios that place boxes the robot's perception can report as obstacles: there the walking OCP's obstacle
+#: clearance terms act, so a variant without them would be another controller
+SCENARIOS_WITH_OBSTACLES = ("obstacle", "terrain")
+
+
+def crocoddyl_twinnable_variant(preset: WalkingPreset, scenario: str) -> dict[str, Any]:
+    """The overrides that make ``preset`` its Crocoddyl-twin-able variant for ``scenario``: the nearest walking
+    OCP that :class:`~bench.crocoddyl_mirror.CrocoddylMirror` mirrors, the preset with only the options the
+    mirror refuses replaced (found by mirroring the H1 preset: these two are all it refuses):
+
+    - ``ocp.contact_damping_moments`` "sole" or "corners" (moment rows damped apart, which Crocoddyl has no
+      model of) -> "uniform": every contact row damped by the preset's own ``contact_damping`` μ [m/s² per N,
+      rad/s² per N·m], which is Crocoddyl's ``JMinvJt_damping``; the dynamics backend is kept (the "kkt"
+      backend solves the uniform damping too);
+    - ``ocp.obstacle_clearance_weight`` > 0 -> 0 when ``scenario`` places no obstacles: its clearance barriers
+      (``ResidualFramePointHeight``, no Crocoddyl model) are in the OCP but never active there.
+
+    Args:
+        preset: the robot's walking preset (with any overrides already applied).
+        scenario: the name of the scenario the loop runs (``"walk"``, ...).
+
+    Returns:
+        ``{"ocp.<field>": value}``, the form of :func:`~wbmpc.walking.preset.load_walking_preset`'s overrides
+        (and of ``--set``), holding only the fields whose value changes; empty when the preset is twin-able.
+
+    Raises:
+        NoCrocoddylTwin: ``scenario`` is one of :data:`SCENARIOS_WITH_OBSTACLES` and the preset has obstacle
+            clearance terms: they act there, and no twin-able variant keeps them.
+    """
+    ocp = preset.ocp
+    overrides: dict[str, Any] = {}
+    if ocp.contact_damping_moments != "uniform":
+        overrides["ocp.contact_damping_moments"] = "uniform"
+    if ocp.obstacle_clearance_weight > 0:
+        if scenario in SCENARIOS_WITH_OBSTACLES:
+            raise NoCrocoddylTwin(f"no Crocoddyl twin for the obstacle clearance terms (ResidualFramePointHeight) of "
+                                  f"obstacle_clearance_weight={ocp.obstacle_clearance_weight:g} in scenario={scenario!r}, "
+                                  f"which places obstacles; a variant without them needs a scenario other than "
+                                  f"{SCENARIOS_WITH_OBSTACLES}")
+        overrides["ocp.obstacle_clearance_weight"] = 0.0
+    return overrides
 
 
 class CrocoddylSolver:

@@ -15,7 +15,10 @@ at 50 Hz; 1 kHz Riccati feedback) for ``--duration`` simulated seconds and repor
   Crocoddyl, Crocoddyl, ours, and the ratio uses both of each, so that a drift of the shared
   machine's speed during the benchmark (25 % within minutes was seen) cancels to first order;
   likewise our MPC cycle (update + its preparation) over Crocoddyl's MPC tick, medians of both
-  runs of each.
+  runs of each. A preset whose walking OCP has no Crocoddyl twin (the H1's) is compared on its
+  twin-able variant (:func:`bench.crocoddyl_loop.crocoddyl_twinnable_variant`, the fields it
+  replaces are reported): the four runs are then all on the variant, after the headline run of
+  ours on the preset.
 """
 
 from __future__ import annotations
@@ -135,16 +138,18 @@ def pinocchio_floor(mpc, rollouts_per_update: float, repeats: int = 10) -> dict:
     }
 
 
-def _run_loop(args: argparse.Namespace, controller_class=None):
+def _run_loop(args: argparse.Namespace, controller_class=None, overrides: dict | None = None):
     """One run of the benchmarked closed loop with a walking controller of ``controller_class``
     (default :class:`~wbmpc.walking.controller.WalkingController`) built as ``run_scenario`` builds its own
-    (the scenario's velocity command, ``--max-iterations``); returns (log, controller)."""
+    (the scenario's velocity command, ``--max-iterations``), on the robot's preset with ``overrides``
+    (``{"ocp.<field>": value}``, e.g. the Crocoddyl-twin-able variant's); returns (log, controller)."""
     from sim.runner import run_scenario
     from wbmpc.walking.controller import WalkingController
     from wbmpc.walking.preset import load_walking_preset
 
     robot = args.robot
     extra = {} if args.max_iterations is None else {"max_iterations": args.max_iterations}
+    extra.update(overrides or {})
     controller = (controller_class or WalkingController)(load_walking_preset(robot, extra))
     log = run_scenario(args.scenario, robot=robot, duration=args.duration, seed=args.seed, progress=False,
                        controller=controller)
@@ -183,23 +188,7 @@ def run(args: argparse.Namespace) -> dict:
         floor["mpc_per_update"] = (timing.get("mpc", 0.0) + prepare) / n_updates
         floor["best_real_time_factor"] = period / (floor["per_update"] + outside)
         floor["best_real_time_factor_one_rollout"] = period / (floor["per_update_one_rollout"] + outside)
-    baseline = None
-    if args.baseline == "crocoddyl":  # runs ours, Crocoddyl, Crocoddyl, ours: a drift of the machine's speed cancels
-        first = _crocoddyl_loop(args, log)
-        baseline = first
-        if "skipped" not in first:
-            second = _crocoddyl_loop(args, log)
-            again, _ = _run_loop(args)
-            ours_rtf = (simulated + again.timing["simulated_time"]) / (total + again.timing["loop"])
-            theirs_rtf = ((first["simulated_time"] + second["simulated_time"])
-                          / (first["wall_time"] + second["wall_time"]))
-            ours_cycle = 0.5 * sum(run_log.metrics.get("mpc_cycle_time_median") or run_log.metrics["mpc_tick_time_median"]
-                                   for run_log in (log, again))
-            theirs_tick = 0.5 * (first["mpc_tick_time_median"] + second["mpc_tick_time_median"])
-            baseline = {**first, "runs": [first, second], "real_time_factor": theirs_rtf,
-                        "ours_real_time_factor_both_runs": ours_rtf, "ratio": ours_rtf / theirs_rtf,
-                        "ours_mpc_cycle_both_runs": ours_cycle, "crocoddyl_mpc_tick_both_runs": theirs_tick,
-                        "mpc_cycle_ratio": ours_cycle / theirs_tick}
+    baseline = _crocoddyl_baseline(args, log, controller.preset) if args.baseline == "crocoddyl" else None
     return {
         "baseline": baseline,
         "scenario": args.scenario,
@@ -224,9 +213,64 @@ def run(args: argparse.Namespace) -> dict:
     }
 
 
-def _crocoddyl_loop(args: argparse.Namespace, ours) -> dict:
-    """The same run with Crocoddyl's FDDP solving the MPC; its real-time factor without the
-    reference copies into the twin (see :mod:`bench.crocoddyl_loop`)."""
+def _run_summary(log) -> dict:
+    """Status and timing of one run of our loop [s]: what the baseline reports of each of ours."""
+    simulated, wall = log.timing.get("simulated_time", 0.0), log.timing["loop"]
+    return {"status": log.status, "simulated_time": simulated, "wall_time": wall,
+            "real_time_factor": simulated / wall if wall > 0 else None,
+            "mpc_tick_time_median": log.metrics.get("mpc_tick_time_median"),
+            "mpc_cycle_time_median": log.metrics.get("mpc_cycle_time_median")}
+
+
+def _crocoddyl_baseline(args: argparse.Namespace, ours_on_preset, preset) -> dict:
+    """Our loop against the Crocoddyl-based one, runs ours, Crocoddyl, Crocoddyl, ours (a drift of the
+    machine's speed cancels to first order), on one problem: the preset's when it has a Crocoddyl twin (ours
+    is then ``ours_on_preset`` and one more run), else its twin-able variant
+    (:func:`~bench.crocoddyl_loop.crocoddyl_twinnable_variant`, in ``"variant"``), on which both of ours
+    are run anew. Returns the first Crocoddyl run's fields, both runs of each, the ratios and ``"variant"``
+    (``{}``: the preset itself), or ``{"skipped": reason}``."""
+    first = _crocoddyl_loop(args, ours_on_preset)
+    variant: dict = {}
+    ours_first = ours_on_preset
+    if "no_twin" in first:  # the preset's OCP has no Crocoddyl twin: both loops on its twin-able variant
+        from bench.crocoddyl_loop import crocoddyl_twinnable_variant
+        from bench.crocoddyl_mirror import NoCrocoddylTwin
+
+        try:
+            variant = crocoddyl_twinnable_variant(preset, args.scenario)
+        except NoCrocoddylTwin as err:
+            return {"skipped": f"{first['skipped']}, and no twin-able variant: {err}"}
+        preset_no_twin = first["skipped"]
+        ours_first, _ = _run_loop(args, overrides=variant)
+        first = {**_crocoddyl_loop(args, ours_first, variant), "preset_no_twin": preset_no_twin}
+        if "skipped" in first:
+            return {**first, "variant": variant}
+    if "skipped" in first:
+        return first
+    second = _crocoddyl_loop(args, ours_first, variant)
+    again, _ = _run_loop(args, overrides=variant)
+    ours_rtf = ((ours_first.timing["simulated_time"] + again.timing["simulated_time"])
+                / (ours_first.timing["loop"] + again.timing["loop"]))
+    theirs_rtf = ((first["simulated_time"] + second["simulated_time"])
+                  / (first["wall_time"] + second["wall_time"]))
+    ours_cycle = 0.5 * sum(run_log.metrics.get("mpc_cycle_time_median") or run_log.metrics["mpc_tick_time_median"]
+                           for run_log in (ours_first, again))
+    ours_tick = 0.5 * sum(run_log.metrics["mpc_tick_time_median"] for run_log in (ours_first, again))
+    theirs_tick = 0.5 * (first["mpc_tick_time_median"] + second["mpc_tick_time_median"])
+    return {**first, "runs": [first, second], "real_time_factor": theirs_rtf,
+            "ours_real_time_factor_both_runs": ours_rtf, "ratio": ours_rtf / theirs_rtf,
+            "ours_mpc_cycle_both_runs": ours_cycle, "crocoddyl_mpc_tick_both_runs": theirs_tick,
+            "mpc_cycle_ratio": ours_cycle / theirs_tick, "variant": variant,
+            "ours_runs": [_run_summary(run_log) for run_log in (ours_first, again)],
+            "ours_mpc_tick_both_runs": ours_tick}
+
+
+def _crocoddyl_loop(args: argparse.Namespace, ours, overrides: dict | None = None) -> dict:
+    """The same run with Crocoddyl's FDDP solving the MPC, on the robot's preset with ``overrides``; its
+    real-time factor without the reference copies into the twin (see :mod:`bench.crocoddyl_loop`), and
+    the largest difference of its torques to those of ``ours`` (a run log) over their common ticks.
+    Returns ``{"skipped": reason}`` without Crocoddyl, and ``{"skipped": reason, "no_twin": message}``
+    when that OCP has no Crocoddyl twin."""
     try:
         import crocoddyl  # noqa: F401
     except ImportError as err:
@@ -237,9 +281,10 @@ def _crocoddyl_loop(args: argparse.Namespace, ours) -> dict:
     from bench.crocoddyl_mirror import NoCrocoddylTwin
 
     try:
-        log, controller = _run_loop(args, CrocoddylWalkingController)
+        log, controller = _run_loop(args, CrocoddylWalkingController, overrides)
     except NoCrocoddylTwin as err:  # e.g. the H1's sole-weighted contact damping and obstacle clearance terms
-        return {"skipped": f"robot {args.robot!r}: its walking OCP has {err}"}
+        which = "its walking OCP" if not overrides else f"its walking OCP with {_overrides_text(overrides)}"
+        return {"skipped": f"robot {args.robot!r}: {which} has {err}", "no_twin": str(err)}
     mirror = controller.mirror_seconds
     wall = log.timing["loop"] - mirror
     simulated = log.timing.get("simulated_time", 0.0)
@@ -255,9 +300,15 @@ def _crocoddyl_loop(args: argparse.Namespace, ours) -> dict:
     }
 
 
+def _overrides_text(overrides: dict) -> str:
+    """``ocp.a='x', ocp.b=0`` (the ``--set`` form of preset overrides)."""
+    return ", ".join(f"{name}={value!r}" for name, value in overrides.items())
+
+
 def format_report(result: dict) -> str:
     lines = [
-        f"closed loop '{result['scenario']}' ({result['status']}, {result['max_iterations']} FDDP iteration(s) per "
+        f"closed loop '{result['scenario']}' on the {result['robot']} preset ({result['status']}, "
+        f"{result['max_iterations']} FDDP iteration(s) per "
         f"update): {result['simulated_time']:.2f} s simulated "
         f"in {result['wall_time']:.2f} s wall",
         f"  real-time factor        {result['real_time_factor']:.2f} x   (target >= {result['target_real_time_factor']})",
@@ -292,12 +343,26 @@ def format_report(result: dict) -> str:
     base = result.get("baseline")
     if base is not None and "skipped" in base:
         lines.append(f"  Crocoddyl baseline skipped: {base['skipped']}")
+    elif base is not None and base.get("variant"):
+        ours_runs, theirs_runs = base["ours_runs"], base["runs"]
+        lines += [
+            f"  Crocoddyl baseline on the preset's twin-able variant, not on the preset ({base['preset_no_twin']}):",
+            f"    the variant is the preset with {_overrides_text(base['variant'])}; both loops run it, "
+            "ours, Crocoddyl, Crocoddyl, ours",
+            f"    ours on the variant ({', '.join(run['status'] for run in ours_runs)}): real-time factor "
+            f"{base['ours_real_time_factor_both_runs']:.2f} x, MPC tick median {base['ours_mpc_tick_both_runs'] * 1e3:.2f} ms",
+            f"    Crocoddyl's FDDP as the solver on the variant ({', '.join(run['status'] for run in theirs_runs)}): "
+            f"real-time factor {base['real_time_factor']:.2f} x, MPC tick median "
+            f"{base['crocoddyl_mpc_tick_both_runs'] * 1e3:.2f} ms",
+            f"    on the variant: ours / Crocoddyl {base['ratio']:.2f} (real-time factors, both runs of each)",
+        ]
     elif base is not None:
         lines.append(
             f"  same loop, Crocoddyl's FDDP as the solver ({base['status']}): real-time factor "
             f"{base['real_time_factor']:.2f} x; ours {base['ours_real_time_factor_both_runs']:.2f} x -> "
             f"ours / Crocoddyl {base['ratio']:.2f}   (runs ours, Crocoddyl, Crocoddyl, ours)"
         )
+    if base is not None and "skipped" not in base:
         lines.append(
             f"    MPC: our cycle {base['ours_mpc_cycle_both_runs'] * 1e3:.2f} ms, Crocoddyl's tick "
             f"{base['crocoddyl_mpc_tick_both_runs'] * 1e3:.2f} ms (medians, both runs) -> ours / Crocoddyl "
