@@ -236,8 +236,9 @@ def test_contact_damping_matches_crocoddyls_jminvjt_damping(backend):
 @pytest.mark.filterwarnings("ignore::wbmpc.walking.ocp.SlowPathWarning")  # the H1 is node-wise (its sole damping)
 def test_the_h1_preset_has_no_crocoddyl_twin_and_the_loop_bench_says_so():
     """The H1 preset's sole-weighted contact damping and obstacle clearance (a frame point's height) have no
-    Crocoddyl model: the mirror refuses the problem by name, and ``wbmpc bench loop --robot h1`` reports the
-    baseline as skipped with that reason instead of a traceback."""
+    Crocoddyl model: the mirror refuses the problem by name, and the Crocoddyl loop on the preset reports itself
+    skipped with that reason instead of a traceback (``wbmpc bench loop --robot h1`` then runs the baseline on
+    the preset's twin-able variant, next test)."""
     from bench.crocoddyl_mirror import NoCrocoddylTwin
     from bench.loop import _crocoddyl_loop
     from wbmpc.cli import build_parser
@@ -249,3 +250,32 @@ def test_the_h1_preset_has_no_crocoddyl_twin_and_the_loop_bench_says_so():
     args = build_parser().parse_args(["bench", "loop", "--robot", "h1", "--duration", "0.05"])
     result = _crocoddyl_loop(args, None)
     assert result["skipped"].startswith("robot 'h1': its walking OCP has no Crocoddyl twin for ")
+
+
+@needs_h1_extra
+@pytest.mark.filterwarnings("ignore::wbmpc.walking.ocp.SlowPathWarning")  # the H1 is node-wise (its sole damping)
+def test_the_h1_presets_crocoddyl_twinnable_variant_replaces_only_the_untwinnable_options():
+    """``wbmpc bench loop --robot h1`` compares with Crocoddyl on the preset's twin-able variant: the preset with
+    the uniform damping of the same mu (Crocoddyl's JMinvJt_damping) and, in a scenario without obstacles, no
+    obstacle clearance terms. The preset's OCP has no twin, the variant's has one, and no other field differs;
+    in a scenario with obstacles there is no variant."""
+    from bench.crocoddyl_loop import crocoddyl_twinnable_variant
+    from bench.crocoddyl_mirror import NoCrocoddylTwin
+    from wbmpc.walking.preset import ALL_SECTIONS
+
+    h1 = load_robot("h1")
+    preset = load_walking_preset("h1")
+    overrides = crocoddyl_twinnable_variant(preset, "walk")
+    assert overrides == {"ocp.contact_damping_moments": "uniform", "ocp.obstacle_clearance_weight": 0.0}
+    variant = load_walking_preset("h1", overrides)
+    differing = {f"{section}.{field.name}" for section in ALL_SECTIONS if getattr(preset, section) is not None
+                 for field in dataclasses.fields(getattr(preset, section))
+                 if getattr(getattr(preset, section), field.name) != getattr(getattr(variant, section), field.name)}
+    assert differing == set(overrides)
+    assert (variant.ocp.contact_damping, variant.ocp.dynamics_backend) == (3e-4, "kkt")  # the preset's mu, backend
+    with pytest.raises(NoCrocoddylTwin, match="no Crocoddyl twin for"):
+        CrocoddylMirror(WalkingOCP(h1, preset.ocp, n_nodes=4, dt=0.02).problem)
+    CrocoddylMirror(WalkingOCP(h1, variant.ocp, n_nodes=4, dt=0.02).problem)  # mirrors
+    assert crocoddyl_twinnable_variant(variant, "walk") == {}  # twin-able as it is
+    with pytest.raises(NoCrocoddylTwin, match=r"obstacle_clearance_weight=100000 in scenario='obstacle'"):
+        crocoddyl_twinnable_variant(preset, "obstacle")
