@@ -417,7 +417,8 @@ def test_contact_damping_reaches_the_batched_constraint_dynamics():
 @needs_h1_extra
 @pytest.mark.parametrize("moments", ["sole", "corners"])
 def test_h1_soles_with_the_obstacle_clearance_are_batched_and_match_the_node_pipelines(moments):
-    """The H1 preset over a swing that crosses a box (the clearance terms on the toe, heel and knee active), with
+    """The H1 preset over a swing that crosses a box (the clearance terms on the toe, heel and knee and the smooth
+    swing path's tracking active), with
     its "sole" contact damping (the KKT backend: the batched problem calls each node's own dynamics) or
     "corners" (each sole's four corner contacts, Pinocchio's constraintDynamics): batched without a
     SlowPathWarning and equal to the node-wise pipeline (values, derivatives, a rollout, the prepared dynamics);
@@ -427,7 +428,8 @@ def test_h1_soles_with_the_obstacle_clearance_are_batched_and_match_the_node_pip
     h1 = load_robot("h1")
     backend = "kkt" if moments == "sole" else "pinocchio"
     config = dataclasses.replace(load_walking_preset("h1").ocp, contact_damping_moments=moments,
-                                 dynamics_backend=backend, evaluation="auto")
+                                 dynamics_backend=backend, evaluation="auto", obstacle_swing_path_timing="smooth",
+                                 obstacle_swing_path_weight=1e4)
     n_nodes = 12
     schedule, crossings = crossing_schedule(n_nodes)
     ocp = _batched_walking_ocp(h1, config, n_nodes)
@@ -452,7 +454,8 @@ def test_h1_soles_with_the_obstacle_clearance_are_batched_and_match_the_node_pip
             for k in range(n_nodes):
                 ours, theirs = getattr(kkt.running_datas[k], name), getattr(nodes.running_datas[k], name)
                 assert np.max(np.abs(ours - theirs)) <= 1e-9 * max(1.0, np.max(np.abs(theirs))), (name, k)
-    for name in ("right_clearance_sole0", "right_clearance_sole1", "right_clearance_shank", "left_wrench_cone"):
+    for name in ("right_clearance_sole0", "right_clearance_sole1", "right_clearance_shank", "right_swing_path",
+                 "left_wrench_cone"):
         assert any(model.differential.costs.costs[name].active for model in nodes.running_models), name
     assert batched.term_costs()["right_clearance_sole0"] > 0  # the random states put the toe below the clearance
     _assert_same_half_step_rollout(nodes, batched, xs, us)

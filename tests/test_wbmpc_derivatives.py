@@ -14,7 +14,7 @@ from robots import load_robot
 from wbmpc.ocp.activations import ActivationQuadraticBarrier, ActivationWeightedQuad
 from wbmpc.ocp.numdiff import ActionModelNumDiff, tangent_jacobian, vector_jacobian
 from wbmpc.ocp.state import StateMultibody
-from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig
+from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig, swing_path, swing_path_fraction
 
 EPS = float(np.finfo(float).eps)
 RTOL = EPS ** (1.0 / 3.0)
@@ -206,7 +206,6 @@ def test_activation_gradients():
 
 def test_bad_inputs_raise_clear_errors(bolt):
     from wbmpc.errors import ParameterError
-
     with pytest.raises(ParameterError, match="barrier bounds need lower <= upper"):
         ActivationQuadraticBarrier(np.ones(2), np.zeros(2))
     with pytest.raises(ParameterError, match="n_nodes=0"):
@@ -519,6 +518,62 @@ def test_h1_obstacle_clearance_residual_jacobians_match_finite_differences():
     assert kinds >= {"clearance_sole0", "clearance_sole1", "clearance_shank", "height"}, kinds
 
 
+def test_the_swing_path_timings_go_from_lift_off_to_touchdown_and_smooth_lands_at_rest():
+    from wbmpc.errors import ParameterError
+    phase = np.linspace(0.0, 1.0, 101)
+    assert np.array_equal(swing_path_fraction(phase, "straight"), phase)
+    smooth = swing_path_fraction(phase, "smooth")
+    assert smooth[0] == 0.0 and smooth[-1] == 1.0 and smooth[50] == pytest.approx(0.5)
+    assert np.all(np.diff(smooth) > 0)
+    h = 1e-6  # at rest at both ends; the peak velocity 15/8 of the mean at s = 1/2
+    assert swing_path_fraction(h, "smooth") / h < 1e-10 and (1 - swing_path_fraction(1 - h, "smooth")) / h < 1e-10
+    assert (swing_path_fraction(0.5 + h, "smooth") - swing_path_fraction(0.5 - h, "smooth")) / (2 * h) == \
+        pytest.approx(1.875)
+    path = swing_path(np.array([0.0, 0.1]), np.array([0.6, -0.1]), np.array([0.0, 0.5, 1.0]), "smooth")
+    assert path == pytest.approx(np.array([[0.0, 0.1], [0.3, 0.0], [0.6, -0.1]]))
+    with pytest.raises(ParameterError, match="timing='linear' must be one of \\('straight', 'smooth'\\)"):
+        swing_path_fraction(phase, "linear")
+    with pytest.raises(ParameterError, match="obstacle_swing_path_timing='linear' must be one of"):
+        WalkingOCPConfig(obstacle_swing_path_timing="linear")
+    with pytest.raises(ParameterError, match="obstacle_swing_path_weight"):
+        WalkingOCPConfig(obstacle_swing_path_weight=-1.0)
+
+
+@needs_h1_extra
+def test_h1_smooth_crossing_swing_is_tracked_along_its_path_and_gated_where_that_path_is_over_the_box():
+    """A crossing swing timed "smooth" with the path term on: ``{foot}_swing_path`` is active at every node of a
+    crossing swing (the fixture's swings all cross) with the smooth path's (x, y) as reference, nowhere else;
+    the sole barriers are gated and the plateau held where the smooth path (not the straight one) puts a sole
+    point over the grown footprint."""
+    h1, ocp, schedule, crossings = _h1_crossing()
+    config = dataclasses.replace(ocp.config, obstacle_swing_path_timing="smooth", obstacle_swing_path_weight=1e4,
+                                 obstacle_plateau_transition_min=0.05)
+    assert "right_swing_path" not in ocp.problem.running_models[0].differential.costs.costs  # weight 0: absent
+    smooth_ocp = WalkingOCP(h1, config, n_nodes=ocp.n_nodes, dt=0.02)
+    x0 = standing_state(h1)
+    costs = [model.differential.costs.costs for model in smooth_ocp.problem.running_models]
+    smooth_ocp.update(x0, schedule, np.array([0.1, 0.0, 0.97]))  # no crossing: no path tracking
+    assert not any(node[f"{foot}_swing_path"].active for node in costs for foot in ("left", "right"))
+    smooth_ocp.update(x0, schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
+    path = swing_path(crossings.liftoff_xy, crossings.touchdown_xy, schedule.swing_phase, "smooth")[:, 1]
+    straight = swing_path(crossings.liftoff_xy, crossings.touchdown_xy, schedule.swing_phase)[:, 1]
+    sole_x = np.array([point[0] for point in config.obstacle_sole_points])
+    reach = 0.05 + config.obstacle_footprint_margin
+    differs = 0
+    for k, node in enumerate(costs):
+        swinging = not schedule.in_contact[k, 1]
+        tracking = node["right_swing_path"]
+        assert tracking.active == swinging and node["left_swing_path"].active == (not schedule.in_contact[k, 0]), k
+        if swinging:
+            assert tracking.cost.residual.reference[:2] == pytest.approx(path[k]), k
+            over = np.abs(path[k, 0] + sole_x - 0.25) <= reach
+            assert [node[f"right_clearance_sole{i}"].active for i in range(sole_x.size)] == over.tolist(), k
+            if over.any():
+                assert node["right_height"].cost.residual.reference == pytest.approx(0.1 + config.obstacle_apex_margin)
+            differs += bool(np.any(over != (np.abs(straight[k, 0] + sole_x - 0.25) <= reach)))
+    assert differs  # the two timings gate different nodes on this swing
+
+
 @needs_h1_extra
 def test_h1_crossing_swing_holds_a_plateau_over_the_box_and_turns_the_clearance_on_only_over_it():
     h1, ocp, schedule, crossings = _h1_crossing()
@@ -529,11 +584,13 @@ def test_h1_crossing_swing_holds_a_plateau_over_the_box_and_turns_the_clearance_
     plain_heights = [node["right_height"].cost.residual.reference for node in costs]
     ocp.update(x0, schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
     config = ocp.config
+    assert config.obstacle_swing_path_timing == "straight"
+    straight_x = swing_path(crossings.liftoff_xy, crossings.touchdown_xy, schedule.swing_phase)[:, 1, 0]
     for k, node in enumerate(costs):
         swinging = not schedule.in_contact[k, 1]
         toe = node["right_clearance_sole0"]
         # the toe's straight-path position over the box grown by the footprint margin, its reference the top + margin
-        toe_x = crossings.path_xy[k, 1, 0] + config.obstacle_sole_points[0][0]
+        toe_x = straight_x[k] + config.obstacle_sole_points[0][0]
         over = swinging and abs(toe_x - 0.25) <= 0.05 + config.obstacle_footprint_margin
         assert toe.active == over, k
         if over:
@@ -555,7 +612,7 @@ def test_h1_crossing_swing_holds_a_plateau_over_the_box_and_turns_the_clearance_
             assert max(heights) > max(plateau)  # eq. (19) clearing the same nodes peaks higher
             continue
         for k, height in enumerate(heights):
-            path_x = crossings.path_xy[k, 1, 0] + np.array([point[0] for point in config.obstacle_sole_points])
+            path_x = straight_x[k] + np.array([point[0] for point in config.obstacle_sole_points])
             if not schedule.in_contact[k, 1] and np.any(np.abs(path_x - 0.25) <= 0.05 + config.obstacle_footprint_margin):
                 assert height == pytest.approx(0.1 + config.obstacle_apex_margin), k
     # one-sided: no cost above the reference, a quadratic one below

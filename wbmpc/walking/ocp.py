@@ -191,7 +191,7 @@ class WalkingOCPConfig:
         obstacle_shank_frames: (foot, frame name) pairs: the shank frame of each foot (its knee) kept
             above the obstacle over the whole crossing swing; () = none.
         obstacle_clearance_margin: the sole points stay this far above the obstacle's top [m] while their
-            straight-path position is over its footprint grown by ``obstacle_footprint_margin``.
+            path position (``obstacle_swing_path_timing``) is over its footprint grown by ``obstacle_footprint_margin``.
         obstacle_shank_margin: the shank frame stays this far above the top [m].
         obstacle_footprint_margin: the footprint grown by this for the sole points' gating [m].
         obstacle_apex_margin: a crossing swing's height H (the plateau, or the apex of eq. 19) is at least the
@@ -205,6 +205,13 @@ class WalkingOCPConfig:
         obstacle_plateau_transition_min: the plateau profile's rise and fall each last at least this fraction
             of the swing, in (0, 0.5] (the breakpoints moved inwards if the footprint asks a shorter one: the
             gated sole barriers keep the clearance there).
+        obstacle_swing_path_timing: how a crossing swing's foot is timed along its lift-off -> touchdown segment
+            (:func:`swing_path_fraction`): "straight" (constant velocity) or "smooth" (at rest at lift-off and
+            touchdown). The clearance gating and the plateau breakpoints follow this path, and so does the
+            ``{foot}_swing_path`` term.
+        obstacle_swing_path_weight: weight of ``{foot}_swing_path``, the foot frame's (x, y) tracking that path
+            at every node of a crossing swing (the foot neither goes back while rising nor overshoots its
+            foothold); 0 = the term is absent (the horizontal path is free between lift-off and foothold).
         obstacle_foothold_weight: the ``{foot}_foothold`` weight of every swing while the horizon holds a
             crossing swing (the footholds next to an obstacle must be where the plan puts them, not where
             they emerge); 0 = ``foothold_weight`` always. Needs ``foothold_weight`` > 0 (the term exists).
@@ -246,6 +253,8 @@ class WalkingOCPConfig:
     obstacle_apex_height_max: float = 0.5
     obstacle_swing_profile: str = "plateau"
     obstacle_plateau_transition_min: float = 0.05
+    obstacle_swing_path_timing: str = "straight"
+    obstacle_swing_path_weight: float = 0.0
     obstacle_foothold_weight: float = 0.0
     max_line_search_trials: int = 10
     reg_min: float = 1e-9
@@ -257,7 +266,7 @@ class WalkingOCPConfig:
                      "control_weight", "control_bound_weight",
                      "com_terminal_weight", "foothold_weight", "contact_force_weight", "friction_cone_weight",
                      "wrench_cone_weight", "swing_orientation_weight", "obstacle_clearance_weight",
-                     "obstacle_foothold_weight"):
+                     "obstacle_swing_path_weight", "obstacle_foothold_weight"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f"{name}={value} must be finite and >= 0")
@@ -272,6 +281,9 @@ class WalkingOCPConfig:
                 0.0 < self.obstacle_plateau_transition_min <= 0.5):
             raise ParameterError(f"obstacle_plateau_transition_min={self.obstacle_plateau_transition_min!r} "
                                  "must be in (0, 0.5]")
+        if self.obstacle_swing_path_timing not in SWING_PATH_TIMINGS:
+            raise ParameterError(f"obstacle_swing_path_timing={self.obstacle_swing_path_timing!r} must be one of "
+                                 f"{SWING_PATH_TIMINGS}")
         if self.obstacle_swing_profile not in ("plateau", "apex"):
             raise ParameterError(f"obstacle_swing_profile={self.obstacle_swing_profile!r} must be one of "
                                  "('plateau', 'apex')")
@@ -355,6 +367,29 @@ def swing_height_reference_derivative(phase, apex_height: float):
     """d/ds of :func:`swing_height_reference`: 32 H s (1 − s)(1 − 2 s) [m]."""
     s = np.asarray(phase, dtype=float)
     return 32.0 * apex_height * s * (1.0 - s) * (1.0 - 2.0 * s)
+
+
+SWING_PATH_TIMINGS = ("straight", "smooth")
+
+
+def swing_path_fraction(phase, timing: str = "straight"):
+    """How far along its lift-off -> touchdown segment a swinging foot is at swing phase s = t / t_f (any
+    shape, clipped to [0, 1]): "straight", s (constant velocity: the foot lifts off and lands moving);
+    "smooth", the quintic smoothstep 10 s³ − 15 s⁴ + 6 s⁵ (zero horizontal velocity and acceleration at
+    lift-off and touchdown, peak velocity 1.875 times the mean at s = ½)."""
+    s = np.clip(np.asarray(phase, dtype=float), 0.0, 1.0)
+    if timing == "straight":
+        return s
+    if timing == "smooth":
+        return s**3 * (10.0 - 15.0 * s + 6.0 * s**2)
+    raise ParameterError(f"timing={timing!r} must be one of {SWING_PATH_TIMINGS}")
+
+
+def swing_path(liftoff_xy, touchdown_xy, phase, timing: str = "straight") -> np.ndarray:
+    """World (x, y) [m] of a swinging foot's frame on its path from ``liftoff_xy`` to ``touchdown_xy``
+    (..., 2) [m] at swing phase ``phase`` (...), timed by :func:`swing_path_fraction`: shape (..., 2)."""
+    liftoff, touchdown = np.asarray(liftoff_xy, dtype=float), np.asarray(touchdown_xy, dtype=float)
+    return liftoff + swing_path_fraction(phase, timing)[..., None] * (touchdown - liftoff)
 
 
 PLATEAU_SAMPLES = 401  # phases sampled on a crossing swing's straight path to find where it meets the footprint
@@ -468,6 +503,9 @@ class WalkingOCP:
               items.get(f"{foot}_clearance_shank")) for foot in self.feet]
             for items in (model.differential.costs.costs for model in running)
         ] if config.obstacle_clearance_weight > 0 else None
+        # per running node, per foot: the swing path tracking cost item (None: the term is absent)
+        self._swing_path_terms = [[items.get(f"{foot}_swing_path") for foot in self.feet]
+                                  for items in (model.differential.costs.costs for model in running)]
         self.problem = ShootingProblem(self.x_reference, running, terminal)
         self._timed = False  # running nodes carry a timed schedule's spacing (see update)
         #: "batched" or "nodes" (see WalkingOCPConfig.evaluation); evaluation_note says why nodes
@@ -570,6 +608,11 @@ class WalkingOCP:
                               CostModelResidual(ResidualFramePointHeight(state, shank, np.zeros(3), 0.0, nu),
                                                 ActivationQuadraticBarrier(*barrier)),
                               cfg.obstacle_clearance_weight, active=False)
+            if not terminal and cfg.obstacle_swing_path_weight > 0:
+                residual = ResidualFrameTranslation(state, fid, self._reference_placements[foot].translation, nu)
+                costs.add(f"{foot}_swing_path",
+                          CostModelResidual(residual, ActivationWeightedQuad(np.array([1.0, 1.0, 0.0]))),
+                          cfg.obstacle_swing_path_weight, active=False)
             if not terminal and cfg.swing_orientation_weight > 0 and flat:
                 costs.add(f"{foot}_orientation",
                           CostModelResidual(ResidualFrameRotation(state, fid, self._reference_placements[foot].rotation,
@@ -651,6 +694,10 @@ class WalkingOCP:
                         item.active = False
                     if shank is not None:
                         shank.active = False
+        for node_items in self._swing_path_terms:
+            for item in node_items:
+                if item is not None:
+                    item.active = False
         heights = self.ground_height + swing_height_reference(np.nan_to_num(phase), apex)
         if crossings is not None:
             crossing_heights = self._clearance(crossings, ~in_contact, np.nan_to_num(phase), columns)
@@ -712,20 +759,25 @@ class WalkingOCP:
         """Write the clearance terms of ``crossings`` and return the swing height references (n + 1, n_feet)
         [m] above the ground of the crossing swings' nodes, NaN at every other node (eq. 19 there).
 
-        For each crossing swing (a run of swing nodes of one foot over one obstacle) and each sole point p_i,
-        the point's straight-path position (the foot's path position plus p_i turned by the touchdown yaw) is
-        over the footprint grown by ``obstacle_footprint_margin`` at some nodes: there ``{foot}_clearance_sole{i}``
-        is active with the reference top + ``obstacle_clearance_margin``; ``{foot}_clearance_shank`` is active
-        over the whole crossing swing with top + ``obstacle_shank_margin``. The height reference
+        For each crossing swing (a run of swing nodes of one foot over one obstacle) the foot's path position
+        is :func:`swing_path` (lift-off -> touchdown, timed by ``obstacle_swing_path_timing``); there
+        ``{foot}_swing_path`` (when present) is active with that (x, y) reference. Each sole point p_i's path
+        position (the foot's plus p_i turned by the touchdown yaw) is over the footprint grown by
+        ``obstacle_footprint_margin`` at some nodes: there ``{foot}_clearance_sole{i}`` is active with the
+        reference top + ``obstacle_clearance_margin``; ``{foot}_clearance_shank`` is active over the whole
+        crossing swing with top + ``obstacle_shank_margin``. The height reference
         (``obstacle_swing_profile``): "plateau", :func:`plateau_height_reference` at H = the largest of
         ``swing_apex_height`` and top + ``obstacle_apex_margin``, at most ``obstacle_apex_height_max``, its
-        rise over until the first sole point's straight path enters the grown footprint and its fall begun
+        rise over until the first sole point's path enters the grown footprint and its fall begun
         only once the last has left it (:meth:`_plateau_phases`); "apex", eq. (19) with that H raised until
         the profile is at the clearance reference at the first and the last gated node (same cap). World
         z = 0 is the ground the obstacles stand on."""
         cfg = self.config
         index = np.asarray(crossings.index)[:, columns]
-        path = np.asarray(crossings.path_xy, dtype=float)[:, columns]
+        liftoff = np.asarray(crossings.liftoff_xy, dtype=float)[:, columns]
+        touchdown = np.asarray(crossings.touchdown_xy, dtype=float)[:, columns]
+        timing = cfg.obstacle_swing_path_timing
+        path = swing_path(liftoff, touchdown, phase, timing)
         path_yaw = np.nan_to_num(np.asarray(crossings.path_yaw, dtype=float)[:, columns])
         if index.shape != swinging.shape:
             raise ParameterError(f"crossings.index has shape {index.shape}, the schedule {swinging.shape}")
@@ -753,9 +805,8 @@ class WalkingOCP:
                 over = np.flatnonzero(gated.any(axis=1))
                 s = phase[nodes, j]
                 if cfg.obstacle_swing_profile == "plateau":
-                    breaks = self._plateau_phases(region, s, path[nodes, j], path_yaw[nodes[0], j], points,
-                                                  s[over] if over.size else s[:0],
-                                                  cfg.obstacle_plateau_transition_min)
+                    breaks = self._plateau_phases(region, liftoff[start, j], touchdown[start, j], timing,
+                                                  path_yaw[start, j], points, cfg.obstacle_plateau_transition_min)
                     if breaks is None:
                         heights[nodes, j] = swing_height_reference(s, min(height, cap))
                     else:
@@ -766,10 +817,14 @@ class WalkingOCP:
                         edge = float(np.min(swing_height_reference(s[[over[0], over[-1]]], 1.0)))
                         height = max(height, need / edge if edge > 0 else np.inf)
                     heights[nodes, j] = swing_height_reference(s, min(height, cap))
-                if terms is None:
-                    continue
                 for row, node in enumerate(nodes.tolist()):
                     if node >= n_running:
+                        continue
+                    tracking = self._swing_path_terms[node][j]
+                    if tracking is not None:
+                        tracking.active = True
+                        tracking.cost.residual.reference[:2] = path[node, j]
+                    if terms is None:
                         continue
                     soles, shank = terms[node][j]
                     for i, item in enumerate(soles):
@@ -781,35 +836,25 @@ class WalkingOCP:
         return heights
 
     @staticmethod
-    def _plateau_phases(region, phases: np.ndarray, path_xy: np.ndarray, yaw: float, points: np.ndarray,
-                        gated_phases: np.ndarray, transition: float) -> tuple[float, float] | None:
+    def _plateau_phases(region, liftoff_xy: np.ndarray, touchdown_xy: np.ndarray, timing: str, yaw: float,
+                        points: np.ndarray, transition: float) -> tuple[float, float] | None:
         """Breakpoints (rise_end, fall_start) of a crossing swing's :func:`plateau_height_reference`, or None
-        when no sole point's straight path meets ``region`` (the grown footprint).
+        when no sole point's path meets ``region`` (the grown footprint).
 
-        The straight lift-off -> touchdown path is linear in the phase, xy(s) = a + s b: with two distinct
-        node ``phases`` (m,) it is recovered from the nodes' ``path_xy`` (m, 2) [m] and sampled at
-        :data:`PLATEAU_SAMPLES` phases; rise_end is the last sample before any of the ``points`` (n, 3) [m]
-        (foot frame, turned by ``yaw`` [rad]) is in ``region``, fall_start the first after all have left it.
-        With a single node phase the ``gated_phases`` (the nodes over the region) bound the plateau instead.
-        Both are kept within [transition, 1 − transition] (``transition`` in (0, 0.5]: a rise and a fall of at
-        least that fraction of the swing)."""
-        if np.ptp(phases) > 1e-9:
-            first, last = int(np.argmin(phases)), int(np.argmax(phases))
-            direction = (path_xy[last] - path_xy[first]) / (phases[last] - phases[first])
-            origin = path_xy[first] - phases[first] * direction
-            grid = np.linspace(0.0, 1.0, PLATEAU_SAMPLES)
-            centre = origin[None] + grid[:, None] * direction[None]
-            inside = np.zeros(grid.size, dtype=bool)
-            for point in points:
-                inside |= region.contains(_turned_points(centre, np.full(grid.size, yaw), point))
-            hit = np.flatnonzero(inside)
-            if not hit.size:
-                return None
-            rise_end, fall_start = grid[max(hit[0] - 1, 0)], grid[min(hit[-1] + 1, grid.size - 1)]
-        elif gated_phases.size:
-            rise_end, fall_start = float(np.min(gated_phases)), float(np.max(gated_phases))
-        else:
+        The foot's path from ``liftoff_xy`` to ``touchdown_xy`` (2,) [m] (:func:`swing_path` with ``timing``)
+        is sampled at :data:`PLATEAU_SAMPLES` phases; rise_end is the last sample before any of the ``points``
+        (n, 3) [m] (foot frame, turned by ``yaw`` [rad]) is in ``region``, fall_start the first after all have
+        left it. Both are kept within [transition, 1 − transition] (``transition`` in (0, 0.5]: a rise and a
+        fall of at least that fraction of the swing)."""
+        grid = np.linspace(0.0, 1.0, PLATEAU_SAMPLES)
+        centre = swing_path(liftoff_xy, touchdown_xy, grid, timing)
+        inside = np.zeros(grid.size, dtype=bool)
+        for point in points:
+            inside |= region.contains(_turned_points(centre, np.full(grid.size, yaw), point))
+        hit = np.flatnonzero(inside)
+        if not hit.size:
             return None
+        rise_end, fall_start = grid[max(hit[0] - 1, 0)], grid[min(hit[-1] + 1, grid.size - 1)]
         low, high = float(transition), 1.0 - float(transition)
         rise_end = float(np.clip(rise_end, low, high))
         return rise_end, float(np.clip(fall_start, rise_end, high))
