@@ -305,6 +305,11 @@ def _overrides_text(overrides: dict) -> str:
     return ", ".join(f"{name}={value!r}" for name, value in overrides.items())
 
 
+def _runs_text(runs: list) -> str:
+    """``completed 2.00 s, fell 1.22 s``: each run's status and simulated time."""
+    return ", ".join(f"{run['status']} {run['simulated_time']:.2f} s" for run in runs)
+
+
 def format_report(result: dict) -> str:
     lines = [
         f"closed loop '{result['scenario']}' on the {result['robot']} preset ({result['status']}, "
@@ -344,14 +349,14 @@ def format_report(result: dict) -> str:
     if base is not None and "skipped" in base:
         lines.append(f"  Crocoddyl baseline skipped: {base['skipped']}")
     elif base is not None and base.get("variant"):
-        ours_runs, theirs_runs = base["ours_runs"], base["runs"]
+        ours_runs, theirs_runs = _runs_text(base["ours_runs"]), _runs_text(base["runs"])
         lines += [
             f"  Crocoddyl baseline on the preset's twin-able variant, not on the preset ({base['preset_no_twin']}):",
             f"    the variant is the preset with {_overrides_text(base['variant'])}; both loops run it, "
             "ours, Crocoddyl, Crocoddyl, ours",
-            f"    ours on the variant ({', '.join(run['status'] for run in ours_runs)}): real-time factor "
+            f"    ours on the variant ({ours_runs}): real-time factor "
             f"{base['ours_real_time_factor_both_runs']:.2f} x, MPC tick median {base['ours_mpc_tick_both_runs'] * 1e3:.2f} ms",
-            f"    Crocoddyl's FDDP as the solver on the variant ({', '.join(run['status'] for run in theirs_runs)}): "
+            f"    Crocoddyl's FDDP as the solver on the variant ({theirs_runs}): "
             f"real-time factor {base['real_time_factor']:.2f} x, MPC tick median "
             f"{base['crocoddyl_mpc_tick_both_runs'] * 1e3:.2f} ms",
             f"    on the variant: ours / Crocoddyl {base['ratio']:.2f} (real-time factors, both runs of each)",
