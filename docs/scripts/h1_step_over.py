@@ -127,6 +127,10 @@ def main() -> None:
           + (f"; cold restarts at {', '.join(f'{t:.2f}' for t in r['t'][r['mpc_restart'] > 0.5])} s"
              if "mpc_restart" in r and np.any(r["mpc_restart"] > 0.5) else ""))
     print(f"  status {log.status}  fall {log.fall_time} ({log.fall_reason})  error {log.error}")
+    iterations = r["mpc_iterations"][1:]  # the first update is the cold start
+    if iterations.size:
+        print(f"  FDDP iterations per update: mean {np.mean(iterations):.1f}, median {np.median(iterations):.0f}, "
+              f"max {np.max(iterations):.0f}  (real-time factor {log.metrics.get('real_time_factor') or float('nan'):.3f})")
     dcm = log.ticks.get("dcm")
     if dcm is not None:
         print(f"  final DCM x {dcm[-1, 0]:.3f}  CoM x {log.ticks['com'][-1, 0]:.3f}")
