@@ -51,3 +51,30 @@ def test_h1_walks_up_to_the_box_with_every_foothold_before_it_and_without_touchi
     # least (the closed loop lands short steps up to 6 cm beyond the plan)
     planner = preset.planner
     assert np.all(stance_x + planner.sole_front < box.distance - 0.5 * planner.obstacle_margin)
+
+
+@pytest.mark.parametrize("distance, negotiating", [(1.0, True), (4.0, False)])
+def test_h1_gives_the_negotiation_its_own_fddp_iterations(distance, negotiating):
+    """``negotiation_max_iterations``: while negotiating (the box within the 1.5 m lookahead) every warm-started
+    update runs up to that many FDDP iterations, and the preset's ``max_iterations`` otherwise."""
+    box = StepOverBox(height=0.1, depth=0.1, distance=distance, speed=0.3)
+    preset = load_walking_preset("h1", {"negotiation_max_iterations": 4})
+    assert preset.controller.max_iterations == 2
+    controller = KnownObstacleController(preset, (box.obstacle(),))
+    log = run_scenario("step_over_box", robot="h1", duration=0.1, controller=controller, progress=False,
+                       height=box.height, depth=box.depth, distance=box.distance, speed=box.speed)
+    assert log.status == "completed", log.error
+    replans = log.replans
+    assert np.all(replans["negotiation_mode"] == (NEGOTIATION if negotiating else 0))
+    warm = replans["mpc_iterations"][1:]  # the first update is the cold start
+    assert warm.size >= 4 and warm.max() == (4 if negotiating else 2), warm
+
+
+def test_negotiation_max_iterations_is_zero_or_a_positive_integer():
+    from wbmpc.errors import ParameterError
+    from wbmpc.walking.controller_config import WalkingControllerConfig
+
+    assert WalkingControllerConfig(negotiation_max_iterations=0).negotiation_max_iterations == 0
+    for bad in (-1, 2.5, True):
+        with pytest.raises(ParameterError, match=f"negotiation_max_iterations={bad!r} must be 0"):
+            WalkingControllerConfig(negotiation_max_iterations=bad)

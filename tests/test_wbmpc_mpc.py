@@ -136,6 +136,22 @@ def test_first_update_failure_has_no_plan(bolt):
     assert np.isnan(failed.cost)
 
 
+def test_an_update_can_run_its_own_number_of_iterations(bolt):
+    """``update(max_iterations=)``: that many FDDP iterations for this warm-started update only (th_stop 0: none
+    converges early); a bad value is a ParameterError, the update is not run."""
+    from wbmpc.errors import ParameterError
+
+    mpc = WalkingMPC(bolt, WalkingOCPConfig(th_stop=0.0), n_nodes=10, dt=DT, max_iterations=1, cold_start_iterations=3)
+    x0 = standing_state(bolt)
+    schedule, com = alternating_schedule(0.0, DT, 10), np.array([0.0, 0.0, 0.3])
+    assert mpc.update(0.0, x0, schedule, com).iterations == 3  # the cold start
+    assert mpc.update(0.0, x0, schedule, com, max_iterations=4).iterations == 4
+    assert mpc.update(0.0, x0, schedule, com).iterations == 1
+    for bad in (0, 1.5, True):
+        with pytest.raises(ParameterError, match=f"max_iterations={bad!r} must be None or an integer >= 1"):
+            mpc.update(0.0, x0, schedule, com, max_iterations=bad)
+
+
 def test_constructor_rejects_bad_parameters(bolt):
     from wbmpc.errors import ParameterError
 

@@ -278,8 +278,10 @@ class RecedingHorizonMPC:
         return prepare(xs, us, [None] + keys[2:] + [keys[N - 1]], deadline=deadline)
 
     def update(self, t: float, x_measured: np.ndarray,
-               update_problem: Callable[[np.ndarray], None] | None = None) -> MPCSolution:
-        """Re-solve from the measured state; never raises (failures come back with ok=False).
+               update_problem: Callable[[np.ndarray], None] | None = None,
+               max_iterations: int | None = None) -> MPCSolution:
+        """Re-solve from the measured state; a failing update never raises (it comes back with
+        ok=False), a bad ``max_iterations`` is a ParameterError before anything runs.
 
         Args:
             t: time of the measurement, node 0 [s].
@@ -287,12 +289,19 @@ class RecedingHorizonMPC:
             update_problem: called with the checked state before the warm start, to set the
                 problem's models for this update (contacts, references); an exception it raises
                 is a failed update like a solver failure (the last good plan is kept).
+            max_iterations: FDDP iterations of this warm-started update, an integer >= 1; None =
+                ``self.max_iterations`` (a cold start runs ``cold_start_iterations`` either way).
         """
+        if max_iterations is not None and (isinstance(max_iterations, bool) or int(max_iterations) != max_iterations
+                                           or max_iterations < 1):
+            raise ParameterError(f"max_iterations={max_iterations!r} must be None or an integer >= 1")
         tic = time.perf_counter()
         with self._blas():
-            return self._update(tic, t, x_measured, update_problem)
+            return self._update(tic, t, x_measured, update_problem,
+                                self.max_iterations if max_iterations is None else int(max_iterations))
 
-    def _update(self, tic: float, t: float, x_measured: np.ndarray, update_problem) -> MPCSolution:
+    def _update(self, tic: float, t: float, x_measured: np.ndarray, update_problem,
+                max_iterations: int) -> MPCSolution:
         restart = (self.restart_after_failures > 0 and self.last_good is not None
                    and self.failures >= self.restart_after_failures)
         if restart:
@@ -304,7 +313,7 @@ class RecedingHorizonMPC:
             else:
                 self.problem.set_x0(x)
             xs_init, us_init, cold = self._guess(float(t), x, None if restart else self.last_good)
-            iterations = self.cold_start_iterations if cold else self.max_iterations
+            iterations = self.cold_start_iterations if cold else max_iterations
             deadline = None if cold or self.time_budget is None else tic + self.time_budget
             converged = self.solver.solve(xs_init, us_init, maxiter=iterations, is_feasible=False, deadline=deadline)
             solver = self.solver

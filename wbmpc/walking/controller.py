@@ -35,6 +35,7 @@ from wbmpc.walking.controller_config import WalkingControllerConfig
 from wbmpc.walking.feedback import FeedbackLaw
 from wbmpc.walking.measurement import Measurement
 from wbmpc.walking.mpc import WalkingMPC
+from wbmpc.walking.negotiation import NEGOTIATION
 from wbmpc.walking.planning import PlanningStage
 from wbmpc.walking.preset import WalkingPreset, load_walking_preset
 from wbmpc.walking.reference import OcpReferenceStage
@@ -188,8 +189,10 @@ class WalkingController:
             ok, status, iterations, cost, solve_time = False, "injected_failure", 0, np.nan, 0.0
             restart = False
         else:
+            negotiating = cfg.negotiation_max_iterations and record.get("negotiation_mode") == NEGOTIATION
             solution = self.mpc.update(t, x, reference.schedule, reference.com_terminal, reference.touchdown_depth,
-                                       reference.crossings)
+                                       reference.crossings,
+                                       max_iterations=cfg.negotiation_max_iterations if negotiating else None)
             ok, status = bool(solution.ok), str(solution.status)
             restart = bool(solution.restart)
             record["mpc_prepared_used"] = float(getattr(self.mpc.problem, "prepared_used", 0))

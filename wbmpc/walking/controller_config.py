@@ -151,6 +151,11 @@ class WalkingControllerConfig:
             obstacle of the negotiation (along the heading).
         negotiation_speed_max: forward command bound [m/s] while negotiating (the approach and crossing
             speed; inf = the walking command).
+        negotiation_max_iterations: FDDP iterations per MPC update while negotiating, an integer >= 1, or
+            0 (``max_iterations`` throughout). A crossing changes the OCP more from one update to the next
+            than walking does (a plateau, clearance barriers, a long step entering the horizon), and a
+            warm-started update of a few iterations then stays far above the optimum (docs/ocp.md,
+            "Solved to convergence, measured"); the budget goes where the problem changes.
     """
 
     n_nodes: int = 100
@@ -187,6 +192,7 @@ class WalkingControllerConfig:
     negotiation_corridor: float = 0.3
     negotiation_release: float = 0.05
     negotiation_speed_max: float = float("inf")
+    negotiation_max_iterations: int = 0
 
     def __post_init__(self) -> None:
         for name in ("mpc_prepare", "interpolate", "feedback"):
@@ -252,6 +258,10 @@ class WalkingControllerConfig:
             raise ParameterError(f"first_stance_foot={self.first_stance_foot!r} must be 'left' or 'right'")
         if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
             raise ParameterError(f"max_iterations={self.max_iterations!r} must be an integer >= 1")
+        if isinstance(self.negotiation_max_iterations, bool) or not (
+                isinstance(self.negotiation_max_iterations, int) and self.negotiation_max_iterations >= 0):
+            raise ParameterError(f"negotiation_max_iterations={self.negotiation_max_iterations!r} must be 0 "
+                                 "(max_iterations) or an integer >= 1")
         restart = self.mpc_restart_after_failures
         if restart is not None and (isinstance(restart, bool) or not isinstance(restart, int) or restart < 0):
             raise ParameterError(f"mpc_restart_after_failures={restart!r} must be None, 0 (never) or an integer >= 1")
