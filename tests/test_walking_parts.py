@@ -297,9 +297,10 @@ OBSTACLE_FIELDS = {
                 "sole_rear", "sole_half_width"},
     "ocp": {"obstacle_clearance_weight", "obstacle_sole_points", "obstacle_shank_frames", "obstacle_clearance_margin",
             "obstacle_shank_margin", "obstacle_footprint_margin", "obstacle_apex_margin", "obstacle_apex_height_max",
-            "obstacle_swing_profile", "obstacle_plateau_transition_min",
-            "obstacle_foothold_weight"},
-    "controller": {"negotiation_lookahead", "negotiation_corridor", "negotiation_release", "negotiation_speed_max"},
+            "obstacle_swing_profile", "obstacle_plateau_transition_min", "obstacle_swing_path_timing",
+            "obstacle_swing_path_weight", "obstacle_foothold_weight"},
+    "controller": {"negotiation_lookahead", "negotiation_corridor", "negotiation_release", "negotiation_speed_max",
+                   "negotiation_max_iterations"},
 }
 
 
