@@ -73,8 +73,7 @@ def test_the_planning_stage_plans_over_the_obstacles_of_a_negotiation_and_logs_t
     assert crossings is not None and crossings.obstacles == (box,)
     over = crossings.index >= 0
     assert over.any() and not np.any(over & schedule.in_contact)
-    for known in (crossings.liftoff_xy, crossings.touchdown_xy):
-        assert np.all(np.isfinite(known[over])) and np.all(np.isnan(known[~over]))
+    assert np.all(np.isfinite(crossings.liftoff_xy[over])) and np.all(np.isnan(crossings.liftoff_xy[~over]))
 
 
 def test_without_obstacles_the_stage_plans_as_without_perception():

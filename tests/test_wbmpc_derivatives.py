@@ -555,8 +555,8 @@ def test_h1_smooth_crossing_swing_is_tracked_along_its_path_and_gated_where_that
     smooth_ocp.update(x0, schedule, np.array([0.1, 0.0, 0.97]))  # no crossing: no path tracking
     assert not any(node[f"{foot}_swing_path"].active for node in costs for foot in ("left", "right"))
     smooth_ocp.update(x0, schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
-    path = swing_path(crossings.liftoff_xy, crossings.touchdown_xy, schedule.swing_phase, "smooth")[:, 1]
-    straight = swing_path(crossings.liftoff_xy, crossings.touchdown_xy, schedule.swing_phase)[:, 1]
+    path = swing_path(crossings.liftoff_xy, schedule.touchdown_position, schedule.swing_phase, "smooth")[:, 1]
+    straight = swing_path(crossings.liftoff_xy, schedule.touchdown_position, schedule.swing_phase)[:, 1]
     sole_x = np.array([point[0] for point in config.obstacle_sole_points])
     reach = 0.05 + config.obstacle_footprint_margin
     differs = 0
@@ -585,7 +585,7 @@ def test_h1_crossing_swing_holds_a_plateau_over_the_box_and_turns_the_clearance_
     ocp.update(x0, schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
     config = ocp.config
     assert config.obstacle_swing_path_timing == "straight"
-    straight_x = swing_path(crossings.liftoff_xy, crossings.touchdown_xy, schedule.swing_phase)[:, 1, 0]
+    straight_x = swing_path(crossings.liftoff_xy, schedule.touchdown_position, schedule.swing_phase)[:, 1, 0]
     for k, node in enumerate(costs):
         swinging = not schedule.in_contact[k, 1]
         toe = node["right_clearance_sole0"]

@@ -59,6 +59,5 @@ def crossing_schedule(n_nodes: int, dt: float = 0.02):
     index = np.where(swinging, 0, -1)
     liftoff = np.array([[-0.5, 0.2], [-0.25, -0.2]])  # each foot's lift-off, 0.5 m behind its touchdown
     liftoff_xy = np.where(swinging[..., None], np.broadcast_to(liftoff, schedule.touchdown_position.shape), np.nan)
-    touchdown_xy = np.where(swinging[..., None], schedule.touchdown_position, np.nan)
-    return schedule, CrossingSchedule((box,), index, liftoff_xy, touchdown_xy, np.where(swinging, 0.0, np.nan),
+    return schedule, CrossingSchedule((box,), index, liftoff_xy, np.where(swinging, 0.0, np.nan),
                                       schedule.feet)

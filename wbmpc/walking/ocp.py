@@ -392,7 +392,7 @@ def swing_path(liftoff_xy, touchdown_xy, phase, timing: str = "straight") -> np.
     return liftoff + swing_path_fraction(phase, timing)[..., None] * (touchdown - liftoff)
 
 
-PLATEAU_SAMPLES = 401  # phases sampled on a crossing swing's straight path to find where it meets the footprint
+PLATEAU_SAMPLES = 401  # phases sampled on a crossing swing's path to find where it meets the footprint
 
 
 def _turned_points(centre_xy: np.ndarray, yaw: np.ndarray, point) -> np.ndarray:
@@ -503,9 +503,10 @@ class WalkingOCP:
               items.get(f"{foot}_clearance_shank")) for foot in self.feet]
             for items in (model.differential.costs.costs for model in running)
         ] if config.obstacle_clearance_weight > 0 else None
-        # per running node, per foot: the swing path tracking cost item (None: the term is absent)
-        self._swing_path_terms = [[items.get(f"{foot}_swing_path") for foot in self.feet]
-                                  for items in (model.differential.costs.costs for model in running)]
+        # per running node, per foot: the swing path tracking cost item
+        self._swing_path_terms = [[items[f"{foot}_swing_path"] for foot in self.feet]
+                                  for items in (model.differential.costs.costs for model in running)
+                                  ] if config.obstacle_swing_path_weight > 0 else None
         self.problem = ShootingProblem(self.x_reference, running, terminal)
         self._timed = False  # running nodes carry a timed schedule's spacing (see update)
         #: "batched" or "nodes" (see WalkingOCPConfig.evaluation); evaluation_note says why nodes
@@ -571,10 +572,7 @@ class WalkingOCP:
                                             ActivationWeightedQuad(np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0]))),
                           cfg.touchdown_velocity_weight, active=False)
             if not terminal and cfg.foothold_weight > 0:
-                residual = ResidualFrameTranslation(state, fid, self._reference_placements[foot].translation, nu)
-                costs.add(f"{foot}_foothold",
-                          CostModelResidual(residual, ActivationWeightedQuad(np.array([1.0, 1.0, 0.0]))),
-                          cfg.foothold_weight, active=False)
+                costs.add(f"{foot}_foothold", self._frame_xy_cost(foot), cfg.foothold_weight, active=False)
             if not terminal and cfg.contact_force_weight > 0:
                 nc = 3 if self.contact_type == "point3d" else 6
                 costs.add(f"{foot}_contact_force",
@@ -609,10 +607,7 @@ class WalkingOCP:
                                                 ActivationQuadraticBarrier(*barrier)),
                               cfg.obstacle_clearance_weight, active=False)
             if not terminal and cfg.obstacle_swing_path_weight > 0:
-                residual = ResidualFrameTranslation(state, fid, self._reference_placements[foot].translation, nu)
-                costs.add(f"{foot}_swing_path",
-                          CostModelResidual(residual, ActivationWeightedQuad(np.array([1.0, 1.0, 0.0]))),
-                          cfg.obstacle_swing_path_weight, active=False)
+                costs.add(f"{foot}_swing_path", self._frame_xy_cost(foot), cfg.obstacle_swing_path_weight, active=False)
             if not terminal and cfg.swing_orientation_weight > 0 and flat:
                 costs.add(f"{foot}_orientation",
                           CostModelResidual(ResidualFrameRotation(state, fid, self._reference_placements[foot].rotation,
@@ -636,6 +631,13 @@ class WalkingOCP:
                                                         damping_lever_arms=lever_arms,
                                                         sole_corners=moments == "corners")
         return IntegratedActionModelEuler(dam, 0.0 if terminal else self.dt)
+
+    def _frame_xy_cost(self, foot: str) -> CostModelResidual:
+        """The (x, y) [m] of ``foot``'s frame against a world reference (``cost.residual.reference``, (3,),
+        z weighted 0): the foothold and the swing path terms."""
+        residual = ResidualFrameTranslation(self.state, self.foot_frame_ids[foot],
+                                            self._reference_placements[foot].translation, self.nu)
+        return CostModelResidual(residual, ActivationWeightedQuad(np.array([1.0, 1.0, 0.0])))
 
     def _sole_size(self, needed_by: str) -> tuple[float, float]:
         size = self.robot.sole_size
@@ -694,13 +696,13 @@ class WalkingOCP:
                         item.active = False
                     if shank is not None:
                         shank.active = False
-        for node_items in self._swing_path_terms:
-            for item in node_items:
-                if item is not None:
+        if self._swing_path_terms is not None:  # off until a crossing swing turns them on
+            for node_items in self._swing_path_terms:
+                for item in node_items:
                     item.active = False
         heights = self.ground_height + swing_height_reference(np.nan_to_num(phase), apex)
         if crossings is not None:
-            crossing_heights = self._clearance(crossings, ~in_contact, np.nan_to_num(phase), columns)
+            crossing_heights = self._clearance(crossings, ~in_contact, np.nan_to_num(phase), touchdown, columns)
             heights = np.where(np.isnan(crossing_heights), heights, self.ground_height + crossing_heights)
         n_stance = np.maximum(in_contact.sum(axis=1), 1)
         last_swing = np.zeros_like(in_contact)
@@ -755,12 +757,14 @@ class WalkingOCP:
         if self.evaluation == "batched":  # contact sets (references, weights and activity are shared)
             self.problem.sync()
 
-    def _clearance(self, crossings, swinging: np.ndarray, phase: np.ndarray, columns: list[int]) -> np.ndarray:
+    def _clearance(self, crossings, swinging: np.ndarray, phase: np.ndarray, touchdown: np.ndarray,
+                   columns: list[int]) -> np.ndarray:
         """Write the clearance terms of ``crossings`` and return the swing height references (n + 1, n_feet)
         [m] above the ground of the crossing swings' nodes, NaN at every other node (eq. 19 there).
 
         For each crossing swing (a run of swing nodes of one foot over one obstacle) the foot's path position
-        is :func:`swing_path` (lift-off -> touchdown, timed by ``obstacle_swing_path_timing``); there
+        is :func:`swing_path` (lift-off -> the schedule's ``touchdown`` (n + 1, n_feet, 2) [m], in the OCP's
+        foot order, timed by ``obstacle_swing_path_timing``); there
         ``{foot}_swing_path`` (when present) is active with that (x, y) reference. Each sole point p_i's path
         position (the foot's plus p_i turned by the touchdown yaw) is over the footprint grown by
         ``obstacle_footprint_margin`` at some nodes: there ``{foot}_clearance_sole{i}`` is active with the
@@ -775,7 +779,6 @@ class WalkingOCP:
         cfg = self.config
         index = np.asarray(crossings.index)[:, columns]
         liftoff = np.asarray(crossings.liftoff_xy, dtype=float)[:, columns]
-        touchdown = np.asarray(crossings.touchdown_xy, dtype=float)[:, columns]
         timing = cfg.obstacle_swing_path_timing
         path = swing_path(liftoff, touchdown, phase, timing)
         path_yaw = np.nan_to_num(np.asarray(crossings.path_yaw, dtype=float)[:, columns])
@@ -820,8 +823,8 @@ class WalkingOCP:
                 for row, node in enumerate(nodes.tolist()):
                     if node >= n_running:
                         continue
-                    tracking = self._swing_path_terms[node][j]
-                    if tracking is not None:
+                    if self._swing_path_terms is not None:
+                        tracking = self._swing_path_terms[node][j]
                         tracking.active = True
                         tracking.cost.residual.reference[:2] = path[node, j]
                     if terms is None:

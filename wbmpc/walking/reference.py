@@ -8,7 +8,7 @@ Bolt's CoM creep up by 1 cm per second of walking (legs stretching) until it fel
 
 A plan whose steps pass over obstacles (``PlannedStep.crossing``, :mod:`sequencer.footholds`) also gives
 the OCP its crossing swings on the grid (:class:`CrossingSchedule`): which obstacle each swinging foot
-passes over and the swing's lift-off and touchdown at each node; the foot's path between them
+passes over and the swing's lift-off at each node; the foot's path from there to the schedule's touchdown
 (:func:`wbmpc.walking.ocp.swing_path`, straight or smoothly timed) is where the OCP raises the swing apex and turns on its
 clearance terms.
 """
@@ -52,9 +52,9 @@ class CrossingSchedule:
         obstacles: the obstacles crossed (:class:`sequencer.obstacles.Obstacle`).
         index: (n_nodes + 1, n_feet) int, the index in ``obstacles`` of the obstacle the swinging foot passes
             over at that node, -1 where none (or in contact).
-        liftoff_xy, touchdown_xy: (n_nodes + 1, n_feet, 2), world (x, y) [m] of the foot frame where that
-            crossing swing lifted off and where it lands (the plan's foothold); NaN where index is -1. The
-            foot's path between them: :func:`wbmpc.walking.ocp.swing_path`.
+        liftoff_xy: (n_nodes + 1, n_feet, 2), world (x, y) [m] of the foot frame where that crossing swing
+            lifted off; NaN where index is -1. It lands at the schedule's ``touchdown_position``; the foot's
+            path between them: :func:`wbmpc.walking.ocp.swing_path`.
         path_yaw: (n_nodes + 1, n_feet), the touchdown yaw [rad] there (the sole's heading); NaN elsewhere.
         feet: foot names of the columns.
     """
@@ -62,7 +62,6 @@ class CrossingSchedule:
     obstacles: tuple
     index: np.ndarray
     liftoff_xy: np.ndarray
-    touchdown_xy: np.ndarray
     path_yaw: np.ndarray
     feet: tuple[str, ...]
 
@@ -76,7 +75,7 @@ def crossing_schedule(plan: Any, schedule: ContactSchedule) -> CrossingSchedule 
         return None
     rows, n_feet = schedule.in_contact.shape
     index = np.full((rows, n_feet), -1, dtype=int)
-    liftoff, touchdown_xy = np.full((rows, n_feet, 2), np.nan), np.full((rows, n_feet, 2), np.nan)
+    liftoff = np.full((rows, n_feet, 2), np.nan)
     path_yaw = np.full((rows, n_feet), np.nan)
     obstacles: list = []
     for j, foot in enumerate(schedule.feet):
@@ -92,11 +91,11 @@ def crossing_schedule(plan: Any, schedule: ContactSchedule) -> CrossingSchedule 
                 obstacles.append(obstacle)
                 which = len(obstacles) - 1
             index[k, j] = which
-            liftoff[k, j], touchdown_xy[k, j] = step.crossing.liftoff, step.position[:2]
+            liftoff[k, j] = step.crossing.liftoff
             path_yaw[k, j] = step.yaw
     if not obstacles:
         return None
-    return CrossingSchedule(tuple(obstacles), index, liftoff, touchdown_xy, path_yaw, tuple(schedule.feet))
+    return CrossingSchedule(tuple(obstacles), index, liftoff, path_yaw, tuple(schedule.feet))
 
 
 class OcpReferenceStage:
