@@ -108,6 +108,11 @@ HORIZON_ENDS = ("rollout", "repeat")
 """Warm-start fills of the nodes entering at the end of the horizon (``RecedingHorizonMPC(horizon_end=)``)."""
 
 
+def _is_iteration_count(value) -> bool:
+    """Whether ``value`` is a solver iteration count: an integer >= 1 (a bool is not one)."""
+    return not isinstance(value, bool) and int(value) == value and value >= 1
+
+
 class RecedingHorizonMPC:
     """Receding-horizon solves of a shooting problem whose models the caller keeps up to date.
 
@@ -147,7 +152,7 @@ class RecedingHorizonMPC:
                  solver: MPCSolver | None = None, max_iterations: int = 1, cold_start_iterations: int = 20,
                  horizon_end: str = "repeat", time_budget: float | None = None, blas_threads: int | None = 1,
                  restart_after_failures: int | None = None):
-        if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or max_iterations < 1:
+        if not _is_iteration_count(max_iterations):
             raise ParameterError(f"max_iterations={max_iterations!r} must be an integer >= 1")
         if int(cold_start_iterations) != cold_start_iterations or cold_start_iterations < 1:
             raise ParameterError(f"cold_start_iterations={cold_start_iterations!r} must be an integer >= 1")
@@ -292,8 +297,7 @@ class RecedingHorizonMPC:
             max_iterations: FDDP iterations of this warm-started update, an integer >= 1; None =
                 ``self.max_iterations`` (a cold start runs ``cold_start_iterations`` either way).
         """
-        if max_iterations is not None and (isinstance(max_iterations, bool) or int(max_iterations) != max_iterations
-                                           or max_iterations < 1):
+        if max_iterations is not None and not _is_iteration_count(max_iterations):
             raise ParameterError(f"max_iterations={max_iterations!r} must be None or an integer >= 1")
         tic = time.perf_counter()
         with self._blas():
