@@ -36,6 +36,10 @@ def test_the_mode_switches_to_negotiation_within_the_lookahead_and_back_once_pas
     both_past = np.array([[0.7, 0.2], [0.62, -0.2]])
     assert mode.update(1.5, (BOX,), (0.66, 0.0), both_past, 0.0) == -1 and mode.mode == WALKING
     assert mode.switches == [(0.3, NEGOTIATION), (1.5, WALKING)]
+    # passed, the box is still avoided by the planner (not counted) until it is a lookahead behind the feet
+    assert mode.active == () and mode.avoided == (BOX,)
+    far_past = both_past + np.array([1.0, 0.0])  # the rearmost foot 1.07 m beyond the far edge
+    assert mode.update(4.0, (BOX,), (1.66, 0.0), far_past, 0.0) == 0 and mode.avoided == ()
     # along the heading: a robot turned away (heading +pi/2) does not negotiate the box ahead in x
     assert NegotiationMode(1.0, 0.3, 0.05).update(0.0, (BOX,), (0.0, 0.0), FEET, np.pi / 2) == 0
     assert NegotiationMode(0.0, 0.3, 0.05).update(0.0, (BOX,), (0.0, 0.0), FEET, 0.0) == 0  # lookahead 0: never
@@ -74,6 +78,24 @@ def test_the_planning_stage_plans_over_the_obstacles_of_a_negotiation_and_logs_t
     over = crossings.index >= 0
     assert over.any() and not np.any(over & schedule.in_contact)
     assert np.all(np.isfinite(crossings.liftoff_xy[over])) and np.all(np.isnan(crossings.liftoff_xy[~over]))
+
+
+def test_a_passed_obstacle_bounds_a_step_back_onto_it():
+    """After the crossing (both feet beyond the release line: walking again) a step back, commanded here by a
+    backwards velocity, lands beyond the box's far side, not on it (the H1 was planned a step back onto the box it
+    had just crossed with its DCM behind its feet, and fell)."""
+    robot, stage, x0 = _bolt_stage(negotiation_lookahead=1.0)
+    _, plain, _ = _bolt_stage(negotiation_lookahead=1.0)
+    contact = np.ones(2, dtype=bool)
+    box = Obstacle(np.array([-0.15, 0.0]), 0.0, 0.05, 0.6, 0.03)  # far edge 0.125 m behind both feet
+    for planning in (stage, plain):
+        planning.set_command(VelocityCommand(-0.3))
+    plan, _, record = stage.update(0.0, x0, contact, obstacles=(box,))
+    assert record["negotiation_mode"] == WALKING and record["obstacles_planned"] == 1.0
+    unbounded, _, _ = plain.update(0.0, x0, contact, obstacles=())
+    grown = box.grown(stage.planner.params.obstacle_margin - 1e-9)
+    assert np.any(grown.contains(unbounded.positions))  # without it the backward steps land on the box
+    assert not np.any(grown.contains(plan.positions))
 
 
 def test_without_obstacles_the_stage_plans_as_without_perception():

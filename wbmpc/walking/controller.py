@@ -189,10 +189,8 @@ class WalkingController:
             ok, status, iterations, cost, solve_time = False, "injected_failure", 0, np.nan, 0.0
             restart = False
         else:
-            negotiating = cfg.negotiation_max_iterations and record.get("negotiation_mode") == NEGOTIATION
             solution = self.mpc.update(t, x, reference.schedule, reference.com_terminal, reference.touchdown_depth,
-                                       reference.crossings,
-                                       max_iterations=cfg.negotiation_max_iterations if negotiating else None)
+                                       reference.crossings, max_iterations=self._iteration_budget(record))
             ok, status = bool(solution.ok), str(solution.status)
             restart = bool(solution.restart)
             record["mpc_prepared_used"] = float(getattr(self.mpc.problem, "prepared_used", 0))
@@ -222,6 +220,16 @@ class WalkingController:
             record["mpc_prepare_time"] = time.perf_counter() - tic
             self.timers.mpc_prepare += record["mpc_prepare_time"]
         return record
+
+    def _iteration_budget(self, record: dict[str, float]) -> int | None:
+        """FDDP iterations of this update: ``crossing_max_iterations`` while the horizon holds a crossing swing,
+        else ``negotiation_max_iterations`` while negotiating, else None (``max_iterations``); 0 means unset."""
+        cfg = self.config
+        if cfg.crossing_max_iterations and record.get("crossing_nodes", 0.0) > 0:
+            return cfg.crossing_max_iterations
+        if cfg.negotiation_max_iterations and record.get("negotiation_mode") == NEGOTIATION:
+            return cfg.negotiation_max_iterations
+        return None
 
     # ------------------------------------------------------------------ every tick
     def compute(self, t: float, measurement: Measurement) -> np.ndarray:

@@ -156,6 +156,10 @@ class WalkingControllerConfig:
             than walking does (a plateau, clearance barriers, a long step entering the horizon), and a
             warm-started update of a few iterations then stays far above the optimum (docs/ocp.md,
             "Solved to convergence, measured"); the budget goes where the problem changes.
+        crossing_max_iterations: FDDP iterations per MPC update while the OCP's horizon holds a swing over an
+            obstacle (``crossing_nodes`` > 0 in the replan record), an integer >= 1, or 0 (none: the negotiation's
+            or ``max_iterations``). It takes precedence over ``negotiation_max_iterations``: the approach walks
+            with the walking budget and only the updates that see the crossing pay for it.
     """
 
     n_nodes: int = 100
@@ -193,6 +197,7 @@ class WalkingControllerConfig:
     negotiation_release: float = 0.05
     negotiation_speed_max: float = float("inf")
     negotiation_max_iterations: int = 0
+    crossing_max_iterations: int = 0
 
     def __post_init__(self) -> None:
         for name in ("mpc_prepare", "interpolate", "feedback"):
@@ -258,10 +263,11 @@ class WalkingControllerConfig:
             raise ParameterError(f"first_stance_foot={self.first_stance_foot!r} must be 'left' or 'right'")
         if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
             raise ParameterError(f"max_iterations={self.max_iterations!r} must be an integer >= 1")
-        if isinstance(self.negotiation_max_iterations, bool) or not (
-                isinstance(self.negotiation_max_iterations, int) and self.negotiation_max_iterations >= 0):
-            raise ParameterError(f"negotiation_max_iterations={self.negotiation_max_iterations!r} must be 0 "
-                                 "(max_iterations) or an integer >= 1")
+        for name, fallback in (("negotiation_max_iterations", "max_iterations"),
+                               ("crossing_max_iterations", "the negotiation's or max_iterations")):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not (isinstance(value, int) and value >= 0):
+                raise ParameterError(f"{name}={value!r} must be 0 ({fallback}) or an integer >= 1")
         restart = self.mpc_restart_after_failures
         if restart is not None and (isinstance(restart, bool) or not isinstance(restart, int) or restart < 0):
             raise ParameterError(f"mpc_restart_after_failures={restart!r} must be None, 0 (never) or an integer >= 1")

@@ -195,7 +195,7 @@ class PlanningStage:
                 self._switch_planner(self._planner_after[1])
         self.slide.follow_if_sliding(slide, feet[stance_index, :2], bool(foot_in_contact[stance_index]))
         mode_switch = self.negotiation.update(t, obstacles, measured.com[:2], feet[:, :2], stance.yaw)
-        planned_obstacles = self.negotiation.active
+        planned_obstacles = self.negotiation.avoided
         command = self.planned_command
         record: dict[str, float] = {
             "stance_foot": float(stance_index),
