@@ -638,14 +638,15 @@ class FootstepSequencer:
             c, s = math.cos(yaw), math.sin(yaw)
             hax, hay = c * ax + s * ay, c * ay - s * ax  # the DCM growth in the heading frame
 
-            def solve(bounds, aim):
+            def solve(bounds, aim, lateral=1.0):
                 low = math.exp(omega * max(bounds[4], elapsed, duration_min))
                 high = max(math.exp(omega * bounds[5]), low)
                 bx_nom = bnx if aim is None else aim
+                by_nom = bny * lateral
                 dx, dy, g, hx, hy, b = solve_exact_scalars(
-                    0.0, 0.0, hax, hay, a1, a2, a3, l_nom, w_nom, gamma_nom, bx_nom, bny, *bounds[:4], low, high)
+                    0.0, 0.0, hax, hay, a1, a2, a3, l_nom, w_nom, gamma_nom, bx_nom, by_nom, *bounds[:4], low, high)
                 cost = a1 * ((dx - l_nom) ** 2 + (dy - w_nom) ** 2) + a2 * (g - gamma_nom) ** 2 \
-                    + a3 * ((hx - bx_nom) ** 2 + (hy - bny) ** 2)
+                    + a3 * ((hx - bx_nom) ** 2 + (hy - by_nom) ** 2)
                 return StepCandidate(dx, dy, g, hx, hy, b, cost, math.log(g) / omega)
 
             rx, ry = px - p0x, py - p0y
@@ -685,8 +686,8 @@ class FootstepSequencer:
                 chosen, changed = constraints.choose(
                     p0, yaw, (*problem.length_bounds, *problem.width_bounds, *problem.time_bounds),
                     self._candidate(problem, solution, to_heading, rotate),
-                    lambda bounds, aim, problem=problem, to_heading=to_heading: self._solve_bounded(
-                        problem, bounds, aim, to_heading, rotate),
+                    lambda bounds, aim, lateral=1.0, problem=problem, to_heading=to_heading: self._solve_bounded(
+                        problem, bounds, aim, to_heading, rotate, lateral),
                     liftoff if not steps else (steps[-2].position if len(steps) >= 2 else first_stance),
                     gait.step_length, float(problem.b_nominal[0]), None if steps else first_crossing)
                 if changed:
@@ -704,13 +705,16 @@ class FootstepSequencer:
             stance, p0, stance_start, elapsed = landing, position, touchdown, 0.0
         return steps
 
-    def _solve_bounded(self, problem: StepProblem, bounds, aim, to_heading: np.ndarray, rotate: bool) -> StepCandidate:
+    def _solve_bounded(self, problem: StepProblem, bounds, aim, to_heading: np.ndarray, rotate: bool,
+                       lateral: float = 1.0) -> StepCandidate:
         """The backend's solution of ``problem`` with the step bounds (ℓ_min, ℓ_max, w_min, w_max, T_min, T_max) and,
-        unless ``aim`` is None, the nominal DCM offset b_x = aim [m] (heading frame)."""
+        unless ``aim`` is None, the nominal DCM offset b_x = aim [m] (heading frame); the lateral one scaled by
+        ``lateral``."""
         bounded = dataclasses.replace(problem, length_bounds=(bounds[0], bounds[1]), width_bounds=(bounds[2], bounds[3]),
                                       time_bounds=(bounds[4], bounds[5]))
-        if aim is not None:
-            bounded = dataclasses.replace(bounded, b_nominal=np.array((aim, problem.b_nominal[1])))
+        if aim is not None or lateral != 1.0:
+            bx = problem.b_nominal[0] if aim is None else aim
+            bounded = dataclasses.replace(bounded, b_nominal=np.array((bx, problem.b_nominal[1] * lateral)))
         return self._candidate(bounded, self.backend.solve(bounded), to_heading, rotate)
 
     @staticmethod

@@ -118,6 +118,11 @@ class SequencerParams:
         obstacle_crossing_drift: κ_c [-] in [0, 1): a swing over an obstacle (the lead crossing, the trailing
             swing) ends with the DCM κ_c d further than the LIPM's, d its travel from lift-off along the heading
             (the swing leg's mass carried forward; "Crossing drift" in :mod:`sequencer.footholds`); 0: the LIPM's.
+        obstacle_lateral_aim_duration: T_lat [s], 0 (off) or in [t_nom, max(t_max, obstacle_step_duration_max)]:
+            the last step before an obstacle aims at the lateral DCM offset b_y,nom exp(-ω (T_lat - t_nom)) instead
+            of b_y,nom, the one from which a crossing step lasting T_lat ends at the nominal lateral offset and width
+            ("The lateral aim" in :mod:`sequencer.footholds`); 0: b_y,nom (a crossing longer than t_nom then
+            spreads the feet: the H1's lateral DCM bounded its crossing to 0.6 s, too short for the DCM to carry it).
         sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m],
             >= 0 (0: a point foot); sole_half_width: its half width [m], >= 0. The footholds keep the whole
             sole rectangle outside the grown footprints.
@@ -158,6 +163,7 @@ class SequencerParams:
     obstacle_aim_duration: float = 0.0
     obstacle_approach_distance: float = 0.0
     obstacle_crossing_drift: float = 0.0
+    obstacle_lateral_aim_duration: float = 0.0
     sole_front: float = 0.0
     sole_rear: float = 0.0
     sole_half_width: float = 0.0
@@ -233,6 +239,10 @@ class SequencerParams:
         if not (0.0 <= self.obstacle_crossing_drift < 1.0):
             raise ParameterError(f"obstacle_crossing_drift={self.obstacle_crossing_drift} must be in [0, 1) "
                                  f"(0: the LIPM's crossing)")
+        lateral = self.obstacle_lateral_aim_duration
+        if not (lateral == 0.0 or self.t_nom <= lateral <= crossing_max):
+            raise ParameterError(f"obstacle_lateral_aim_duration={lateral} s must be 0 (off) or in [t_nom={self.t_nom} s, "
+                                 f"max(t_max, obstacle_step_duration_max)={crossing_max} s]")
         self.check_velocity(self.v_x, self.v_y)
 
     # ------------------------------------------------------------------ derived values
@@ -275,7 +285,9 @@ class SequencerParams:
                                 trailing_double_support=self.obstacle_trailing_double_support,
                                 aim_duration=self.obstacle_aim_duration,
                                 approach_distance=self.obstacle_approach_distance,
-                                crossing_drift=self.obstacle_crossing_drift)
+                                crossing_drift=self.obstacle_crossing_drift,
+                                lateral_aim_fraction=math.exp(-self.omega * (self.obstacle_lateral_aim_duration - self.t_nom))
+                                if self.obstacle_lateral_aim_duration > 0.0 else 1.0)
 
     # ------------------------------------------------------------------ velocity commands
     def velocity_range(self) -> dict[str, tuple[float, float]]:

@@ -99,12 +99,13 @@ def test_the_plan_without_obstacles_or_past_them_is_bit_identical():
     _assert_plans_equal(planner.plan(0.1, stance, measured, COMMAND, obstacles=(behind, beside)), plain)
 
 
-def test_the_osqp_backend_chooses_the_same_footholds_as_the_exact_one():
+@pytest.mark.parametrize("lateral_aim", [0.0, 0.7])
+def test_the_osqp_backend_chooses_the_same_footholds_as_the_exact_one(lateral_aim):
     pytest.importorskip("osqp")
     obstacle = Obstacle(np.array([0.85, 0.0]), 0.0, 0.15, 1.2, 0.2)
     plans = []
     for backend in ("exact", "osqp"):
-        planner = DcmFootstepPlanner(H1, backend=backend)
+        planner = DcmFootstepPlanner(dataclasses.replace(H1, obstacle_lateral_aim_duration=lateral_aim), backend=backend)
         stance, measured = _start(planner)
         plans.append(planner.plan(0.0, stance, measured, COMMAND, obstacles=(obstacle,)))
     assert np.allclose(plans[0].positions, plans[1].positions, atol=2e-4)
@@ -360,6 +361,31 @@ def test_the_last_step_before_an_obstacle_aims_further_ahead_with_a_shorter_aim_
     assert _sole_overlaps(plans[0.5], box, H1.foothold_geometry()) == []
 
 
+def test_the_last_step_before_an_obstacle_aims_at_the_lateral_offset_of_a_long_crossing():
+    """obstacle_lateral_aim_duration T_lat: the last step before the box aims at the lateral DCM offset
+    b_y,nom exp(-ω (T_lat - t_nom)), the one a crossing lasting T_lat carries to the nominal lateral offset: that step
+    lands nearer its DCM (a smaller lateral offset at its touchdown) and the crossing after it is narrower; the
+    steps before are kept (the iterative backends: with the osqp backend's test)."""
+    box = Obstacle(np.array([1.09, 0.0]), 0.0, 0.1, 1.2, 0.1)
+    plans = {}
+    for lateral in (0.0, 0.7):
+        params = dataclasses.replace(H1, obstacle_lateral_aim_duration=lateral, obstacle_offset_tolerance=0.1)
+        planner = DcmFootstepPlanner(params)
+        stance, measured = _start(planner)
+        plans[lateral] = planner.plan(0.0, stance, measured, COMMAND, obstacles=(box,))
+    leads = {lateral: next(k for k, step in enumerate(plan.steps) if step.crossing is not None)
+             for lateral, plan in plans.items()}
+    assert leads[0.0] == leads[0.7]
+    last = leads[0.0] - 1
+    np.testing.assert_array_equal(plans[0.0].positions[:last], plans[0.7].positions[:last])
+    before, after = plans[0.0].steps[last].dcm_offset[1], plans[0.7].steps[last].dcm_offset[1]
+    fraction = np.exp(-H1.omega * (0.7 - H1.t_nom))
+    assert abs(after) < abs(before) - 0.02 and abs(after - fraction * before) < 0.02, (before, after, fraction)
+    width = {lateral: abs(plan.positions[leads[0.0], 1] - plan.positions[last, 1]) for lateral, plan in plans.items()}
+    assert width[0.7] < width[0.0] - 0.02, width
+    assert _sole_overlaps(plans[0.7], box, H1.foothold_geometry()) == []
+
+
 def test_trailing_settle_and_aim_duration_bad_input():
     for value in (0.05, 6.0, float("nan")):
         with pytest.raises(ParameterError, match="obstacle_trailing_double_support"):
@@ -367,6 +393,9 @@ def test_trailing_settle_and_aim_duration_bad_input():
     for value in (0.2, 0.9, float("nan")):  # the crossing durations are [0.5, 0.8] s
         with pytest.raises(ParameterError, match="obstacle_aim_duration"):
             dataclasses.replace(H1, obstacle_aim_duration=value)
+    for value in (0.2, 0.9, -1.0, float("nan")):  # [t_nom, 0.8] s
+        with pytest.raises(ParameterError, match="obstacle_lateral_aim_duration="):
+            dataclasses.replace(H1, obstacle_lateral_aim_duration=value)
 
 
 TWO_STEPS = dataclasses.replace(H1, obstacle_step_duration_max=1.1, obstacle_swing_length_max=0.7)

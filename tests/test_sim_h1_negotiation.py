@@ -70,11 +70,28 @@ def test_h1_gives_the_negotiation_its_own_fddp_iterations(distance, negotiating)
     assert warm.size >= 4 and warm.max() == (4 if negotiating else 2), warm
 
 
-def test_negotiation_max_iterations_is_zero_or_a_positive_integer():
+def test_h1_gives_the_updates_that_see_a_crossing_their_own_fddp_iterations():
+    """``crossing_max_iterations``: the warm-started updates whose horizon holds a crossing swing run up to that
+    many FDDP iterations, the others (negotiating or not) the preset's ``max_iterations``."""
+    box = StepOverBox(height=0.1, depth=0.1, distance=0.45, speed=0.3)
+    preset = load_walking_preset("h1", {"crossing_max_iterations": 5, "negotiation_max_iterations": 3})
+    controller = KnownObstacleController(preset, (box.obstacle(),))
+    log = run_scenario("step_over_box", robot="h1", duration=0.3, controller=controller, progress=False,
+                       height=box.height, depth=box.depth, distance=box.distance, speed=box.speed)
+    assert log.status == "completed", log.error
+    replans = log.replans
+    warm = replans["mpc_iterations"][1:]  # the first update is the cold start
+    seeing = replans["crossing_nodes"][1:] > 0
+    assert seeing.any() and (~seeing).any(), replans["crossing_nodes"]
+    assert warm[seeing].max() == 5 and warm[~seeing].max() == 3, (warm, seeing)
+
+
+@pytest.mark.parametrize("name", ["negotiation_max_iterations", "crossing_max_iterations"])
+def test_the_iteration_budgets_are_zero_or_a_positive_integer(name):
     from wbmpc.errors import ParameterError
     from wbmpc.walking.controller_config import WalkingControllerConfig
 
-    assert WalkingControllerConfig(negotiation_max_iterations=0).negotiation_max_iterations == 0
+    assert getattr(WalkingControllerConfig(**{name: 0}), name) == 0
     for bad in (-1, 2.5, True):
-        with pytest.raises(ParameterError, match=f"negotiation_max_iterations={bad!r} must be 0"):
-            WalkingControllerConfig(negotiation_max_iterations=bad)
+        with pytest.raises(ParameterError, match=f"{name}={bad!r} must be 0"):
+            WalkingControllerConfig(**{name: bad})
