@@ -70,20 +70,18 @@ def test_h1_gives_the_negotiation_its_own_fddp_iterations(distance, negotiating)
     assert warm.size >= 4 and warm.max() == (4 if negotiating else 2), warm
 
 
-def test_h1_gives_the_updates_that_see_a_crossing_their_own_fddp_iterations():
-    """``crossing_max_iterations``: the warm-started updates whose horizon holds a crossing swing run up to that
-    many FDDP iterations, the others (negotiating or not) the preset's ``max_iterations``."""
-    box = StepOverBox(height=0.1, depth=0.1, distance=0.45, speed=0.3)
-    preset = load_walking_preset("h1", {"crossing_max_iterations": 5, "negotiation_max_iterations": 3})
-    controller = KnownObstacleController(preset, (box.obstacle(),))
-    log = run_scenario("step_over_box", robot="h1", duration=0.3, controller=controller, progress=False,
-                       height=box.height, depth=box.depth, distance=box.distance, speed=box.speed)
-    assert log.status == "completed", log.error
-    replans = log.replans
-    warm = replans["mpc_iterations"][1:]  # the first update is the cold start
-    seeing = replans["crossing_nodes"][1:] > 0
-    assert seeing.any() and (~seeing).any(), replans["crossing_nodes"]
-    assert warm[seeing].max() == 5 and warm[~seeing].max() == 3, (warm, seeing)
+def test_the_updates_that_see_a_crossing_get_their_own_fddp_iterations():
+    """``crossing_max_iterations``: an update whose horizon holds a crossing swing runs up to that many FDDP iterations
+    (before ``negotiation_max_iterations``); the others the negotiation's while negotiating, else the preset's."""
+    from wbmpc.walking.controller import WalkingController
+
+    for crossing, negotiation in ((5, 3), (5, 0), (0, 3), (0, 0)):
+        preset = load_walking_preset("h1", {"crossing_max_iterations": crossing,
+                                            "negotiation_max_iterations": negotiation})
+        budget = WalkingController(preset)._iteration_budget
+        assert budget({"crossing_nodes": 12.0, "negotiation_mode": NEGOTIATION}) == (crossing or negotiation or None)
+        assert budget({"crossing_nodes": 0.0, "negotiation_mode": NEGOTIATION}) == (negotiation or None)
+        assert budget({"crossing_nodes": 0.0, "negotiation_mode": 0.0}) is None
 
 
 @pytest.mark.parametrize("name", ["negotiation_max_iterations", "crossing_max_iterations"])
