@@ -152,8 +152,8 @@ class DcmFootstepPlanner:
         sole rectangle (``params.sole_*``), lands outside their footprints grown by ``params.obstacle_margin``,
         before or beyond them (:mod:`sequencer.footholds`); a step whose swing passes over one carries its
         :class:`~sequencer.footholds.Crossing` (from ``stance.swing_liftoff`` for the swing in progress). The
-        step of a stance keeps the before/beyond decision of the stance's first plan with obstacles (made at the
-        touchdown that began it, or when the obstacle is first seen). With ``params.obstacle_double_support`` > 0 (a quasi-static crossing) a crossing swing
+        step of a stance keeps a crossing once planned; a step before the obstacle may become the crossing until
+        its swing begins, and the swing in progress keeps the decision it lifted off with. With ``params.obstacle_double_support`` > 0 (a quasi-static crossing) a crossing swing
         lifts off after that long a double support, and the stance that begins with its touchdown resumes the walk
         with another such step (``first_resume`` of :meth:`FootstepSequencer.plan`). Empty: the plan without
         obstacles, bit for bit.
@@ -175,14 +175,16 @@ class DcmFootstepPlanner:
         if t < stance.t_start:  # start from standing (see above)
             dcm = self.stance_start_dcm(stance, command)
             t = stance.t_start
-        # the step of this stance keeps the before/beyond decision of the stance's first plan: flipped mid-swing
-        # (the measured DCM crossing the tolerance), the H1's foot, low and before the box, was sent beyond it;
-        # flipped in the double support (decided at lift-off), its foot already moving into a crossing swing was
-        # called back to a step in place and landed 10 cm long, on the box's edge
+        # the step of this stance keeps a crossing once planned: called back in the double support to a step in
+        # place (the measured DCM crossing the tolerance), the H1's foot, already rising into the crossing swing,
+        # landed 10 cm long on the box's edge; a step before the obstacle may still become the crossing until the
+        # swing begins (the DCM run on far enough: the H1's crossings came from there). The swing in progress keeps
+        # the decision it lifted off with: flipped mid-swing, the H1's foot, low and before the box, was sent beyond it
         key = (stance.foot, stance.t_start)
-        deciding = len(obstacles) > 0
-        kept = self._swing_decision[2] if deciding and self._swing_decision is not None \
+        decided = self._swing_decision[2] if len(obstacles) > 0 and self._swing_decision is not None \
             and self._swing_decision[:2] == key else None
+        swinging = t >= stance.t_start + self.params.double_support
+        kept = decided if swinging else (True if decided else None)
         # a stance that began with the touchdown of a settled crossing swing resumes the walk with a settled step
         if self._resume is None or self._resume[:2] != key:
             landed = self._landing is not None and self._landing[0] == stance.foot and self._landing[1]
@@ -193,7 +195,7 @@ class DcmFootstepPlanner:
             corrections=self.corrections, obstacles=obstacles, liftoff=stance.swing_liftoff, first_crossing=kept,
             first_resume=self._resume[2],
         )
-        if deciding and kept is None:
+        if len(obstacles) > 0 and kept is None:
             self._swing_decision = (*key, plan.steps[0].crossing is not None)
         first = plan.steps[0]
         self._landing = (first.foot, first.crossing is not None and first.settle_dcm is not None)

@@ -185,39 +185,33 @@ def test_the_alip_planner_refuses_obstacles():
         planner.plan(0.0, stance, measured, VelocityCommand(0.2), obstacles=(Obstacle(np.ones(2), 0.0, 0.1, 1, 0.1),))
 
 
-def test_the_step_of_a_stance_keeps_its_before_or_beyond_decision():
-    """Decided by the stance's first plan (at its touchdown), the step does not flip from before the obstacle to
-    beyond it when the measured DCM moves on (nor back), in the double support or in the swing."""
+def test_a_planned_crossing_is_kept_and_the_swing_keeps_its_decision():
+    """A crossing once planned for the step of a stance is kept, in the double support and in the swing, when the
+    measured DCM falls back; a step before the obstacle becomes the crossing while still in the double support when
+    the DCM runs on far enough, and the swing in progress keeps the decision it lifted off with (no flip from
+    before the obstacle to beyond it mid-swing)."""
     box = Obstacle(np.array([0.7425, 0.0]), 0.0, 0.1, 1.2, 0.1)  # near side 0.6925 m: ℓ <= 0.1 m stays before
-    planner = DcmFootstepPlanner(H1)
     stance = StanceState("left", np.array([0.45, 0.203]), 0.0, 0.0, swing_liftoff=np.array([0.33, -0.203]))
 
-    def first_step(t, dcm_ahead):
+    def first_step(planner, t, dcm_ahead):
         dcm = stance.position + np.array([dcm_ahead, -0.09])
         plan = planner.plan(t, stance, ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm), COMMAND,
                             obstacles=(box,))
         return plan.steps[0]
 
-    # the touchdown with the DCM on the stance foot: the crossing is late, one more step before the box
-    late = first_step(0.0, 0.0)
+    planner = DcmFootstepPlanner(H1)  # (a fresh planner stays before the box up to a DCM 8 cm ahead, crosses at 10)
+    late = first_step(planner, 0.0, 0.06)  # the touchdown: the crossing is late, one more step before the box
     assert late.crossing is None and late.position[0] + H1.sole_front <= 0.6925 - H1.obstacle_margin + 1e-9
-    assert first_step(0.05, 0.3).crossing is None  # the DCM far ahead in the double support: the decision is kept
-    assert first_step(0.2, 0.3).crossing is None  # and in the swing
-    fresh = DcmFootstepPlanner(H1)  # a planner deciding at that state crosses
-    stance_fresh = dataclasses.replace(stance)
-    dcm = stance_fresh.position + np.array([0.3, -0.09])
-    crossing = fresh.plan(0.2, stance_fresh, ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm), COMMAND,
-                          obstacles=(box,)).steps[0]
-    assert crossing.crossing is not None
-    # ... and keeps crossing when the DCM falls back later in the stance (6 cm ahead: a fresh plan stays before)
-    back = stance_fresh.position + np.array([0.06, -0.09])
-    kept = fresh.plan(0.25, stance_fresh, ReducedState(np.array([*back, 0.97]), np.zeros(3), back), COMMAND,
-                      obstacles=(box,)).steps[0]
-    assert kept.crossing is not None
-    # a new stance decides afresh (before the box)
+    assert first_step(planner, 0.05, 0.3).crossing is not None  # the DCM ran on in the double support: it crosses
+    assert first_step(planner, 0.08, 0.06).crossing is not None  # and keeps crossing when the DCM falls back
+    assert first_step(planner, 0.2, 0.06).crossing is not None  # in the swing too
+    planner = DcmFootstepPlanner(H1)
+    assert first_step(planner, 0.12, 0.06).crossing is None  # lifted off before the box
+    assert first_step(planner, 0.2, 0.3).crossing is None  # the DCM far ahead now: the swing keeps its decision
     next_stance = StanceState("left", np.array([0.45, 0.203]), 0.0, 1.0, swing_liftoff=np.array([0.33, -0.203]))
-    assert fresh.plan(1.0, next_stance, ReducedState(np.array([*back, 0.97]), np.zeros(3), back), COMMAND,
-                      obstacles=(box,)).steps[0].crossing is None
+    dcm = next_stance.position + np.array([0.3, -0.09])  # a new stance decides afresh
+    assert planner.plan(1.0, next_stance, ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm), COMMAND,
+                        obstacles=(box,)).steps[0].crossing is not None
 
 
 def test_a_quasi_static_crossing_settles_the_dcm_before_each_crossing_swing():
