@@ -71,6 +71,19 @@ LIPM chain b_{k-1} = (a / n + b_k) / γ_nom ending at the last step's aim b_n
 (:meth:`FootholdConstraints.last_step_aim`, eq. 1b of each step): the crossing begins at the offset it
 needs after even steps, not after a leftover one.
 
+**The crossing's centre of pressure.** The LIPM pivots on the foothold; a flat foot's centre of pressure can move
+to its heel, and a whole-body controller moves it there to carry a long step (the H1 crossed the box from a DCM
+6 cm ahead of its stance foot, which the point-foot LIPM says cannot carry a 0.55 m crossing within 0.8 s; its
+planner then kept adding steps in place before the box while the DCM ran on). With ``obstacle_crossing_cop``
+δ > 0 the lead crossing (the step from before an obstacle to beyond it) pivots δ behind its stance foothold
+along the heading (not the trailing swing: its step from the lead foot is short, and a pivot behind would carry the
+DCM away from it): eq. 1b from that pivot,
+ξ_T - p_T = (ξ_0 - p_0 + δ) γ - (ℓ + δ), solved as the step QP of the step ℓ + δ from the initial offset
+(ξ_0 - p_0) + δ (its length bounds and nominal length shifted by δ); the candidate keeps δ
+(:attr:`StepCandidate.cop`), the plan's CoM prediction pivots there (``PlannedStep.cop_offset`` of the stance), and
+the last step before an obstacle aims at the offset from which that crossing reaches its aim,
+(ℓ_c + δ + b_c) exp(-ω T_c,aim) - δ (at least the nominal offset).
+
 **The lateral aim.** A crossing step lasts longer than a walking step (T_c against t_nom), and the lateral DCM
 offset it starts from grows by exp(ω T_c), not exp(ω t_nom): from the nominal offset b_y,nom the crossing spreads
 the feet (on the H1 a 0.6 s crossing lands 0.2 m wider than the nominal width, and the QP's lateral cost bounded
@@ -140,6 +153,9 @@ class FootholdGeometry:
         crossing_drift: κ_c [-] >= 0: a swing over an obstacle ends with the DCM κ_c d further along the heading than
             the LIPM's, d [m] its travel from lift-off to touchdown along the heading (the swing leg's mass carried
             forward: "Crossing drift" in the module docstring); 0: the LIPM's.
+        crossing_cop: δ [m] >= 0: the lead crossing step is planned with the centre of pressure δ behind its
+            stance foothold along the heading ("The crossing's centre of pressure" in the module docstring); 0: the
+            foothold.
         lateral_aim_fraction: the last step before an obstacle aims at this fraction of the nominal lateral DCM
             offset, exp(-ω (T_lat - t_nom)) in (0, 1] ("The lateral aim" in the module docstring); 1: the nominal.
         approach_distance: > 0: within this distance [m] of the last foothold before an obstacle the walk must
@@ -164,6 +180,7 @@ class FootholdGeometry:
     approach_distance: float = 0.0
     crossing_drift: float = 0.0
     lateral_aim_fraction: float = 1.0
+    crossing_cop: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -189,7 +206,8 @@ class StepCandidate:
     Attributes:
         dx, dy: the step p_T - p_0 (heading frame) [m]; gamma: exp(ω T) [-]; hx, hy: the DCM offset at
         touchdown (heading frame) [m]; bits: active-inequality bits (sequencer.step_qp); objective: the
-        QP cost f [-]; duration: T [s].
+        QP cost f [-]; duration: T [s]; cop: δ [m], the centre of pressure behind the
+        stance foothold along the heading the step was planned with (0: the foothold).
     """
 
     dx: float
@@ -200,6 +218,7 @@ class StepCandidate:
     bits: int
     objective: float
     duration: float
+    cop: float = 0.0
 
 
 StepBounds = tuple[float, float, float, float, float, float]
@@ -444,7 +463,8 @@ class FootholdConstraints:
         (:meth:`swing_solve`; ``lift_along``: its lift-off along the heading from this stance [m], None: unknown)."""
         if far is None and not (crossing and self.geometry.swing_length_max > 0.0):
             if crossing:
-                return self.swing_solve(solve, bounds, None, offset_nominal, lift_along), bounds, None
+                return self.swing_solve(solve, bounds, None, offset_nominal, lift_along,
+                                        self.geometry.crossing_cop), bounds, None
             return solve(bounds, None), bounds, None
         sign = 1.0 if step_length_nominal > 0.0 else -1.0
         foothold = bounds[1] if sign > 0.0 else bounds[0]
@@ -452,7 +472,7 @@ class FootholdConstraints:
         for _ in range(3):
             if far is None:  # the crossing itself
                 aim = self._crossing_aim(abs(foothold), sign, step_length_nominal, offset_nominal)
-                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along)
+                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along, self.geometry.crossing_cop)
             else:  # the last step before it: at least the nominal offset; the crossing lifts off this stance
                 aim = self.last_step_aim(abs(far - foothold), sign, step_length_nominal, offset_nominal,
                                          travel=abs(far))
@@ -461,34 +481,37 @@ class FootholdConstraints:
         return candidate, bounds, aim
 
     def swing_solve(self, solve, bounds: StepBounds, aim: float | None, offset_nominal: float,
-                    lift_along: float | None) -> StepCandidate:
+                    lift_along: float | None, cop: float = 0.0) -> StepCandidate:
         """``solve(bounds, aim)`` for a swing over an obstacle with the crossing drift κ_c d ("Crossing drift" in
         the module docstring; d = ℓ - ``lift_along`` [m], the swing's signed travel along the heading, ℓ with
         the lift-off unknown): the QP's LIPM offset aimed at b - κ_c d (b = ``aim``, or ``offset_nominal`` for
         None), the candidate's offset h + κ_c d (two fixed-point passes: d moves with the foothold). κ_c = 0:
-        ``solve(bounds, aim)``."""
+        ``solve(bounds, aim)``. Every solve pivots ``cop`` [m] behind the stance foothold (the lead crossing's
+        ``crossing_cop``)."""
         kappa = self.geometry.crossing_drift
-        candidate = solve(bounds, aim)
+        candidate = solve(bounds, aim, cop=cop)
         if kappa <= 0.0:
             return candidate
         target = offset_nominal if aim is None else aim
         drift = 0.0
         for _ in range(2):
             drift = kappa * (candidate.dx - (0.0 if lift_along is None else lift_along))
-            candidate = solve(bounds, target - drift)
+            candidate = solve(bounds, target - drift, cop=cop)
         return replace(candidate, hx=candidate.hx + drift)
 
     def last_step_aim(self, crossing_length: float, sign: float, step_length_nominal: float,
                       offset_nominal: float, travel: float = 0.0) -> float:
         """b_x [m], heading frame: the DCM offset the last step before an obstacle aims at, from which the crossing
         step of ``crossing_length`` [m] reaches its own aim (b_c, or the nominal offset without a travel bound)
-        within T_c,aim, and at least the nominal offset: sign max((ℓ_c + sign b_c - κ_c d_c) exp(-ω T_c,aim),
-        sign b_nom), d_c = ``travel`` [m] the crossing swing's travel from its lift-off (the crossing drift)."""
+        within T_c,aim, and at least the nominal offset: sign max((ℓ_c + δ + sign b_c - κ_c d_c) exp(-ω T_c,aim) - δ,
+        sign b_nom), d_c = ``travel`` [m] the crossing swing's travel from its lift-off (the crossing drift), δ the
+        crossing's centre of pressure behind its stance foothold (``crossing_cop``)."""
         decay = math.exp(-self.omega * (self.geometry.aim_duration or self.geometry.step_duration_max))
         target = self._crossing_aim(crossing_length, sign, step_length_nominal, offset_nominal) \
             if self.geometry.swing_length_max > 0.0 else offset_nominal
         drift = self.geometry.crossing_drift * abs(travel)
-        return sign * max((crossing_length + sign * target - drift) * decay, sign * offset_nominal)
+        cop = self.geometry.crossing_cop
+        return sign * max((crossing_length + cop + sign * target - drift) * decay - cop, sign * offset_nominal)
 
     def approach(self, p0, yaw: float, width_bounds: tuple[float, float],
                  step_length_nominal: float) -> tuple[float, float] | None:

@@ -48,6 +48,7 @@ from wbmpc.errors import ParameterError
 # the obstacle options only the 'exact' backend plans: (SequencerParams field, its value's unit and what it plans)
 EXACT_ONLY_OPTIONS = (("obstacle_double_support", "s (a quasi-static crossing)"),
                       ("obstacle_trailing_double_support", "s"),
+                      ("obstacle_crossing_cop", "m (the crossing's centre of pressure)"),
                       ("obstacle_approach_distance", "m (the even approach)"))
 _ACTIVE_NAMES = tuple(tuple(CONSTRAINT_NAMES[i] for i in range(6) if (bits >> i) & 1) for bits in range(64))
 
@@ -461,10 +462,11 @@ class FootstepSequencer:
                     self.backend_name,
                 )
         if self.backend_name == "exact":
-            steps = self._plan_exact(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate,
+            steps, stance_cop = self._plan_exact(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate,
                                      gait.step_length, per_stance, constraints, liftoff, first_crossing,
                                      t - t_stance_start, first_resume)
         else:
+            stance_cop = None
             steps = self._plan_backend(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate, gait,
                                        constraints, liftoff, first_crossing)
         if constraints is not None:
@@ -472,13 +474,15 @@ class FootstepSequencer:
         return FootstepPlan(
             t0=t, stance_foot=stance_foot, stance_position=p0.copy(), dcm_measured=dcm.copy(), omega=self._omega,
             steps=tuple(steps), t_stance_start=t_stance_start, horizon=params.horizon, com_height=params.z_c,
-            stance_yaw=stance_yaw, double_support=params.double_support, feet=FEET,
+            stance_yaw=stance_yaw, double_support=params.double_support, feet=FEET, stance_cop_offset=stance_cop,
         )
 
     def _plan_exact(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, l_nom, per_stance,
                     constraints: FootholdConstraints | None = None, liftoff=None,
                     first_crossing: bool | None = None, elapsed_true: float | None = None,
-                    first_resume: bool = False) -> list[PlannedStep]:
+                    first_resume: bool = False) -> tuple[list[PlannedStep], np.ndarray | None]:
+        """The steps of the 'exact' backend and the centre of pressure's offset from the current stance foothold
+        (world (x, y) [m], None: the foothold) its swing is planned with."""
         params = self.params
         omega = self._omega
         elapsed_true = elapsed if elapsed_true is None else elapsed_true
@@ -489,6 +493,7 @@ class FootstepSequencer:
         p0_first = (p0x, p0y)
         zx, zy = float(dcm[0]), float(dcm[1])
         steps, vectors = [], []  # (foot, touchdown, stance start, active bits, yaw), (p_T, b_T, zeta_T)
+        pivots = []  # the centre of pressure's offset from each stance's foothold (world (x, y) [m]) or None
         halt = constraints.geometry.halt_double_support if constraints is not None else 0.0
         # a settle before the trailing crossing swing (and the step resuming the walk after it) only
         halt_trailing = constraints.geometry.trailing_double_support if constraints is not None else 0.0
@@ -496,7 +501,7 @@ class FootstepSequencer:
         for _ in range(self._max_steps):
             lift = liftoff if not steps else (vectors[-2][:2] if len(steps) >= 2 else p0_first)
             cross_kept = None if steps else first_crossing
-            px, py, gamma, bx, by, bits = self._exact_step(
+            px, py, gamma, bx, by, bits, cop = self._exact_step(
                 p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom, constraints, lift, cross_kept,
                 approach=self._approach(p0x, p0y, yaw, stance, per_stance, l_nom, constraints))
             settle, start_qp, own_halt = None, stance_start, 0.0
@@ -544,10 +549,11 @@ class FootstepSequencer:
                         step = self._exact_step(p0x, p0y, *qz, q_elapsed, yaw, rotate, stance, per_stance, l_nom,
                                                 constraints, lift, True, duration_min=t_min,
                                                 length_min=c * (tx - p0x) + s * (ty - p0y))
-                    px, py, gamma, bx, by, bits = step
+                    px, py, gamma, bx, by, bits, cop = step
                 # quasi-static: the walk resumes after the trailing crossing (the step after the lead crosses too);
                 # a trailing settle alone: after the settled trailing crossing
                 resume_next = crosses if halt > 0.0 else (trailing and own_halt > 0.0)
+            pivots.append((-cop * math.cos(yaw), -cop * math.sin(yaw)) if cop > 0.0 else None)
             duration = math.log(gamma) / omega
             touchdown = max(start_qp + duration, t) if settle is not None else start_qp + duration
             yaw = yaw + yaw_rate * (duration if settle is None else touchdown - stance_start)
@@ -559,13 +565,17 @@ class FootstepSequencer:
                 break
             stance, p0x, p0y, stance_start, elapsed, elapsed_true = landing, px, py, touchdown, 0.0, 0.0
         values = np.array(vectors)  # one array for all steps: their vectors are rows of it
-        return [
-            PlannedStep(landing, values[k, 0:2], touchdown, values[k, 2:4], values[k, 4:6], start, _ACTIVE_NAMES[bits], yaw)
+        pivots.append(None)  # the stance after the last step: no swing planned in it
+        cop_offsets = [None if pivot is None else np.array(pivot) for pivot in pivots]
+        planned = [
+            PlannedStep(landing, values[k, 0:2], touchdown, values[k, 2:4], values[k, 4:6], start, _ACTIVE_NAMES[bits],
+                        yaw, cop_offset=cop_offsets[k + 1])
             if settle is None else
-            PlannedStep(landing, values[k, 0:2], touchdown, values[k, 2:4], values[k, 4:6], start, _ACTIVE_NAMES[bits], yaw,
-                        double_support=own, settle_dcm=np.array(settle))
+            PlannedStep(landing, values[k, 0:2], touchdown, values[k, 2:4], values[k, 4:6], start, _ACTIVE_NAMES[bits],
+                        yaw, cop_offset=cop_offsets[k + 1], double_support=own, settle_dcm=np.array(settle))
             for k, (landing, touchdown, start, bits, yaw, settle, own) in enumerate(steps)
         ]
+        return planned, cop_offsets[0]
 
     def _approach(self, p0x, p0y, yaw, stance, per_stance, l_nom,
                   constraints: FootholdConstraints | None) -> tuple[float, float] | None:
@@ -593,7 +603,7 @@ class FootstepSequencer:
     def _exact_step(self, p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom,
                     constraints: FootholdConstraints | None, lift, cross, duration_min: float = 0.0,
                     length_min: float | None = None, approach: tuple[float, float] | None = None) -> tuple:
-        """(p_x, p_y, γ, b_x, b_y, active bits) of one step QP (closed form) from the stance foothold (p0x, p0y)
+        """(p_x, p_y, γ, b_x, b_y, active bits, δ) of one step QP (closed form) from the stance foothold (p0x, p0y)
         and the DCM (zx, zy) ``elapsed`` [s] into the stance (world frame [m]), in the heading frame of ``yaw``
         [rad] (``rotate``: else the world frame is the heading frame), with its foothold outside the obstacles
         of ``constraints`` (``lift``: where the swinging foot lifted off; ``cross``: the before/beyond decision
@@ -634,20 +644,24 @@ class FootstepSequencer:
                 p0x, p0y, ax, ay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny,
                 l_min, l_max, w_lo, w_hi, g_lo, g_hi,
             )
+        cop = 0.0  # the centre of pressure behind the stance foothold the step was planned with [m]
         if constraints is not None:  # footholds outside the obstacles (sequencer.footholds)
             c, s = math.cos(yaw), math.sin(yaw)
             hax, hay = c * ax + s * ay, c * ay - s * ax  # the DCM growth in the heading frame
 
-            def solve(bounds, aim, lateral=1.0):
+            def solve(bounds, aim, lateral=1.0, cop=0.0):
                 low = math.exp(omega * max(bounds[4], elapsed, duration_min))
                 high = max(math.exp(omega * bounds[5]), low)
                 bx_nom = bnx if aim is None else aim
                 by_nom = bny * lateral
+                # the centre of pressure cop [m] behind the foothold: the step QP of ℓ + cop from the offset to it
                 dx, dy, g, hx, hy, b = solve_exact_scalars(
-                    0.0, 0.0, hax, hay, a1, a2, a3, l_nom, w_nom, gamma_nom, bx_nom, by_nom, *bounds[:4], low, high)
+                    0.0, 0.0, hax + cop * decay, hay, a1, a2, a3, l_nom + cop, w_nom, gamma_nom, bx_nom, by_nom,
+                    bounds[0] + cop, bounds[1] + cop, bounds[2], bounds[3], low, high)
+                dx -= cop
                 cost = a1 * ((dx - l_nom) ** 2 + (dy - w_nom) ** 2) + a2 * (g - gamma_nom) ** 2 \
                     + a3 * ((hx - bx_nom) ** 2 + (hy - by_nom) ** 2)
-                return StepCandidate(dx, dy, g, hx, hy, b, cost, math.log(g) / omega)
+                return StepCandidate(dx, dy, g, hx, hy, b, cost, math.log(g) / omega, cop)
 
             rx, ry = px - p0x, py - p0y
             nominal = StepCandidate(c * rx + s * ry, c * ry - s * rx, gamma, c * bx + s * by, c * by - s * bx,
@@ -658,8 +672,8 @@ class FootstepSequencer:
             if changed:
                 px, py = p0x + (c * chosen.dx - s * chosen.dy), p0y + (s * chosen.dx + c * chosen.dy)
                 bx, by = c * chosen.hx - s * chosen.hy, s * chosen.hx + c * chosen.hy
-                gamma, bits = chosen.gamma, chosen.bits
-        return px, py, gamma, bx, by, bits
+                gamma, bits, cop = chosen.gamma, chosen.bits, chosen.cop
+        return px, py, gamma, bx, by, bits, cop
 
     def _plan_backend(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, gait,
                       constraints: FootholdConstraints | None = None, liftoff=None,
@@ -686,8 +700,8 @@ class FootstepSequencer:
                 chosen, changed = constraints.choose(
                     p0, yaw, (*problem.length_bounds, *problem.width_bounds, *problem.time_bounds),
                     self._candidate(problem, solution, to_heading, rotate),
-                    lambda bounds, aim, lateral=1.0, problem=problem, to_heading=to_heading: self._solve_bounded(
-                        problem, bounds, aim, to_heading, rotate, lateral),
+                    lambda bounds, aim, lateral=1.0, cop=0.0, problem=problem, to_heading=to_heading:
+                    self._solve_bounded(problem, bounds, aim, to_heading, rotate, lateral),  # cop: exact backend only
                     liftoff if not steps else (steps[-2].position if len(steps) >= 2 else first_stance),
                     gait.step_length, float(problem.b_nominal[0]), None if steps else first_crossing)
                 if changed:

@@ -118,6 +118,11 @@ class SequencerParams:
         obstacle_crossing_drift: κ_c [-] in [0, 1): a swing over an obstacle (the lead crossing, the trailing
             swing) ends with the DCM κ_c d further than the LIPM's, d its travel from lift-off along the heading
             (the swing leg's mass carried forward; "Crossing drift" in :mod:`sequencer.footholds`); 0: the LIPM's.
+        obstacle_crossing_cop: δ [m] in [0, 0.2): the lead crossing step (from before an obstacle to beyond it) is
+            planned with the centre of pressure δ behind its stance foothold along the heading (a flat foot's heel:
+            the LIPM pivots there and carries the DCM further, ("The crossing's centre of pressure" in
+            :mod:`sequencer.footholds`; the 'exact' backend only); 0: the foothold (a point foot's). The plan's CoM
+            prediction pivots there too (``PlannedStep.cop_offset``), so the OCP's terminal CoM follows.
         obstacle_lateral_aim_duration: T_lat [s], 0 (off) or in [t_nom, max(t_max, obstacle_step_duration_max)]:
             the last step before an obstacle aims at the lateral DCM offset b_y,nom exp(-ω (T_lat - t_nom)) instead
             of b_y,nom, the one from which a crossing step lasting T_lat ends at the nominal lateral offset and width
@@ -164,6 +169,7 @@ class SequencerParams:
     obstacle_approach_distance: float = 0.0
     obstacle_crossing_drift: float = 0.0
     obstacle_lateral_aim_duration: float = 0.0
+    obstacle_crossing_cop: float = 0.0
     sole_front: float = 0.0
     sole_rear: float = 0.0
     sole_half_width: float = 0.0
@@ -239,6 +245,9 @@ class SequencerParams:
         if not (0.0 <= self.obstacle_crossing_drift < 1.0):
             raise ParameterError(f"obstacle_crossing_drift={self.obstacle_crossing_drift} must be in [0, 1) "
                                  f"(0: the LIPM's crossing)")
+        if not (0.0 <= self.obstacle_crossing_cop < 0.2):
+            raise ParameterError(f"obstacle_crossing_cop={self.obstacle_crossing_cop} m must be in [0, 0.2) m "
+                                 f"(0: the foothold, a point foot's centre of pressure)")
         lateral = self.obstacle_lateral_aim_duration
         if not (lateral == 0.0 or self.t_nom <= lateral <= crossing_max):
             raise ParameterError(f"obstacle_lateral_aim_duration={lateral} s must be 0 (off) or in [t_nom={self.t_nom} s, "
@@ -286,6 +295,7 @@ class SequencerParams:
                                 aim_duration=self.obstacle_aim_duration,
                                 approach_distance=self.obstacle_approach_distance,
                                 crossing_drift=self.obstacle_crossing_drift,
+                                crossing_cop=self.obstacle_crossing_cop,
                                 lateral_aim_fraction=math.exp(-self.omega * (self.obstacle_lateral_aim_duration - self.t_nom))
                                 if self.obstacle_lateral_aim_duration > 0.0 else 1.0)
 
