@@ -658,7 +658,8 @@ class FootstepSequencer:
                 dx, dy, g, hx, hy, b = solve_exact_scalars(
                     0.0, 0.0, hax + cop * decay, hay, a1, a2, a3, l_nom + cop, w_nom, gamma_nom, bx_nom, by_nom,
                     bounds[0] + cop, bounds[1] + cop, bounds[2], bounds[3], low, high)
-                dx -= cop
+                if cop:  # back to the step from the foothold, on its bound exactly when the bound is active
+                    dx = min(max(dx - cop, bounds[0]), bounds[1])
                 cost = a1 * ((dx - l_nom) ** 2 + (dy - w_nom) ** 2) + a2 * (g - gamma_nom) ** 2 \
                     + a3 * ((hx - bx_nom) ** 2 + (hy - by_nom) ** 2)
                 return StepCandidate(dx, dy, g, hx, hy, b, cost, math.log(g) / omega, cop)

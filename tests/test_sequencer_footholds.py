@@ -380,6 +380,40 @@ def test_the_last_step_before_an_obstacle_aims_at_the_lateral_offset_of_a_long_c
     assert _sole_overlaps(plans[0.7], box, H1.foothold_geometry()) == []
 
 
+def test_the_lead_crossing_pivots_on_its_centre_of_pressure_behind_the_stance_foot():
+    """obstacle_crossing_cop δ: the lead crossing step is planned with the LIPM pivoting δ behind its stance foothold
+    (a flat foot's heel): from a DCM 6 cm ahead of the stance foot the point-foot plan takes one more step before the
+    box, with δ = 5 cm it crosses at once, landing at the nominal offset; the plan's DCM prediction pivots there too
+    (the stance's ``cop_offset``: continuous at every touchdown), and only the stance of a lead crossing has one."""
+    box = Obstacle(np.array([0.7425, 0.0]), 0.0, 0.1, 1.2, 0.1)  # near side 0.6925 m
+    stance = StanceState("left", np.array([0.45, 0.203]), 0.0, 0.0, swing_liftoff=np.array([0.33, -0.203]))
+    dcm = stance.position + np.array([0.06, -0.09])
+    measured = ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm)
+    plans = {cop: DcmFootstepPlanner(dataclasses.replace(H1, obstacle_crossing_cop=cop)).plan(
+        0.0, stance, measured, COMMAND, obstacles=(box,)) for cop in (0.0, 0.05)}
+    assert plans[0.0].steps[0].crossing is None and plans[0.0].stance_cop_offset is None
+    lead = plans[0.05].steps[0]
+    assert lead.crossing is not None and lead.position[0] - H1.sole_rear >= 0.7925 + H1.obstacle_margin - 1e-9
+    np.testing.assert_allclose(plans[0.05].stance_cop_offset, [-0.05, 0.0])
+    # eq. 1b about the pivot: the DCM at the lead touchdown is the plan's, at the nominal offset ahead of the foothold
+    pivot = stance.position + plans[0.05].stance_cop_offset
+    np.testing.assert_allclose(pivot + (dcm - pivot) * np.exp(H1.omega * lead.duration), lead.dcm_at_touchdown,
+                               atol=1e-9)
+    nominal = DcmFootstepPlanner(H1).stance_start_dcm(StanceState("right", np.zeros(2), 0.0, 0.0), COMMAND)
+    assert lead.dcm_offset[0] == pytest.approx(nominal[0], abs=1e-3)  # the walk's offset, from the far bound
+    for plan in plans.values():
+        for step in plan.steps:
+            np.testing.assert_allclose(plan.dcm_at(step.touchdown_time - 1e-9), step.dcm_at_touchdown, atol=1e-6)
+    steps = plans[0.05].steps
+    assert all(step.cop_offset is None or (steps[k + 1].crossing is not None and step.crossing is None)
+               for k, step in enumerate(steps[:-1]))  # a pivot behind the foothold: the stance of a lead crossing
+    with pytest.raises(ParameterError, match=r"obstacle_crossing_cop=0.3 m must be in \[0, 0.2\) m"):
+        dataclasses.replace(H1, obstacle_crossing_cop=0.3)
+    with pytest.raises(ParameterError, match="obstacle_crossing_cop=0.05 m .* 'exact' backend only"):
+        DcmFootstepPlanner(dataclasses.replace(H1, obstacle_crossing_cop=0.05), backend="osqp").plan(
+            0.0, stance, measured, COMMAND, obstacles=(box,))
+
+
 def test_trailing_settle_and_aim_duration_bad_input():
     for value in (0.05, 6.0, float("nan")):
         with pytest.raises(ParameterError, match="obstacle_trailing_double_support"):
