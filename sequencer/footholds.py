@@ -76,8 +76,10 @@ to its heel, and a whole-body controller moves it there to carry a long step (th
 6 cm ahead of its stance foot, which the point-foot LIPM says cannot carry a 0.55 m crossing within 0.8 s; its
 planner then kept adding steps in place before the box while the DCM ran on). With ``obstacle_crossing_cop``
 δ > 0 the lead crossing (the step from before an obstacle to beyond it) pivots δ behind its stance foothold
-along the heading (not the trailing swing: its step from the lead foot is short, and a pivot behind would carry the
-DCM away from it): eq. 1b from that pivot,
+along the heading, and the trailing swing δ ahead of its stance (the lead foot: its step from there is short, and
+the DCM the lead step carried beyond the lead foot must not run away during the long trailing swing; pivoting on
+the foothold, the H1's trailing swing was planned 0.96 m long, and with the lead aimed at a small offset instead
+the body stayed back and the trailing foot, 30 cm behind its path, came down on the box). The lead crossing: eq. 1b from that pivot,
 ξ_T - p_T = (ξ_0 - p_0 + δ) γ - (ℓ + δ), solved as the step QP of the step ℓ + δ from the initial offset
 (ξ_0 - p_0) + δ (its length bounds and nominal length shifted by δ); the candidate keeps δ
 (:attr:`StepCandidate.cop`), the plan's CoM prediction pivots there (``PlannedStep.cop_offset`` of the stance), and
@@ -154,7 +156,7 @@ class FootholdGeometry:
             the LIPM's, d [m] its travel from lift-off to touchdown along the heading (the swing leg's mass carried
             forward: "Crossing drift" in the module docstring); 0: the LIPM's.
         crossing_cop: δ [m] >= 0: the lead crossing step is planned with the centre of pressure δ behind its
-            stance foothold along the heading ("The crossing's centre of pressure" in the module docstring); 0: the
+            stance foothold, the trailing swing δ ahead of its own along the heading ("The crossing's centre of pressure" in the module docstring); 0: the
             foothold.
         lateral_aim_fraction: the last step before an obstacle aims at this fraction of the nominal lateral DCM
             offset, exp(-ω (T_lat - t_nom)) in (0, 1] ("The lateral aim" in the module docstring); 1: the nominal.
@@ -385,8 +387,8 @@ class FootholdConstraints:
                 trailing = self._trailing_bounds(bounds, p0, yaw, liftoff, boxes, candidate.dx)
                 if trailing[0] <= candidate.dx <= trailing[1] and candidate.duration >= trailing[4] - 1e-12:
                     return candidate, changed
-                bounds = trailing
-                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along)
+                bounds = trailing  # the trailing swing pivots on its stance's toe side (the crossing's centre of pressure)
+                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along, -self.geometry.crossing_cop)
                 changed, lengthened = True, True
                 continue
             along, beside = self._options(hit, bounds, step_length_nominal, offset_nominal)
@@ -486,8 +488,8 @@ class FootholdConstraints:
         the module docstring; d = ℓ - ``lift_along`` [m], the swing's signed travel along the heading, ℓ with
         the lift-off unknown): the QP's LIPM offset aimed at b - κ_c d (b = ``aim``, or ``offset_nominal`` for
         None), the candidate's offset h + κ_c d (two fixed-point passes: d moves with the foothold). κ_c = 0:
-        ``solve(bounds, aim)``. Every solve pivots ``cop`` [m] behind the stance foothold (the lead crossing's
-        ``crossing_cop``)."""
+        ``solve(bounds, aim)``. Every solve pivots ``cop`` [m] behind the stance foothold along the heading (< 0:
+        ahead; the lead crossing's ``crossing_cop``, the trailing swing's minus that)."""
         kappa = self.geometry.crossing_drift
         candidate = solve(bounds, aim, cop=cop)
         if kappa <= 0.0:

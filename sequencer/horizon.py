@@ -553,7 +553,7 @@ class FootstepSequencer:
                 # quasi-static: the walk resumes after the trailing crossing (the step after the lead crosses too);
                 # a trailing settle alone: after the settled trailing crossing
                 resume_next = crosses if halt > 0.0 else (trailing and own_halt > 0.0)
-            pivots.append((-cop * math.cos(yaw), -cop * math.sin(yaw)) if cop > 0.0 else None)
+            pivots.append((-cop * math.cos(yaw), -cop * math.sin(yaw)) if cop != 0.0 else None)
             duration = math.log(gamma) / omega
             touchdown = max(start_qp + duration, t) if settle is not None else start_qp + duration
             yaw = yaw + yaw_rate * (duration if settle is None else touchdown - stance_start)

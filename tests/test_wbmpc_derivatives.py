@@ -518,6 +518,67 @@ def test_h1_obstacle_clearance_residual_jacobians_match_finite_differences():
     assert kinds >= {"clearance_sole0", "clearance_sole1", "clearance_shank", "height"}, kinds
 
 
+@needs_h1_extra
+def test_h1_profile_clearance_holds_the_sole_points_above_the_box_wherever_they_are():
+    """``obstacle_clearance_gating = "profile"``: the sole points' clearance is active at every node of a crossing swing
+    (not only where the planned path is over the box) with the box's height profile, whose value and gradient are
+    the top + margin over the grown footprint, the ground beyond the transition, C1 between (finite differences);
+    the residual's Jacobians match finite differences."""
+    h1, ocp, schedule, crossings = _h1_crossing()
+    config = dataclasses.replace(ocp.config, obstacle_clearance_gating="profile")
+    profile_ocp = WalkingOCP(h1, config, n_nodes=ocp.n_nodes, dt=0.02)
+    x0 = standing_state(h1)
+    profile_ocp.update(x0, schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
+    costs = [model.differential.costs.costs for model in profile_ocp.problem.running_models]
+    for k, node in enumerate(costs):
+        swinging = not schedule.in_contact[k, 1]
+        for i in range(len(config.obstacle_sole_points)):
+            assert node[f"right_clearance_sole{i}"].active == swinging, k
+    residual = costs[int(np.flatnonzero(~schedule.in_contact[:-1, 1])[0])]["right_clearance_sole0"].cost.residual
+    top = 0.1 + config.obstacle_clearance_margin
+    edge = 0.05 + config.obstacle_footprint_margin  # the fixture's box: 10 cm deep, centred at x = 0.25 m
+    assert residual.profile([0.25, 0.0])[0] == pytest.approx(top)
+    assert residual.profile([0.25 + edge - 1e-6, 0.3])[0] == pytest.approx(top)
+    assert residual.profile([0.25 + edge + config.obstacle_profile_transition + 1e-6, 0.0])[0] == 0.0
+    h = 1e-7
+    for xy in ([0.25 + edge + 0.02, 0.1], [0.25 - edge - 0.031, -0.2], [0.25, 0.0]):
+        xy = np.array(xy)
+        value, gradient = residual.profile(xy)
+        numeric = [(residual.profile(xy + h * e)[0] - residual.profile(xy - h * e)[0]) / (2 * h) for e in np.eye(2)]
+        assert gradient == pytest.approx(numeric, abs=1e-6), xy
+    assert residual.profile([0.25 + edge + 0.02, 0.0])[1][0] < 0.0  # falling away from the box
+    kinds = _check_every_residual(h1, profile_ocp.problem, np.random.default_rng(17))
+    assert {"clearance_sole0", "clearance_sole1"} <= kinds, kinds
+    # and with the point on the profile's slope (the box placed beside where it is): Rx through ∇h
+    k = int(np.flatnonzero(~schedule.in_contact[:-1, 1])[0])
+    dam = profile_ocp.problem.running_models[k].differential
+    rng = np.random.default_rng(5)
+    x, u = random_state(h1, rng), np.zeros(dam.nu)
+    data = dam.createData()
+    dam.calc(data, x, u)
+    point = residual._point(data.shared)
+    axis = np.array([np.cos(0.3), np.sin(0.3)])
+    residual.set_box(point[:2] - (0.05 + config.obstacle_footprint_margin + 0.02) * axis, axis, 0.05, 0.6, top)
+    assert 0.0 < residual.profile(point[:2])[0] < top and np.linalg.norm(residual.profile(point[:2])[1]) > 1.0
+    dam.calcDiff(data, x, u)
+
+    def r_of_x(xx):
+        d = dam.createData()
+        dam.calc(d, xx, u)
+        rd = residual.createData()
+        residual.calc(rd, xx, u, d.shared)
+        return rd.r.copy()
+
+    rdata = data.costs.terms["right_clearance_sole0"].residual
+    _assert_blocks_close(rdata.Rx, tangent_jacobian(dam.state, r_of_x, x), "on the slope", WHOLE,
+                         _tangent_blocks(dam.state))
+    from wbmpc.errors import ParameterError
+    with pytest.raises(ParameterError, match="obstacle_clearance_gating='actual' must be one of"):
+        WalkingOCPConfig(obstacle_clearance_gating="actual")
+    with pytest.raises(ParameterError, match="obstacle_profile_transition=0.0 m must be finite and > 0"):
+        WalkingOCPConfig(obstacle_profile_transition=0.0)
+
+
 def test_the_swing_path_timings_go_from_lift_off_to_touchdown_and_smooth_lands_at_rest():
     from wbmpc.errors import ParameterError
     phase = np.linspace(0.0, 1.0, 101)

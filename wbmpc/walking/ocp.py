@@ -57,6 +57,7 @@ from wbmpc.ocp.residuals import (
     ResidualContactForce,
     ResidualControl,
     ResidualFrameHeight,
+    ResidualFramePointAboveBox,
     ResidualFramePointHeight,
     ResidualFrameRotation,
     ResidualFrameTranslation,
@@ -194,6 +195,14 @@ class WalkingOCPConfig:
             path position (``obstacle_swing_path_timing``) is over its footprint grown by ``obstacle_footprint_margin``.
         obstacle_shank_margin: the shank frame stays this far above the top [m].
         obstacle_footprint_margin: the footprint grown by this for the sole points' gating [m].
+        obstacle_clearance_gating: where the sole points' clearance applies: "path" (at the nodes where their
+            planned path position is over the grown footprint, the reference top + ``obstacle_clearance_margin``)
+            or "profile" (at every node of the crossing swing, wherever the points actually are: the box's height
+            profile, top + ``obstacle_clearance_margin`` over the grown footprint falling to the ground over
+            ``obstacle_profile_transition`` outside it, :class:`~wbmpc.ocp.residuals.ResidualFramePointAboveBox`;
+            node by node only). With "path" a foot lagging its path is not held above the box once the path has
+            passed it: the H1's trailing foot came down on the box 30 cm behind its path.
+        obstacle_profile_transition: the "profile" clearance's fall outside the grown footprint [m] (> 0).
         obstacle_apex_margin: a crossing swing's height H (the plateau, or the apex of eq. 19) is at least the
             top plus this [m] (with the "apex" profile also high enough that eq. 19 clears the top plus
             ``obstacle_clearance_margin`` at the first and last gated node).
@@ -249,6 +258,8 @@ class WalkingOCPConfig:
     obstacle_clearance_margin: float = 0.05
     obstacle_shank_margin: float = 0.05
     obstacle_footprint_margin: float = 0.02
+    obstacle_clearance_gating: str = "path"
+    obstacle_profile_transition: float = 0.05
     obstacle_apex_margin: float = 0.1
     obstacle_apex_height_max: float = 0.5
     obstacle_swing_profile: str = "plateau"
@@ -284,6 +295,13 @@ class WalkingOCPConfig:
         if self.obstacle_swing_path_timing not in SWING_PATH_TIMINGS:
             raise ParameterError(f"obstacle_swing_path_timing={self.obstacle_swing_path_timing!r} must be one of "
                                  f"{SWING_PATH_TIMINGS}")
+        if self.obstacle_clearance_gating not in CLEARANCE_GATINGS:
+            raise ParameterError(f"obstacle_clearance_gating={self.obstacle_clearance_gating!r} must be one of "
+                                 f"{CLEARANCE_GATINGS}")
+        if isinstance(self.obstacle_profile_transition, bool) or not (
+                np.isfinite(self.obstacle_profile_transition) and self.obstacle_profile_transition > 0):
+            raise ParameterError(f"obstacle_profile_transition={self.obstacle_profile_transition!r} m must be "
+                                 "finite and > 0")
         if self.obstacle_swing_profile not in ("plateau", "apex"):
             raise ParameterError(f"obstacle_swing_profile={self.obstacle_swing_profile!r} must be one of "
                                  "('plateau', 'apex')")
@@ -370,6 +388,8 @@ def swing_height_reference_derivative(phase, apex_height: float):
 
 
 SWING_PATH_TIMINGS = ("straight", "smooth")
+CLEARANCE_GATINGS = ("path", "profile")
+"""``WalkingOCPConfig.obstacle_clearance_gating`` values."""
 
 
 def swing_path_fraction(phase, timing: str = "straight"):
@@ -596,9 +616,12 @@ class WalkingOCP:
             if not terminal and cfg.obstacle_clearance_weight > 0:
                 barrier = (np.zeros(1), np.full(1, np.inf))  # one-sided: no cost above the reference
                 for i, point in enumerate(cfg.obstacle_sole_points):
+                    residual = ResidualFramePointAboveBox(
+                        state, fid, point, nu, cfg.obstacle_footprint_margin, cfg.obstacle_profile_transition,
+                        self.ground_height) if cfg.obstacle_clearance_gating == "profile" else \
+                        ResidualFramePointHeight(state, fid, point, 0.0, nu)
                     costs.add(f"{foot}_clearance_sole{i}",
-                              CostModelResidual(ResidualFramePointHeight(state, fid, point, 0.0, nu),
-                                                ActivationQuadraticBarrier(*barrier)),
+                              CostModelResidual(residual, ActivationQuadraticBarrier(*barrier)),
                               cfg.obstacle_clearance_weight, active=False)
                 shank = self._shank_frame_ids.get(foot)
                 if shank is not None:
@@ -831,8 +854,14 @@ class WalkingOCP:
                         continue
                     soles, shank = terms[node][j]
                     for i, item in enumerate(soles):
-                        item.active = bool(gated[row, i])
-                        item.cost.residual.reference = top + cfg.obstacle_clearance_margin
+                        if cfg.obstacle_clearance_gating == "profile":  # wherever the point is: the box's profile
+                            item.active = True
+                            item.cost.residual.set_box(obstacle.center, obstacle.axes[0], 0.5 * obstacle.depth,
+                                                       0.5 * obstacle.width,
+                                                       top + cfg.obstacle_clearance_margin - self.ground_height)
+                        else:
+                            item.active = bool(gated[row, i])
+                            item.cost.residual.reference = top + cfg.obstacle_clearance_margin
                     if shank is not None:
                         shank.active = True
                         shank.cost.residual.reference = top + cfg.obstacle_shank_margin

@@ -10,6 +10,7 @@ from wbmpc.ocp.residuals.com_position import ResidualCoMPosition
 from wbmpc.ocp.residuals.contact_force import ResidualContactForce, ResidualLinearInContactForce
 from wbmpc.ocp.residuals.control import ResidualControl
 from wbmpc.ocp.residuals.frame_height import ResidualFrameHeight
+from wbmpc.ocp.residuals.frame_point_above_box import ResidualFramePointAboveBox
 from wbmpc.ocp.residuals.frame_point_height import ResidualFramePointHeight
 from wbmpc.ocp.residuals.frame_rotation import ResidualFrameRotation
 from wbmpc.ocp.residuals.frame_translation import ResidualFrameTranslation
@@ -26,6 +27,7 @@ __all__ = [
     "ResidualLinearInContactForce",
     "ResidualControl",
     "ResidualFrameHeight",
+    "ResidualFramePointAboveBox",
     "ResidualFramePointHeight",
     "ResidualFrameRotation",
     "ResidualFrameTranslation",
