@@ -153,9 +153,9 @@ class DcmFootstepPlanner:
         before or beyond them (:mod:`sequencer.footholds`); a step whose swing passes over one carries its
         :class:`~sequencer.footholds.Crossing` (from ``stance.swing_liftoff`` for the swing in progress). The
         step of a stance keeps a crossing once planned; a step before the obstacle may become the crossing until
-        its swing begins, and the swing in progress keeps the decision it lifted off with. With ``params.obstacle_double_support`` > 0 (a quasi-static crossing) a crossing swing
-        lifts off after that long a double support, and the stance that begins with its touchdown resumes the walk
-        with another such step (``first_resume`` of :meth:`FootstepSequencer.plan`). Empty: the plan without
+        its swing begins, and the swing in progress keeps the decision it lifted off with. With
+        ``params.obstacle_double_support`` > 0 (a quasi-static crossing) a crossing swing lifts off after that
+        long a double support, and the stance that begins with its touchdown resumes the walk with another such step (``first_resume`` of :meth:`FootstepSequencer.plan`). Empty: the plan without
         obstacles, bit for bit.
 
         Raises:

@@ -79,8 +79,8 @@ planner then kept adding steps in place before the box while the DCM ran on). Wi
 along the heading, and the trailing swing δ ahead of its stance (the lead foot: its step from there is short, and
 the DCM the lead step carried beyond the lead foot must not run away during the long trailing swing; pivoting on
 the foothold, the H1's trailing swing was planned 0.96 m long, and with the lead aimed at a small offset instead
-the body stayed back and the trailing foot, 30 cm behind its path, came down on the box). The lead crossing: eq. 1b from that pivot,
-ξ_T - p_T = (ξ_0 - p_0 + δ) γ - (ℓ + δ), solved as the step QP of the step ℓ + δ from the initial offset
+the body stayed back and the trailing foot, 30 cm behind its path, came down on the box). The lead crossing:
+eq. 1b from that pivot, ξ_T - p_T = (ξ_0 - p_0 + δ) γ - (ℓ + δ), solved as the step QP of the step ℓ + δ from the initial offset
 (ξ_0 - p_0) + δ (its length bounds and nominal length shifted by δ); the candidate keeps δ
 (:attr:`StepCandidate.cop`), the plan's CoM prediction pivots there (``PlannedStep.cop_offset`` of the stance), and
 the last step before an obstacle aims at the offset from which that crossing reaches its aim,
@@ -156,8 +156,8 @@ class FootholdGeometry:
             the LIPM's, d [m] its travel from lift-off to touchdown along the heading (the swing leg's mass carried
             forward: "Crossing drift" in the module docstring); 0: the LIPM's.
         crossing_cop: δ [m] >= 0: the lead crossing step is planned with the centre of pressure δ behind its
-            stance foothold, the trailing swing δ ahead of its own along the heading ("The crossing's centre of pressure" in the module docstring); 0: the
-            foothold.
+            stance foothold, the trailing swing δ ahead of its own along the heading ("The crossing's centre of
+            pressure" in the module docstring); 0: the foothold.
         lateral_aim_fraction: the last step before an obstacle aims at this fraction of the nominal lateral DCM
             offset, exp(-ω (T_lat - t_nom)) in (0, 1] ("The lateral aim" in the module docstring); 1: the nominal.
         approach_distance: > 0: within this distance [m] of the last foothold before an obstacle the walk must

@@ -65,8 +65,10 @@ _HELP = {
                                         "[s] (0: off)",
     "obstacle_aim_duration": "crossing duration the last step before an obstacle aims for [s] (0: the longest)",
     "obstacle_crossing_drift": "DCM gain of a swing over an obstacle per metre of its travel [-] (0: the LIPM's)",
-    "obstacle_lateral_aim_duration": "crossing duration [s] whose lateral DCM offset the last step before an obstacle aims at (0: off)",
-    "obstacle_crossing_cop": "centre of pressure behind the stance foothold of a swing over an obstacle [m] (0: the foothold)",
+    "obstacle_lateral_aim_duration": "crossing duration [s] whose lateral DCM offset the last step before an "
+                                     "obstacle aims at (0: off)",
+    "obstacle_crossing_cop": "centre of pressure behind the lead crossing's stance foothold, ahead of the trailing "
+                             "swing's [m] (0: the foothold)",
     "obstacle_approach_distance": "even steps to the last foothold before an obstacle within this distance [m] "
                                   "(0: greedy)",
     "sole_half_width": "sole half width [m]",
