@@ -155,8 +155,8 @@ class DcmFootstepPlanner:
         step of a stance keeps a crossing once planned; a step before the obstacle may become the crossing until
         its swing begins, and the swing in progress keeps the decision it lifted off with. With
         ``params.obstacle_double_support`` > 0 (a quasi-static crossing) a crossing swing lifts off after that
-        long a double support, and the stance that begins with its touchdown resumes the walk with another such step (``first_resume`` of :meth:`FootstepSequencer.plan`). Empty: the plan without
-        obstacles, bit for bit.
+        long a double support, and the stance that begins with its touchdown resumes the walk with another such
+        step (``first_resume`` of :meth:`FootstepSequencer.plan`). Empty: the plan without obstacles, bit for bit.
 
         Raises:
             ParameterError: bad input, or a command outside :meth:`command_range` (clip it first).
