@@ -72,19 +72,19 @@ LIPM chain b_{k-1} = (a / n + b_k) / γ_nom ending at the last step's aim b_n
 needs after even steps, not after a leftover one.
 
 **The crossing's centre of pressure.** The LIPM pivots on the foothold; a flat foot's centre of pressure can move
-to its heel, and a whole-body controller moves it there to carry a long step (the H1 crossed the box from a DCM
-6 cm ahead of its stance foot, which the point-foot LIPM says cannot carry a 0.55 m crossing within 0.8 s; its
-planner then kept adding steps in place before the box while the DCM ran on). With ``obstacle_crossing_cop``
-δ > 0 the lead crossing (the step from before an obstacle to beyond it) pivots δ behind its stance foothold
-along the heading, and the trailing swing δ ahead of its stance (the lead foot: its step from there is short, and
-the DCM the lead step carried beyond the lead foot must not run away during the long trailing swing; pivoting on
-the foothold, the H1's trailing swing was planned 0.96 m long, and with the lead aimed at a small offset instead
-the body stayed back and the trailing foot, 30 cm behind its path, came down on the box). The lead crossing:
-eq. 1b from that pivot, ξ_T - p_T = (ξ_0 - p_0 + δ) γ - (ℓ + δ), solved as the step QP of the step ℓ + δ from the initial offset
-(ξ_0 - p_0) + δ (its length bounds and nominal length shifted by δ); the candidate keeps δ
-(:attr:`StepCandidate.cop`), the plan's CoM prediction pivots there (``PlannedStep.cop_offset`` of the stance), and
-the last step before an obstacle aims at the offset from which that crossing reaches its aim,
-(ℓ_c + δ + b_c) exp(-ω T_c,aim) - δ (at least the nominal offset).
+between its heel and its toe, and a whole-body controller moves it to carry a long step or to hold the body over
+the stance foot (the H1 crossed the box from a DCM 6 cm ahead of its stance foot, which the point-foot LIPM says
+cannot carry a 0.55 m crossing within 0.8 s: its planner kept adding steps in place before the box while the DCM
+ran on; after the lead touchdown, with the DCM on the lead foot, the point-foot plan of the trailing swing let the
+body fall back and the trailing foot came down on the box). With ``obstacle_crossing_cop`` δ > 0 every swing over
+an obstacle (the lead crossing and the trailing swing) pivots on a point δ_c along the heading from its stance
+foothold (δ_c > 0 behind it), chosen in [-δ, δ] (:data:`PIVOT_SAMPLES` values, the one of least QP objective, the
+nearest the foothold among equals): eq. 1b from that pivot, ξ_T - p_T = (ξ_0 - p_0 + δ_c) γ - (ℓ + δ_c), is the step
+QP of the step ℓ + δ_c from the initial offset (ξ_0 - p_0) + δ_c (its length bounds and nominal length shifted by
+δ_c). The candidate keeps δ_c (:attr:`StepCandidate.cop`), the plan's CoM prediction pivots there
+(``PlannedStep.cop_offset`` of the stance), and the last step before an obstacle aims at the offset from which the
+crossing, pivoting on the heel side, reaches its aim, (ℓ_c + δ + b_c) exp(-ω T_c,aim) - δ (at least the nominal
+offset).
 
 **The lateral aim.** A crossing step lasts longer than a walking step (T_c against t_nom), and the lateral DCM
 offset it starts from grows by exp(ω T_c), not exp(ω t_nom): from the nominal offset b_y,nom the crossing spreads
@@ -114,6 +114,10 @@ import numpy as np
 
 from sequencer.obstacles import Obstacle
 from wbmpc.errors import ParameterError, SolverError
+
+PIVOT_SAMPLES = 9
+"""Pivots a crossing swing's QP tries within ``obstacle_crossing_cop`` of its stance foothold (its ends, the
+foothold, evenly spaced)."""
 
 
 class FootholdInfeasible(SolverError):
@@ -155,9 +159,9 @@ class FootholdGeometry:
         crossing_drift: κ_c [-] >= 0: a swing over an obstacle ends with the DCM κ_c d further along the heading than
             the LIPM's, d [m] its travel from lift-off to touchdown along the heading (the swing leg's mass carried
             forward: "Crossing drift" in the module docstring); 0: the LIPM's.
-        crossing_cop: δ [m] >= 0: the lead crossing step is planned with the centre of pressure δ behind its
-            stance foothold, the trailing swing δ ahead of its own along the heading ("The crossing's centre of
-            pressure" in the module docstring); 0: the foothold.
+        crossing_cop: δ [m] >= 0: every swing over an obstacle pivots on a centre of pressure within δ of its stance
+            foothold along the heading, chosen by its QP ("The crossing's centre of pressure" in the module
+            docstring); 0: the foothold.
         lateral_aim_fraction: the last step before an obstacle aims at this fraction of the nominal lateral DCM
             offset, exp(-ω (T_lat - t_nom)) in (0, 1] ("The lateral aim" in the module docstring); 1: the nominal.
         approach_distance: > 0: within this distance [m] of the last foothold before an obstacle the walk must
@@ -388,7 +392,7 @@ class FootholdConstraints:
                 if trailing[0] <= candidate.dx <= trailing[1] and candidate.duration >= trailing[4] - 1e-12:
                     return candidate, changed
                 bounds = trailing  # the trailing swing pivots on its stance's toe side (the crossing's centre of pressure)
-                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along, -self.geometry.crossing_cop)
+                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along)
                 changed, lengthened = True, True
                 continue
             along, beside = self._options(hit, bounds, step_length_nominal, offset_nominal)
@@ -465,8 +469,7 @@ class FootholdConstraints:
         (:meth:`swing_solve`; ``lift_along``: its lift-off along the heading from this stance [m], None: unknown)."""
         if far is None and not (crossing and self.geometry.swing_length_max > 0.0):
             if crossing:
-                return self.swing_solve(solve, bounds, None, offset_nominal, lift_along,
-                                        self.geometry.crossing_cop), bounds, None
+                return self.swing_solve(solve, bounds, None, offset_nominal, lift_along), bounds, None
             return solve(bounds, None), bounds, None
         sign = 1.0 if step_length_nominal > 0.0 else -1.0
         foothold = bounds[1] if sign > 0.0 else bounds[0]
@@ -474,7 +477,7 @@ class FootholdConstraints:
         for _ in range(3):
             if far is None:  # the crossing itself
                 aim = self._crossing_aim(abs(foothold), sign, step_length_nominal, offset_nominal)
-                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along, self.geometry.crossing_cop)
+                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along)
             else:  # the last step before it: at least the nominal offset; the crossing lifts off this stance
                 aim = self.last_step_aim(abs(far - foothold), sign, step_length_nominal, offset_nominal,
                                          travel=abs(far))
@@ -483,23 +486,36 @@ class FootholdConstraints:
         return candidate, bounds, aim
 
     def swing_solve(self, solve, bounds: StepBounds, aim: float | None, offset_nominal: float,
-                    lift_along: float | None, cop: float = 0.0) -> StepCandidate:
+                    lift_along: float | None) -> StepCandidate:
         """``solve(bounds, aim)`` for a swing over an obstacle with the crossing drift κ_c d ("Crossing drift" in
         the module docstring; d = ℓ - ``lift_along`` [m], the swing's signed travel along the heading, ℓ with
         the lift-off unknown): the QP's LIPM offset aimed at b - κ_c d (b = ``aim``, or ``offset_nominal`` for
         None), the candidate's offset h + κ_c d (two fixed-point passes: d moves with the foothold). κ_c = 0:
-        ``solve(bounds, aim)``. Every solve pivots ``cop`` [m] behind the stance foothold along the heading (< 0:
-        ahead; the lead crossing's ``crossing_cop``, the trailing swing's minus that)."""
+        ``solve(bounds, aim)``. Every solve pivots on the crossing's centre of pressure (:meth:`pivot_solve`)."""
         kappa = self.geometry.crossing_drift
-        candidate = solve(bounds, aim, cop=cop)
+        candidate = self.pivot_solve(solve, bounds, aim)
         if kappa <= 0.0:
             return candidate
         target = offset_nominal if aim is None else aim
         drift = 0.0
         for _ in range(2):
             drift = kappa * (candidate.dx - (0.0 if lift_along is None else lift_along))
-            candidate = solve(bounds, target - drift, cop=cop)
+            candidate = self.pivot_solve(solve, bounds, target - drift)
         return replace(candidate, hx=candidate.hx + drift)
+
+    def pivot_solve(self, solve, bounds: StepBounds, aim: float | None) -> StepCandidate:
+        """``solve(bounds, aim, cop=δ_c)`` at the pivot δ_c in [-δ, δ] (δ = ``crossing_cop``, :data:`PIVOT_SAMPLES`
+        values) of least QP objective, the nearest the foothold among equal ones (relative 1e-9); δ = 0:
+        ``solve(bounds, aim)``."""
+        bound = self.geometry.crossing_cop
+        if bound <= 0.0:
+            return solve(bounds, aim)
+        best = None
+        for cop in sorted(np.linspace(-bound, bound, PIVOT_SAMPLES).tolist(), key=abs):
+            candidate = solve(bounds, aim, cop=cop)
+            if best is None or candidate.objective < best.objective - 1e-9 * max(1.0, abs(best.objective)):
+                best = candidate
+        return best
 
     def last_step_aim(self, crossing_length: float, sign: float, step_length_nominal: float,
                       offset_nominal: float, travel: float = 0.0) -> float:

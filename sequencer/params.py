@@ -118,12 +118,12 @@ class SequencerParams:
         obstacle_crossing_drift: κ_c [-] in [0, 1): a swing over an obstacle (the lead crossing, the trailing
             swing) ends with the DCM κ_c d further than the LIPM's, d its travel from lift-off along the heading
             (the swing leg's mass carried forward; "Crossing drift" in :mod:`sequencer.footholds`); 0: the LIPM's.
-        obstacle_crossing_cop: δ [m] in [0, 0.2): the lead crossing step (from before an obstacle to beyond it) is
-            planned with the centre of pressure δ behind its stance foothold along the heading (a flat foot's heel:
-            the LIPM pivots there and carries the DCM further), the trailing swing δ ahead of its own (the lead foot:
-            the DCM is held over it) ("The crossing's centre of pressure" in :mod:`sequencer.footholds`; the 'exact'
-            backend only); 0: the foothold (a point foot's). The plan's CoM prediction pivots there too
-            (``PlannedStep.cop_offset``), so the OCP's terminal CoM follows.
+        obstacle_crossing_cop: δ [m] in [0, 0.2): every swing over an obstacle (the lead crossing, the trailing swing)
+            pivots on a centre of pressure within δ of its stance foothold along the heading, the one its QP does
+            best with (a flat foot's heel carries the DCM further, its toe holds it back; "The crossing's centre of
+            pressure" in :mod:`sequencer.footholds`; the 'exact' backend only); 0: the foothold (a point foot's).
+            The plan's CoM prediction pivots there too (``PlannedStep.cop_offset``), so the OCP's terminal CoM
+            follows.
         obstacle_lateral_aim_duration: T_lat [s], 0 (off) or in [t_nom, max(t_max, obstacle_step_duration_max)]:
             the last step before an obstacle aims at the lateral DCM offset b_y,nom exp(-ω (T_lat - t_nom)) instead
             of b_y,nom, the one from which a crossing step lasting T_lat ends at the nominal lateral offset and width

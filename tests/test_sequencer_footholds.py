@@ -380,11 +380,12 @@ def test_the_last_step_before_an_obstacle_aims_at_the_lateral_offset_of_a_long_c
     assert _sole_overlaps(plans[0.7], box, H1.foothold_geometry()) == []
 
 
-def test_the_lead_crossing_pivots_on_its_centre_of_pressure_behind_the_stance_foot():
-    """obstacle_crossing_cop δ: the lead crossing step is planned with the LIPM pivoting δ behind its stance foothold
-    (a flat foot's heel): from a DCM 6 cm ahead of the stance foot the point-foot plan takes one more step before the
-    box, with δ = 5 cm it crosses at once, landing at the nominal offset; the plan's DCM prediction pivots there too
-    (the stance's ``cop_offset``: continuous at every touchdown), and only the stance of a lead crossing has one."""
+def test_a_crossing_swing_pivots_on_the_centre_of_pressure_its_qp_chooses():
+    """obstacle_crossing_cop δ: a swing over the box pivots on a point within δ of its stance foothold along the
+    heading, the one its QP does best with: from a DCM 6 cm ahead of the stance foot the point-foot plan takes one
+    more step before the box, with δ = 5 cm the lead crosses at once on its heel side, landing at the nominal offset;
+    the plan's DCM prediction pivots there too (the stance's ``cop_offset``: continuous at every touchdown), and
+    only the stances of crossing swings have one."""
     box = Obstacle(np.array([0.7425, 0.0]), 0.0, 0.1, 1.2, 0.1)  # near side 0.6925 m
     stance = StanceState("left", np.array([0.45, 0.203]), 0.0, 0.0, swing_liftoff=np.array([0.33, -0.203]))
     dcm = stance.position + np.array([0.06, -0.09])
@@ -405,8 +406,8 @@ def test_the_lead_crossing_pivots_on_its_centre_of_pressure_behind_the_stance_fo
         for step in plan.steps:
             np.testing.assert_allclose(plan.dcm_at(step.touchdown_time - 1e-9), step.dcm_at_touchdown, atol=1e-6)
     steps = plans[0.05].steps
-    assert all(step.cop_offset is None or (steps[k + 1].crossing is not None and step.crossing is None)
-               for k, step in enumerate(steps[:-1]))  # a pivot behind the foothold: the stance of a lead crossing
+    assert all(step.cop_offset is None or (steps[k + 1].crossing is not None and abs(step.cop_offset[0]) <= 0.05)
+               for k, step in enumerate(steps[:-1]))  # a pivot off the foothold: the stance of a crossing swing
     with pytest.raises(ParameterError, match=r"obstacle_crossing_cop=0.3 m must be in \[0, 0.2\) m"):
         dataclasses.replace(H1, obstacle_crossing_cop=0.3)
     with pytest.raises(ParameterError, match="obstacle_crossing_cop=0.05 m .* 'exact' backend only"):

@@ -67,8 +67,8 @@ _HELP = {
     "obstacle_crossing_drift": "DCM gain of a swing over an obstacle per metre of its travel [-] (0: the LIPM's)",
     "obstacle_lateral_aim_duration": "crossing duration [s] whose lateral DCM offset the last step before an "
                                      "obstacle aims at (0: off)",
-    "obstacle_crossing_cop": "centre of pressure behind the lead crossing's stance foothold, ahead of the trailing "
-                             "swing's [m] (0: the foothold)",
+    "obstacle_crossing_cop": "bound of a crossing swing's centre of pressure from its stance foothold along the "
+                             "heading [m] (0: the foothold)",
     "obstacle_approach_distance": "even steps to the last foothold before an obstacle within this distance [m] "
                                   "(0: greedy)",
     "sole_half_width": "sole half width [m]",
