@@ -92,7 +92,9 @@ the feet (on the H1 a 0.6 s crossing lands 0.2 m wider than the nominal width, a
 the crossing to its shortest duration, in which the DCM could not carry the crossing step). With
 ``obstacle_lateral_aim_duration`` T_lat > 0 the last step before an obstacle aims at b_y,nom exp(-ω (T_lat - t_nom))
 (:attr:`FootholdGeometry.lateral_aim_fraction`), from which a crossing lasting T_lat ends at the nominal lateral
-offset and width (eq. 1b across the heading): it lands wider, with the DCM nearer its stance foot.
+offset and width (eq. 1b across the heading): it lands nearer its DCM. So does the lead crossing, which the
+trailing crossing swing follows (from the nominal lateral offset the H1's trailing swing was planned at its widest
+bound and the lateral DCM still ran away).
 
 "Cross when one step can reach beyond, else stop at the safe distance" rather than "the cheaper
 side": from the last foothold before an obstacle the cheaper step is always in place (the crossing
@@ -468,8 +470,9 @@ class FootholdConstraints:
         fixed-point passes: the foothold moves with the aim. A crossing's candidate carries the crossing drift
         (:meth:`swing_solve`; ``lift_along``: its lift-off along the heading from this stance [m], None: unknown)."""
         if far is None and not (crossing and self.geometry.swing_length_max > 0.0):
-            if crossing:
-                return self.swing_solve(solve, bounds, None, offset_nominal, lift_along), bounds, None
+            if crossing:  # the lead crossing: the trailing crossing swing follows it (the lateral aim)
+                return self.swing_solve(solve, bounds, None, offset_nominal, lift_along,
+                                        self.geometry.lateral_aim_fraction), bounds, None
             return solve(bounds, None), bounds, None
         sign = 1.0 if step_length_nominal > 0.0 else -1.0
         foothold = bounds[1] if sign > 0.0 else bounds[0]
@@ -477,7 +480,8 @@ class FootholdConstraints:
         for _ in range(3):
             if far is None:  # the crossing itself
                 aim = self._crossing_aim(abs(foothold), sign, step_length_nominal, offset_nominal)
-                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along)
+                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along,
+                                             self.geometry.lateral_aim_fraction)
             else:  # the last step before it: at least the nominal offset; the crossing lifts off this stance
                 aim = self.last_step_aim(abs(far - foothold), sign, step_length_nominal, offset_nominal,
                                          travel=abs(far))
@@ -486,33 +490,34 @@ class FootholdConstraints:
         return candidate, bounds, aim
 
     def swing_solve(self, solve, bounds: StepBounds, aim: float | None, offset_nominal: float,
-                    lift_along: float | None) -> StepCandidate:
+                    lift_along: float | None, lateral: float = 1.0) -> StepCandidate:
         """``solve(bounds, aim)`` for a swing over an obstacle with the crossing drift κ_c d ("Crossing drift" in
         the module docstring; d = ℓ - ``lift_along`` [m], the swing's signed travel along the heading, ℓ with
         the lift-off unknown): the QP's LIPM offset aimed at b - κ_c d (b = ``aim``, or ``offset_nominal`` for
         None), the candidate's offset h + κ_c d (two fixed-point passes: d moves with the foothold). κ_c = 0:
-        ``solve(bounds, aim)``. Every solve pivots on the crossing's centre of pressure (:meth:`pivot_solve`)."""
+        ``solve(bounds, aim)``. Every solve pivots on the crossing's centre of pressure (:meth:`pivot_solve`) and aims
+        at ``lateral`` times the nominal lateral offset."""
         kappa = self.geometry.crossing_drift
-        candidate = self.pivot_solve(solve, bounds, aim)
+        candidate = self.pivot_solve(solve, bounds, aim, lateral)
         if kappa <= 0.0:
             return candidate
         target = offset_nominal if aim is None else aim
         drift = 0.0
         for _ in range(2):
             drift = kappa * (candidate.dx - (0.0 if lift_along is None else lift_along))
-            candidate = self.pivot_solve(solve, bounds, target - drift)
+            candidate = self.pivot_solve(solve, bounds, target - drift, lateral)
         return replace(candidate, hx=candidate.hx + drift)
 
-    def pivot_solve(self, solve, bounds: StepBounds, aim: float | None) -> StepCandidate:
-        """``solve(bounds, aim, cop=δ_c)`` at the pivot δ_c in [-δ, δ] (δ = ``crossing_cop``, :data:`PIVOT_SAMPLES`
+    def pivot_solve(self, solve, bounds: StepBounds, aim: float | None, lateral: float = 1.0) -> StepCandidate:
+        """``solve(bounds, aim, lateral, cop=δ_c)`` at the pivot δ_c in [-δ, δ] (δ = ``crossing_cop``, :data:`PIVOT_SAMPLES`
         values) of least QP objective, the nearest the foothold among equal ones (relative 1e-9); δ = 0:
-        ``solve(bounds, aim)``."""
+        ``solve(bounds, aim, lateral)``."""
         bound = self.geometry.crossing_cop
         if bound <= 0.0:
-            return solve(bounds, aim)
+            return solve(bounds, aim, lateral)
         best = None
         for cop in sorted(np.linspace(-bound, bound, PIVOT_SAMPLES).tolist(), key=abs):
-            candidate = solve(bounds, aim, cop=cop)
+            candidate = solve(bounds, aim, lateral, cop=cop)
             if best is None or candidate.objective < best.objective - 1e-9 * max(1.0, abs(best.objective)):
                 best = candidate
         return best

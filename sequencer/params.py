@@ -125,10 +125,11 @@ class SequencerParams:
             The plan's CoM prediction pivots there too (``PlannedStep.cop_offset``), so the OCP's terminal CoM
             follows.
         obstacle_lateral_aim_duration: T_lat [s], 0 (off) or in [t_nom, max(t_max, obstacle_step_duration_max)]:
-            the last step before an obstacle aims at the lateral DCM offset b_y,nom exp(-ω (T_lat - t_nom)) instead
-            of b_y,nom, the one from which a crossing step lasting T_lat ends at the nominal lateral offset and width
-            ("The lateral aim" in :mod:`sequencer.footholds`); 0: b_y,nom (a crossing longer than t_nom then
-            spreads the feet: the H1's lateral DCM bounded its crossing to 0.6 s, too short for the DCM to carry it).
+            the last step before an obstacle and the lead crossing aim at the lateral DCM offset
+            b_y,nom exp(-ω (T_lat - t_nom)) instead of b_y,nom, the one from which a crossing step lasting T_lat ends at
+            the nominal lateral offset and width ("The lateral aim" in :mod:`sequencer.footholds`); 0: b_y,nom (a
+            crossing longer than t_nom then spreads the feet: the H1's lateral DCM bounded its crossing to 0.6 s, too
+            short for the DCM to carry it).
         sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m],
             >= 0 (0: a point foot); sole_half_width: its half width [m], >= 0. The footholds keep the whole
             sole rectangle outside the grown footprints.
