@@ -377,6 +377,9 @@ def test_the_last_step_before_an_obstacle_aims_at_the_lateral_offset_of_a_long_c
     assert abs(after) < abs(before) - 0.02 and abs(after - fraction * before) < 0.02, (before, after, fraction)
     width = {lateral: abs(plan.positions[leads[0.0], 1] - plan.positions[last, 1]) for lateral, plan in plans.items()}
     assert width[0.7] < width[0.0] - 0.02, width
+    # the lead crossing aims at the trailing crossing's lateral offset too (the last step's, without the aim, is the
+    # nominal one)
+    assert abs(plans[0.7].steps[leads[0.0]].dcm_offset[1]) == pytest.approx(fraction * abs(before), abs=0.005)
     assert _sole_overlaps(plans[0.7], box, H1.foothold_geometry()) == []
 
 
