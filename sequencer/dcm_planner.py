@@ -124,6 +124,17 @@ class DcmFootstepPlanner:
         """
         return {**self.params.velocity_range(), "yaw_rate": (-math.inf, math.inf)}
 
+    def can_cross(self, obstacle, stance_position, yaw: float) -> bool:
+        """Whether one crossing step can reach beyond ``obstacle`` (a :class:`sequencer.obstacles.Obstacle`) along
+        the heading of ``yaw`` [rad]: the footholds' forbidden interval along the heading, the box's extent
+        grown by the margins and the sole (:func:`sequencer.footholds.forbidden_box` from ``stance_position``,
+        world (x, y) [m]), within the crossing step's length bound max(l_max, obstacle_step_length_max)."""
+        from sequencer.footholds import forbidden_box
+
+        geometry = self.params.foothold_geometry()
+        a, b, _, _ = forbidden_box(obstacle, np.asarray(stance_position, dtype=float), float(yaw), geometry)
+        return b - a <= geometry.step_length_max
+
     def check_command(self, command: VelocityCommand) -> None:
         """Raise ParameterError, naming the component, its value and the allowed range, when
         ``command`` is outside :meth:`command_range`."""

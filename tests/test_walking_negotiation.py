@@ -80,6 +80,25 @@ def test_the_planning_stage_plans_over_the_obstacles_of_a_negotiation_and_logs_t
     assert np.all(np.isfinite(crossings.liftoff_xy[over])) and np.all(np.isnan(crossings.liftoff_xy[~over]))
 
 
+def test_an_obstacle_too_deep_to_cross_stops_the_walk_before_it():
+    """A box deeper than one crossing step reaches (the planner's ``can_cross``) bounds the forward command by 0 while
+    negotiating (logged ``negotiation_blocked``): the robot steps in place before it; a crossable one keeps the
+    negotiation's speed."""
+    robot, stage, x0 = _bolt_stage(negotiation_lookahead=1.0, negotiation_speed_max=0.2)
+    contact = np.ones(2, dtype=bool)
+    deep = Obstacle(np.array([1.0, 0.0]), 0.0, 1.2, 0.6, 0.05)  # 1.2 m deep, near edge 0.4 m ahead
+    assert not stage.planner.can_cross(deep, np.zeros(2), 0.0) and stage.planner.can_cross(
+        Obstacle(np.array([0.3, 0.0]), 0.0, 0.05, 0.6, 0.03), np.zeros(2), 0.0)
+    plan, _, record = stage.update(0.0, x0, contact, obstacles=(deep,))
+    assert record["negotiation_mode"] == NEGOTIATION and record["negotiation_blocked"] == 1.0
+    assert record["sequencer_v_x"] == 0.0
+    grown = deep.grown(stage.planner.params.obstacle_margin - 1e-9)
+    assert not np.any(grown.contains(plan.positions)) and all(step.crossing is None for step in plan.steps)
+    _, other, _ = _bolt_stage(negotiation_lookahead=1.0, negotiation_speed_max=0.2)
+    _, _, record = other.update(0.0, x0, contact, obstacles=(Obstacle(np.array([0.3, 0.0]), 0.0, 0.05, 0.6, 0.03),))
+    assert record["negotiation_blocked"] == 0.0 and record["sequencer_v_x"] == pytest.approx(0.2)
+
+
 def test_a_passed_obstacle_bounds_a_step_back_onto_it():
     """After the crossing (both feet beyond the release line: walking again) a step back, commanded here by a
     backwards velocity, lands beyond the box's far side, not on it (the H1 was planned a step back onto the box it

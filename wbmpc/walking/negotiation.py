@@ -11,7 +11,9 @@ it, from the CoM c:
 - the mode is *negotiation* (code 1) while some obstacle counts, else *walking* (code 0). In
   negotiation the counting obstacles go to the footstep planner (footholds before/beyond,
   :mod:`sequencer.footholds`) and, through the plan's crossing steps, to the OCP (apex and clearance),
-  and the forward command is bounded by ``negotiation_speed_max``;
+  and the forward command is bounded by ``negotiation_speed_max``, or by 0 when one of them is too deep for one
+  crossing step (the planner's ``can_cross``; ``PlanningStage.blocked``, logged ``negotiation_blocked``): the
+  robot stops before it, stepping in place;
 - a *passed* obstacle is still *avoided* (:attr:`NegotiationMode.avoided`: handed to the footstep planner,
   not counted for the mode) while its far edge lies less than ``negotiation_lookahead`` behind the rearmost
   foot: a robot that has just crossed a box with its DCM behind its feet must not be planned a step back

@@ -149,8 +149,19 @@ class PlanningStage:
         dx, dy = self.velocity_integral.correction_xy
         (low_x, high_x), (low_y, high_y) = self._range["v_x"], self._range["v_y"]
         if self.negotiation.mode == NEGOTIATION:
-            high_x = min(high_x, self.config.negotiation_speed_max)
+            high_x = min(high_x, 0.0 if self.blocked else self.config.negotiation_speed_max)
         return VelocityCommand(min(max(c.v_x + dx, low_x), high_x), min(max(c.v_y + dy, low_y), high_y), c.yaw_rate)
+
+    @property
+    def blocked(self) -> bool:
+        """Whether an obstacle of the negotiation is too deep for one crossing step from the current stance (the
+        planner's ``can_cross``): the forward command is then bounded by 0 (the robot stops before it, stepping in
+        place, instead of running into its foothold bound at walking speed and falling)."""
+        can_cross = getattr(self.planner, "can_cross", None)
+        if can_cross is None or self.negotiation.mode != NEGOTIATION:
+            return False
+        stance = self.stance.state
+        return not all(can_cross(obstacle, stance.position, stance.yaw) for obstacle in self.negotiation.active)
 
     # ------------------------------------------------------------------ every replan
     def update(self, t: float, x: np.ndarray, foot_in_contact: np.ndarray,
@@ -217,6 +228,7 @@ class PlanningStage:
             "dcm_offset_bias": np.nan if self.lipm is None else self.lipm.corrections.dcm_offset_bias,
             "stance_drift": np.nan if self.lipm is None else self.lipm.corrections.stance_drift,
             "negotiation_mode": float(self.negotiation.mode),
+            "negotiation_blocked": float(self.blocked),
             "negotiation_switch": float(mode_switch),
             "obstacles_perceived": float(len(obstacles)),
             "obstacles_planned": float(len(planned_obstacles)),
