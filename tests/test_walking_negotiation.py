@@ -117,6 +117,25 @@ def test_a_passed_obstacle_bounds_a_step_back_onto_it():
     assert not np.any(grown.contains(plan.positions))
 
 
+def test_the_ocp_reference_of_a_crossing_carries_the_plans_com_path():
+    """The OCP reference of a plan with crossing swings in the horizon holds the plan's CoM prediction at every node
+    (the OCP's ``com_path`` references); without a crossing it holds none."""
+    from wbmpc.walking.reference import OcpReferenceStage
+
+    robot, stage, x0 = _bolt_stage(negotiation_lookahead=1.0, negotiation_speed_max=0.2)
+    contact = np.ones(2, dtype=bool)
+    sampler = OcpReferenceStage(("left", "right"), 250, 0.01, False, 2, 0.005)
+    box = Obstacle(np.array([0.3, 0.0]), 0.0, 0.05, 0.6, 0.03)
+    plan, measured, _ = stage.update(0.0, x0, contact, obstacles=(box,))
+    reference = sampler.sample(plan, 0.0, measured.com[:2], contact)
+    assert reference.crossings is not None and reference.com_path.shape == (251, 3)
+    np.testing.assert_allclose(reference.com_path, plan.com_reference(0.01 * np.arange(251), measured.com[:2]))
+    np.testing.assert_allclose(reference.com_path[-1], reference.com_terminal)
+    _, plain, x0 = _bolt_stage()
+    plan, measured, _ = plain.update(0.0, x0, contact)
+    assert sampler.sample(plan, 0.0, measured.com[:2], contact).com_path is None
+
+
 def test_without_obstacles_the_stage_plans_as_without_perception():
     _, stage, x0 = _bolt_stage(negotiation_lookahead=1.0)
     _, plain, x0 = _bolt_stage()

@@ -579,6 +579,32 @@ def test_h1_profile_clearance_holds_the_sole_points_above_the_box_wherever_they_
         WalkingOCPConfig(obstacle_profile_transition=0.0)
 
 
+@needs_h1_extra
+def test_h1_com_path_is_tracked_only_while_the_horizon_holds_a_crossing():
+    """``obstacle_com_weight`` > 0: the running ``com_path`` terms track the given CoM path (x, y) at every running node
+    of an update with crossings, and are off otherwise; a path of the wrong shape is refused."""
+    from wbmpc.errors import ParameterError
+
+    h1, ocp, schedule, crossings = _h1_crossing()
+    config = dataclasses.replace(ocp.config, obstacle_com_weight=1e2)
+    assert "com_path" not in ocp.problem.running_models[0].differential.costs.costs  # weight 0: absent
+    tracking = WalkingOCP(h1, config, n_nodes=ocp.n_nodes, dt=0.02)
+    x0 = standing_state(h1)
+    path = np.column_stack([np.linspace(0.0, 0.3, ocp.n_nodes + 1), np.full(ocp.n_nodes + 1, 0.01),
+                            np.full(ocp.n_nodes + 1, 0.97)])
+    items = [model.differential.costs.costs["com_path"] for model in tracking.problem.running_models]
+    tracking.update(x0, schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings, com_path=path)
+    assert all(item.active for item in items)
+    for k, item in enumerate(items):
+        assert item.cost.residual.reference == pytest.approx(path[k])
+    tracking.update(x0, schedule, np.array([0.1, 0.0, 0.97]), com_path=path)  # no crossing in the horizon
+    assert not any(item.active for item in items)
+    with pytest.raises(ParameterError, match=r"com_path has shape \(3, 3\), expected"):
+        tracking.update(x0, schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings, com_path=path[:3])
+    with pytest.raises(ParameterError, match="obstacle_com_weight=-1.0 must be finite and >= 0"):
+        WalkingOCPConfig(obstacle_com_weight=-1.0)
+
+
 def test_the_swing_path_timings_go_from_lift_off_to_touchdown_and_smooth_lands_at_rest():
     from wbmpc.errors import ParameterError
     phase = np.linspace(0.0, 1.0, 101)

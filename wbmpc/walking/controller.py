@@ -190,7 +190,8 @@ class WalkingController:
             restart = False
         else:
             solution = self.mpc.update(t, x, reference.schedule, reference.com_terminal, reference.touchdown_depth,
-                                       reference.crossings, max_iterations=self._iteration_budget(record))
+                                       reference.crossings, max_iterations=self._iteration_budget(record),
+                                       com_path=reference.com_path)
             ok, status = bool(solution.ok), str(solution.status)
             restart = bool(solution.restart)
             record["mpc_prepared_used"] = float(getattr(self.mpc.problem, "prepared_used", 0))

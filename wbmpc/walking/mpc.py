@@ -61,14 +61,16 @@ class WalkingMPC:
         self.receding.last_good = solution
 
     def update(self, t: float, x_measured, schedule, com_terminal_reference,
-               touchdown_depth: float = 0.0, crossings=None, max_iterations: int | None = None) -> MPCSolution:
+               touchdown_depth: float = 0.0, crossings=None, max_iterations: int | None = None,
+               com_path=None) -> MPCSolution:
         """Write the schedule and the terminal CoM reference (3,) [m, world] into the OCP, then
         re-solve from the measured state; never raises (failures come back with ok=False).
-        ``touchdown_depth`` [m], ``crossings`` (swings over obstacles): see
+        ``touchdown_depth`` [m], ``crossings`` (swings over obstacles), ``com_path`` (the plan's CoM at the nodes): see
         :meth:`~wbmpc.walking.ocp.WalkingOCP.update`; ``max_iterations``: this update's FDDP iterations
         (None: the MPC's own, see :meth:`~wbmpc.ocp.mpc.RecedingHorizonMPC.update`)."""
         return self.receding.update(
-            t, x_measured, lambda x: self.ocp.update(x, schedule, com_terminal_reference, touchdown_depth, crossings),
+            t, x_measured,
+            lambda x: self.ocp.update(x, schedule, com_terminal_reference, touchdown_depth, crossings, com_path),
             max_iterations=max_iterations,
         )
 

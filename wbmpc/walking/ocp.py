@@ -224,6 +224,11 @@ class WalkingOCPConfig:
         obstacle_foothold_weight: the ``{foot}_foothold`` weight of every swing while the horizon holds a
             crossing swing (the footholds next to an obstacle must be where the plan puts them, not where
             they emerge); 0 = ``foothold_weight`` always. Needs ``foothold_weight`` > 0 (the term exists).
+        obstacle_com_weight: weight of ``com_path``, the CoM's (x, y) tracking the footstep plan's CoM prediction at
+            every running node while the horizon holds a crossing swing (the plan's pivots included: a crossing
+            planned on the heel side of the stance foot carries the CoM further than the foothold's pendulum);
+            0 = the term is absent (only the terminal CoM reference ties the OCP to the plan's momentum, and the H1
+            realised the point-foot DCM travel, landing the lead crossing with the DCM behind it).
         max_line_search_trials: FDDP line-search steps tried (1, ½, …).
         reg_min, reg_max: FDDP regularisation bounds.
         th_stop: FDDP stopping threshold.
@@ -267,6 +272,7 @@ class WalkingOCPConfig:
     obstacle_swing_path_timing: str = "straight"
     obstacle_swing_path_weight: float = 0.0
     obstacle_foothold_weight: float = 0.0
+    obstacle_com_weight: float = 0.0
     max_line_search_trials: int = 10
     reg_min: float = 1e-9
     reg_max: float = 1e9
@@ -277,7 +283,7 @@ class WalkingOCPConfig:
                      "control_weight", "control_bound_weight",
                      "com_terminal_weight", "foothold_weight", "contact_force_weight", "friction_cone_weight",
                      "wrench_cone_weight", "swing_orientation_weight", "obstacle_clearance_weight",
-                     "obstacle_swing_path_weight", "obstacle_foothold_weight"):
+                     "obstacle_swing_path_weight", "obstacle_foothold_weight", "obstacle_com_weight"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f"{name}={value} must be finite and >= 0")
@@ -527,6 +533,9 @@ class WalkingOCP:
         self._swing_path_terms = [[items[f"{foot}_swing_path"] for foot in self.feet]
                                   for items in (model.differential.costs.costs for model in running)
                                   ] if config.obstacle_swing_path_weight > 0 else None
+        # per running node: the CoM path tracking cost item (while a crossing is in the horizon)
+        self._com_path_terms = [model.differential.costs.costs["com_path"] for model in running
+                                ] if config.obstacle_com_weight > 0 else None
         self.problem = ShootingProblem(self.x_reference, running, terminal)
         self._timed = False  # running nodes carry a timed schedule's spacing (see update)
         #: "batched" or "nodes" (see WalkingOCPConfig.evaluation); evaluation_note says why nodes
@@ -639,6 +648,10 @@ class WalkingOCP:
         if terminal:
             costs.add("com_position",
                       CostModelResidual(ResidualCoMPosition(state, np.zeros(3), nu)), cfg.com_terminal_weight)
+        elif cfg.obstacle_com_weight > 0:
+            costs.add("com_path", CostModelResidual(ResidualCoMPosition(state, np.zeros(3), nu),
+                                                    ActivationWeightedQuad(np.array([1.0, 1.0, 0.0]))),
+                      cfg.obstacle_com_weight, active=False)
         contacts = {foot: self._contact(foot) for foot in self.feet}
         lever_arms = None
         moments = cfg.contact_damping_moments
@@ -670,7 +683,7 @@ class WalkingOCP:
 
     # ------------------------------------------------------------------ update
     def update(self, x0: np.ndarray, schedule, com_terminal_reference: np.ndarray,
-               touchdown_depth: float = 0.0, crossings=None) -> None:
+               touchdown_depth: float = 0.0, crossings=None, com_path=None) -> None:
         """Set the initial state, the per-node contacts and references from a schedule.
 
         Args:
@@ -685,6 +698,9 @@ class WalkingOCP:
             crossings: the swings that pass over obstacles on this grid (a
                 :class:`wbmpc.walking.reference.CrossingSchedule`, same rows and feet as ``schedule``), or None
                 (none: the problem without obstacles). Their apex and clearance terms: :meth:`_clearance`.
+            com_path: the footstep plan's CoM prediction at the nodes, (n_nodes + 1, 3) [m], world, or None: the
+                ``com_path`` references, active at every running node when ``crossings`` is given (with
+                ``obstacle_com_weight`` > 0).
         """
         self.problem.set_x0(x0)
         if schedule.n_nodes != self.n_nodes:
@@ -777,6 +793,17 @@ class WalkingOCP:
             for residual, yaw in zip(self._state_residuals, heading.tolist()):  # (a batched problem's rows)
                 residual.reference[3:7] = pin.Quaternion(yaw_rotation(yaw) @ self._base_rotation_reference).coeffs()
         self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
+        if self._com_path_terms is not None:
+            tracking = crossings is not None and com_path is not None
+            if tracking:
+                path = np.asarray(com_path, dtype=float)
+                if path.shape != (self.n_nodes + 1, 3):
+                    raise ParameterError(f"com_path has shape {path.shape}, expected ({self.n_nodes + 1}, 3)")
+                check_finite("com_path", path)
+            for k, item in enumerate(self._com_path_terms):
+                item.active = tracking
+                if tracking:
+                    item.cost.residual.reference[:] = path[k]
         if self.evaluation == "batched":  # contact sets (references, weights and activity are shared)
             self.problem.sync()
 

@@ -35,6 +35,8 @@ class OcpReference:
             lies ahead (0 when none, see :func:`wbmpc.walking.stance.delay_to_touchdown`).
         touchdown_depth: how far below the ground the OCP aims that foot [m] (0 when no wait).
         crossings: the swings over obstacles on the grid, or None (the plan crosses none).
+        com_path: the plan's CoM prediction at the nodes (n_nodes + 1, 3) [m], world (z at the planner's CoM
+            height), when ``crossings`` is not None; else None.
     """
 
     schedule: ContactSchedule
@@ -42,6 +44,7 @@ class OcpReference:
     touchdown_wait: float
     touchdown_depth: float
     crossings: "CrossingSchedule | None" = None
+    com_path: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -145,4 +148,9 @@ class OcpReferenceStage:
             depth = self.wait_depth
         # (a plan for a stance that has not begun starts later than t: it predicts from its start)
         com_end = plan.com_reference(max(t + self.n_nodes * self.node_dt, plan.t0), com_xy)
-        return OcpReference(schedule, np.asarray(com_end, dtype=float), wait, depth, crossing_schedule(sampled, schedule))
+        crossings = crossing_schedule(sampled, schedule)
+        com_path = None
+        if crossings is not None:  # the plan's CoM at the nodes, for the OCP's CoM tracking over a crossing
+            times = np.maximum(t + self.node_dt * np.arange(self.n_nodes + 1), plan.t0)
+            com_path = plan.com_reference(times, com_xy)
+        return OcpReference(schedule, np.asarray(com_end, dtype=float), wait, depth, crossings, com_path)
