@@ -496,10 +496,13 @@ def test_crossing_duration_and_travel_bad_input():
 
 def _h1_preset_plan(overrides: dict, box_x: float = 1.0):
     """The H1 preset's plan (5 s horizon) from a left stance at the origin with the nominal DCM, 0.3 m/s, towards
-    a 10 cm box across the path at ``box_x`` [m] (the deterministic scene of docs/scripts/h1_step_over.py)."""
+    a 10 cm box across the path at ``box_x`` [m] (the deterministic scene of docs/scripts/h1_step_over.py), with the
+    crossing's centre of pressure on the foothold and no lateral aim unless overridden (the point-foot LIPM the
+    approach and drift relations below are written in)."""
     from wbmpc.walking.preset import load_walking_preset
 
-    params = load_walking_preset("h1", {"planner.horizon": 5.0, **overrides}).planner_params
+    pinned = {"planner.obstacle_crossing_cop": 0.0, "planner.obstacle_lateral_aim_duration": 0.0}
+    params = load_walking_preset("h1", {"planner.horizon": 5.0, **pinned, **overrides}).planner_params
     planner = DcmFootstepPlanner(params)
     box = Obstacle(np.array([box_x, 0.0]), 0.0, 0.1, 1.2, 0.1)
     stance, measured = _start(planner)
@@ -508,14 +511,9 @@ def _h1_preset_plan(overrides: dict, box_x: float = 1.0):
 
 @pytest.mark.parametrize("box_x", [1.0, 1.05, 1.12])
 def test_without_an_approach_distance_the_plan_is_the_greedy_one(box_x):
-    _, _, greedy = _h1_preset_plan({}, box_x)
-    _, _, zero = _h1_preset_plan({"planner.obstacle_approach_distance": 0.0}, box_x)
+    assert SequencerParams.__dataclass_fields__["obstacle_approach_distance"].default == 0.0  # greedy by default
+    _, _, greedy = _h1_preset_plan({"planner.obstacle_approach_distance": 0.0}, box_x)
     far = _h1_preset_plan({"planner.obstacle_approach_distance": 0.2}, box_x)[2]  # the box beyond it until the end
-    for a, b in zip(greedy.steps, zero.steps, strict=True):  # bit for bit (their crossings: equal marks)
-        assert (a.foot, a.touchdown_time, a.active, a.crossing is None) == (b.foot, b.touchdown_time, b.active,
-                                                                           b.crossing is None)
-        np.testing.assert_array_equal(np.concatenate((a.position, a.dcm_offset)),
-                                      np.concatenate((b.position, b.dcm_offset)))
     first = next(k for k, step in enumerate(greedy.steps) if step.position[0] > 0.45)  # where the approach begins
     np.testing.assert_array_equal(greedy.positions[:first], far.positions[:first])
 
@@ -539,7 +537,7 @@ def test_the_even_approach_ends_on_the_bound_and_crosses_without_a_step_in_place
     assert plan.steps[lead - 1].dcm_offset[0] == pytest.approx(aim, abs=0.01)
     assert plan.steps[lead - 2].dcm_offset[0] < plan.steps[lead - 1].dcm_offset[0]  # the offsets build up to it
     assert _sole_overlaps(plan, box, geometry) == []
-    _, _, greedy = _h1_preset_plan({"planner.obstacle_aim_duration": 0.6}, box_x)
+    _, _, greedy = _h1_preset_plan({"planner.obstacle_aim_duration": 0.6, "planner.obstacle_approach_distance": 0.0}, box_x)
     greedy_lead = next(k for k, step in enumerate(greedy.steps) if step.crossing is not None)
     greedy_lengths = np.diff(greedy.positions[:greedy_lead, 0])
     assert greedy_lengths.min() < 0.1 or np.ptp(greedy_lengths) > 0.05  # greedy: a short or an in-place step
