@@ -293,14 +293,15 @@ OBSTACLE_FIELDS = {
                 "obstacle_step_duration_min", "obstacle_step_duration_max", "obstacle_swing_length_max",
                 "obstacle_offset_tolerance", "obstacle_double_support", "obstacle_trailing_double_support",
                 "obstacle_aim_duration", "obstacle_approach_distance", "obstacle_crossing_drift",
-                "sole_front",
+                "obstacle_crossing_cop", "obstacle_lateral_aim_duration", "sole_front",
                 "sole_rear", "sole_half_width"},
     "ocp": {"obstacle_clearance_weight", "obstacle_sole_points", "obstacle_shank_frames", "obstacle_clearance_margin",
             "obstacle_shank_margin", "obstacle_footprint_margin", "obstacle_apex_margin", "obstacle_apex_height_max",
             "obstacle_swing_profile", "obstacle_plateau_transition_min", "obstacle_swing_path_timing",
-            "obstacle_swing_path_weight", "obstacle_foothold_weight"},
+            "obstacle_swing_path_weight", "obstacle_foothold_weight", "obstacle_clearance_gating",
+            "obstacle_profile_transition", "obstacle_com_weight"},
     "controller": {"negotiation_lookahead", "negotiation_corridor", "negotiation_release", "negotiation_speed_max",
-                   "negotiation_max_iterations"},
+                   "negotiation_max_iterations", "crossing_max_iterations"},
 }
 
 
