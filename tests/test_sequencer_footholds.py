@@ -335,21 +335,30 @@ def test_a_trailing_settle_halts_the_trailing_crossing_swing_once_the_lead_foot_
     assert unsettled.steps[0].double_support is None and unsettled.steps[0].crossing is not None
 
 
+def _plans_towards_a_box(field: str, values: tuple[float, float]):
+    """(box, {value: plan}, the lead crossing's index) of the H1 geometry walking towards a 10 cm box with the planner
+    parameter ``field`` at each of ``values``: both plans cross with the same step and keep every step before the
+    last one before the box."""
+    box = Obstacle(np.array([1.09, 0.0]), 0.0, 0.1, 1.2, 0.1)
+    plans = {}
+    for value in values:
+        planner = DcmFootstepPlanner(dataclasses.replace(H1, obstacle_offset_tolerance=0.1, **{field: value}))
+        stance, measured = _start(planner)
+        plans[value] = planner.plan(0.0, stance, measured, COMMAND, obstacles=(box,))
+    leads = {next(k for k, step in enumerate(plan.steps) if step.crossing is not None) for plan in plans.values()}
+    assert len(leads) == 1, leads
+    lead = leads.pop()
+    first, second = (plans[value] for value in values)
+    np.testing.assert_array_equal(first.positions[:lead - 1], second.positions[:lead - 1])
+    return box, plans, lead
+
+
 def test_the_last_step_before_an_obstacle_aims_further_ahead_with_a_shorter_aim_duration():
     """obstacle_aim_duration: the last step before the box aims at (ℓ_c + b_nom) exp(-ω T_aim), at least the nominal
     offset (0, the default: T_aim = the crossing's longest duration); a shorter T_aim leans that step further
     ahead (the same foothold along the heading, a larger DCM offset at its touchdown); the steps before are kept."""
-    box = Obstacle(np.array([1.09, 0.0]), 0.0, 0.1, 1.2, 0.1)
-    plans = {}
-    for aim in (0.0, 0.5):
-        planner = DcmFootstepPlanner(dataclasses.replace(H1, obstacle_aim_duration=aim, obstacle_offset_tolerance=0.1))
-        stance, measured = _start(planner)
-        plans[aim] = planner.plan(0.0, stance, measured, COMMAND, obstacles=(box,))
-    leads = {aim: next(k for k, step in enumerate(plan.steps) if step.crossing is not None)
-             for aim, plan in plans.items()}
-    assert leads[0.0] == leads[0.5]
-    last = leads[0.0] - 1
-    np.testing.assert_array_equal(plans[0.0].positions[:last], plans[0.5].positions[:last])
+    box, plans, lead = _plans_towards_a_box("obstacle_aim_duration", (0.0, 0.5))
+    last = lead - 1
     assert plans[0.0].positions[last, 0] == plans[0.5].positions[last, 0]  # along the heading (aside: the QP's)
     assert plans[0.5].steps[last].dcm_offset[0] > plans[0.0].steps[last].dcm_offset[0] + 0.02
     assert _sole_overlaps(plans[0.5], box, H1.foothold_geometry()) == []
@@ -360,26 +369,16 @@ def test_the_last_step_before_an_obstacle_aims_at_the_lateral_offset_of_a_long_c
     b_y,nom exp(-ω (T_lat - t_nom)), the one a crossing lasting T_lat carries to the nominal lateral offset: that step
     lands nearer its DCM (a smaller lateral offset at its touchdown) and the crossing after it is narrower; the
     steps before are kept (the iterative backends: with the osqp backend's test)."""
-    box = Obstacle(np.array([1.09, 0.0]), 0.0, 0.1, 1.2, 0.1)
-    plans = {}
-    for lateral in (0.0, 0.7):
-        params = dataclasses.replace(H1, obstacle_lateral_aim_duration=lateral, obstacle_offset_tolerance=0.1)
-        planner = DcmFootstepPlanner(params)
-        stance, measured = _start(planner)
-        plans[lateral] = planner.plan(0.0, stance, measured, COMMAND, obstacles=(box,))
-    leads = {lateral: next(k for k, step in enumerate(plan.steps) if step.crossing is not None)
-             for lateral, plan in plans.items()}
-    assert leads[0.0] == leads[0.7]
-    last = leads[0.0] - 1
-    np.testing.assert_array_equal(plans[0.0].positions[:last], plans[0.7].positions[:last])
+    box, plans, lead = _plans_towards_a_box("obstacle_lateral_aim_duration", (0.0, 0.7))
+    last = lead - 1
     before, after = plans[0.0].steps[last].dcm_offset[1], plans[0.7].steps[last].dcm_offset[1]
     fraction = np.exp(-H1.omega * (0.7 - H1.t_nom))
     assert abs(after) < abs(before) - 0.02 and abs(after - fraction * before) < 0.02, (before, after, fraction)
-    width = {lateral: abs(plan.positions[leads[0.0], 1] - plan.positions[last, 1]) for lateral, plan in plans.items()}
+    width = {lateral: abs(plan.positions[lead, 1] - plan.positions[last, 1]) for lateral, plan in plans.items()}
     assert width[0.7] < width[0.0] - 0.02, width
     # the lead crossing aims at the trailing crossing's lateral offset too (the last step's, without the aim, is the
     # nominal one)
-    assert abs(plans[0.7].steps[leads[0.0]].dcm_offset[1]) == pytest.approx(fraction * abs(before), abs=0.005)
+    assert abs(plans[0.7].steps[lead].dcm_offset[1]) == pytest.approx(fraction * abs(before), abs=0.005)
     assert _sole_overlaps(plans[0.7], box, H1.foothold_geometry()) == []
 
 
