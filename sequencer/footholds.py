@@ -164,8 +164,9 @@ class FootholdGeometry:
         crossing_cop: δ [m] >= 0: every swing over an obstacle pivots on a centre of pressure within δ of its stance
             foothold along the heading, chosen by its QP ("The crossing's centre of pressure" in the module
             docstring); 0: the foothold.
-        lateral_aim_fraction: the last step before an obstacle aims at this fraction of the nominal lateral DCM
-            offset, exp(-ω (T_lat - t_nom)) in (0, 1] ("The lateral aim" in the module docstring); 1: the nominal.
+        lateral_aim_fraction: the last step before an obstacle and the lead crossing aim at this fraction of the
+            nominal lateral DCM offset, exp(-ω (T_lat - t_nom)) in (0, 1] ("The lateral aim" in the module docstring);
+            1: the nominal.
         approach_distance: > 0: within this distance [m] of the last foothold before an obstacle the walk must
             cross, the steps towards it are spaced evenly and aim at the DCM offsets that end on that foothold
             with the offset the crossing needs (:meth:`FootholdConstraints.approach`, "The approach" in the
@@ -393,7 +394,7 @@ class FootholdConstraints:
                 trailing = self._trailing_bounds(bounds, p0, yaw, liftoff, boxes, candidate.dx)
                 if trailing[0] <= candidate.dx <= trailing[1] and candidate.duration >= trailing[4] - 1e-12:
                     return candidate, changed
-                bounds = trailing  # the trailing swing pivots on its stance's toe side (the crossing's centre of pressure)
+                bounds = trailing
                 candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along)
                 changed, lengthened = True, True
                 continue
