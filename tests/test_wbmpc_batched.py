@@ -429,8 +429,8 @@ def test_h1_soles_with_the_obstacle_clearance_are_batched_and_match_the_node_pip
     backend = "kkt" if moments == "sole" else "pinocchio"
     config = dataclasses.replace(load_walking_preset("h1").ocp, contact_damping_moments=moments,
                                  dynamics_backend=backend, evaluation="auto", obstacle_swing_path_timing="smooth",
-                                 obstacle_swing_path_weight=1e4, obstacle_clearance_gating="path")  # (the
-    # "profile" clearance is evaluated node by node)
+                                 obstacle_swing_path_weight=1e4, obstacle_clearance_gating="path",
+                                 obstacle_com_weight=0.0)  # (the "profile" clearance is evaluated node by node)
     n_nodes = 12
     schedule, crossings = crossing_schedule(n_nodes)
     ocp = _batched_walking_ocp(h1, config, n_nodes)
