@@ -82,6 +82,22 @@ def test_the_updates_that_see_a_crossing_get_their_own_fddp_iterations():
         assert budget({"crossing_nodes": 12.0, "negotiation_mode": NEGOTIATION}) == (crossing or negotiation or None)
         assert budget({"crossing_nodes": 0.0, "negotiation_mode": NEGOTIATION}) == (negotiation or None)
         assert budget({"crossing_nodes": 0.0, "negotiation_mode": 0.0}) is None
+    # crossing_iterations_hold: the crossing's budget kept that long after the last update that saw a crossing
+    preset = load_walking_preset("h1", {"crossing_max_iterations": 5, "crossing_iterations_hold": 0.1})
+    budget = WalkingController(preset)._iteration_budget
+    walking = {"crossing_nodes": 0.0, "negotiation_mode": 0.0}
+    assert budget(walking, 1.0) is None  # no crossing seen yet
+    assert budget({"crossing_nodes": 3.0, "negotiation_mode": 0.0}, 1.0) == 5
+    assert budget(walking, 1.1) == 5 and budget(walking, 1.12) is None
+
+
+def test_crossing_iterations_hold_is_a_duration():
+    from wbmpc.errors import ParameterError
+    from wbmpc.walking.controller_config import WalkingControllerConfig
+
+    for bad in (-0.1, float("nan"), True, 11.0):
+        with pytest.raises(ParameterError, match=f"crossing_iterations_hold={bad!r} s must be in"):
+            WalkingControllerConfig(crossing_iterations_hold=bad)
 
 
 @pytest.mark.parametrize("name", ["negotiation_max_iterations", "crossing_max_iterations"])

@@ -301,7 +301,7 @@ OBSTACLE_FIELDS = {
             "obstacle_swing_path_weight", "obstacle_foothold_weight", "obstacle_clearance_gating",
             "obstacle_profile_transition", "obstacle_com_weight"},
     "controller": {"negotiation_lookahead", "negotiation_corridor", "negotiation_release", "negotiation_speed_max",
-                   "negotiation_max_iterations", "crossing_max_iterations"},
+                   "negotiation_max_iterations", "crossing_max_iterations", "crossing_iterations_hold"},
 }
 
 

@@ -79,6 +79,7 @@ class WalkingController:
     def __init__(self, preset: WalkingPreset | None = None, mpc_solver=None, planner=None) -> None:
         self.preset = load_walking_preset("bolt") if preset is None else preset
         self.config: WalkingControllerConfig = self.preset.controller
+        self._last_crossing_update: float | None = None  # [s], the last update whose horizon held a crossing
         self.replan_period = self.config.replan_period
         self.mpc_solver = mpc_solver
         self.planner = self._make_planner(self.preset.planner_params) if planner is None else planner
@@ -122,6 +123,7 @@ class WalkingController:
                                     cfg.computation_delay)
         self.planning.reset(x0, t0, self.command)
         self.n_failures = 0
+        self._last_crossing_update = None
         self.last_status = "none"
         self.timers = ControllerTimers()
         self._pending_failures = sorted(float(t) for t in cfg.mpc_failure_times)
@@ -190,7 +192,7 @@ class WalkingController:
             restart = False
         else:
             solution = self.mpc.update(t, x, reference.schedule, reference.com_terminal, reference.touchdown_depth,
-                                       reference.crossings, max_iterations=self._iteration_budget(record),
+                                       reference.crossings, max_iterations=self._iteration_budget(record, t),
                                        com_path=reference.com_path)
             ok, status = bool(solution.ok), str(solution.status)
             restart = bool(solution.restart)
@@ -222,12 +224,18 @@ class WalkingController:
             self.timers.mpc_prepare += record["mpc_prepare_time"]
         return record
 
-    def _iteration_budget(self, record: dict[str, float]) -> int | None:
-        """FDDP iterations of this update: ``crossing_max_iterations`` while the horizon holds a crossing swing,
-        else ``negotiation_max_iterations`` while negotiating, else None (``max_iterations``); 0 means unset."""
+    def _iteration_budget(self, record: dict[str, float], t: float | None = None) -> int | None:
+        """FDDP iterations of the update at ``t`` [s]: ``crossing_max_iterations`` while the horizon holds a crossing
+        swing and ``crossing_iterations_hold`` after, else ``negotiation_max_iterations`` while negotiating, else None
+        (``max_iterations``); 0 means unset."""
         cfg = self.config
-        if cfg.crossing_max_iterations and record.get("crossing_nodes", 0.0) > 0:
-            return cfg.crossing_max_iterations
+        if cfg.crossing_max_iterations:
+            if record.get("crossing_nodes", 0.0) > 0:
+                self._last_crossing_update = t
+                return cfg.crossing_max_iterations
+            last = self._last_crossing_update
+            if t is not None and last is not None and t - last <= cfg.crossing_iterations_hold + 1e-9:
+                return cfg.crossing_max_iterations
         if cfg.negotiation_max_iterations and record.get("negotiation_mode") == NEGOTIATION:
             return cfg.negotiation_max_iterations
         return None

@@ -160,6 +160,9 @@ class WalkingControllerConfig:
             obstacle (``crossing_nodes`` > 0 in the replan record), an integer >= 1, or 0 (none: the negotiation's
             or ``max_iterations``). It takes precedence over ``negotiation_max_iterations``: the approach walks
             with the walking budget and only the updates that see the crossing pay for it.
+        crossing_iterations_hold: the ``crossing_max_iterations`` budget is kept this long [s] after the last update
+            whose horizon held a crossing swing (>= 0; 0: none): the H1, both feet just across with its DCM behind
+            them, failed at the first update back on the walking budget.
     """
 
     n_nodes: int = 100
@@ -198,6 +201,7 @@ class WalkingControllerConfig:
     negotiation_speed_max: float = float("inf")
     negotiation_max_iterations: int = 0
     crossing_max_iterations: int = 0
+    crossing_iterations_hold: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("mpc_prepare", "interpolate", "feedback"):
@@ -268,6 +272,9 @@ class WalkingControllerConfig:
             value = getattr(self, name)
             if isinstance(value, bool) or not (isinstance(value, int) and value >= 0):
                 raise ParameterError(f"{name}={value!r} must be 0 ({fallback}) or an integer >= 1")
+        hold = self.crossing_iterations_hold
+        if isinstance(hold, bool) or not (np.isfinite(hold) and 0.0 <= hold <= 10.0):
+            raise ParameterError(f"crossing_iterations_hold={hold!r} s must be in [0, 10] s")
         restart = self.mpc_restart_after_failures
         if restart is not None and (isinstance(restart, bool) or not isinstance(restart, int) or restart < 0):
             raise ParameterError(f"mpc_restart_after_failures={restart!r} must be None, 0 (never) or an integer >= 1")
