@@ -45,6 +45,7 @@ import math
 import numpy as np
 
 from sequencer.corrections import LipmCorrections
+from sequencer.footholds import forbidden_box
 from sequencer.horizon import FootstepPlan, FootstepSequencer
 from sequencer.nominal import FEET, other_foot
 from sequencer.params import SequencerParams
@@ -129,8 +130,6 @@ class DcmFootstepPlanner:
         the heading of ``yaw`` [rad]: the footholds' forbidden interval along the heading, the box's extent
         grown by the margins and the sole (:func:`sequencer.footholds.forbidden_box` from ``stance_position``,
         world (x, y) [m]), within the crossing step's length bound max(l_max, obstacle_step_length_max)."""
-        from sequencer.footholds import forbidden_box
-
         geometry = self.params.foothold_geometry()
         a, b, _, _ = forbidden_box(obstacle, np.asarray(stance_position, dtype=float), float(yaw), geometry)
         return b - a <= geometry.step_length_max

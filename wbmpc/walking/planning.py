@@ -94,6 +94,7 @@ class PlanningStage:
                                            config.negotiation_release)
         self.swing_liftoff = None  # world (x, y) [m] where the swinging foot lifted off
         self.plan = None
+        self.blocked = False  # an obstacle of the negotiation too deep to cross (set by every update, _blocked)
         self.planner_time = 0.0  # [s], total wall time in the planner
         self._clear_failures()
 
@@ -121,6 +122,7 @@ class PlanningStage:
         self.slide.reset(self.stance.state.position)
         self.swing_liftoff = feet[1 - index, :2].copy() if len(self.feet) == 2 else None
         self.negotiation.reset()
+        self.blocked = False
         self.set_command(command)
         self.plan = None
         self._clear_failures()
@@ -152,8 +154,7 @@ class PlanningStage:
             high_x = min(high_x, 0.0 if self.blocked else self.config.negotiation_speed_max)
         return VelocityCommand(min(max(c.v_x + dx, low_x), high_x), min(max(c.v_y + dy, low_y), high_y), c.yaw_rate)
 
-    @property
-    def blocked(self) -> bool:
+    def _blocked(self) -> bool:
         """Whether an obstacle of the negotiation is too deep for one crossing step from the current stance (the
         planner's ``can_cross``): the forward command is then bounded by 0 (the robot stops before it, stepping in
         place, instead of running into its foothold bound at walking speed and falling)."""
@@ -206,6 +207,7 @@ class PlanningStage:
                 self._switch_planner(self._planner_after[1])
         self.slide.follow_if_sliding(slide, feet[stance_index, :2], bool(foot_in_contact[stance_index]))
         mode_switch = self.negotiation.update(t, obstacles, measured.com[:2], feet[:, :2], stance.yaw)
+        self.blocked = self._blocked()
         planned_obstacles = self.negotiation.avoided
         command = self.planned_command
         record: dict[str, float] = {
