@@ -227,7 +227,7 @@ class WalkingController:
     def _iteration_budget(self, record: dict[str, float], t: float | None = None) -> int | None:
         """FDDP iterations of the update at ``t`` [s]: ``crossing_max_iterations`` while the horizon holds a crossing
         swing and ``crossing_iterations_hold`` after, else ``negotiation_max_iterations`` while negotiating, else None
-        (``max_iterations``); 0 means unset."""
+        (``max_iterations``); 0 means unset. An update that sees a crossing records its ``t`` (the hold's start)."""
         cfg = self.config
         if cfg.crossing_max_iterations:
             if record.get("crossing_nodes", 0.0) > 0:
