@@ -31,8 +31,8 @@ def test_h1_preset_states_every_perception_field_and_the_others_have_none():
     assert {f.name for f in dataclasses.fields(PerceptionConfig)} <= stated
     h1 = load_walking_preset("h1").perception
     assert h1.enabled and h1.n_rays == len(h1.pitch_deg) * len(h1.yaw_deg) == 119 and h1.rate == 67.0
-    assert load_walking_preset("g1").perception is None  # no [perception]: Measurement.obstacles stays ()
-    noisy = load_walking_preset("g1", {"perception.noise_std": 0.01}).perception  # an override turns it on
+    assert load_walking_preset("bolt").perception is None  # no [perception]: Measurement.obstacles stays ()
+    noisy = load_walking_preset("bolt", {"perception.noise_std": 0.01}).perception  # an override turns it on
     assert noisy.noise_std == 0.01 and noisy.enabled
     assert load_walking_preset("h1", {"perception.enabled": False}).perception.enabled is False
 
@@ -153,6 +153,39 @@ def test_a_box_is_reported_within_1_cm_at_1_m_without_noise_on_random_layouts(h1
         first = xs[int(round(track.first_seen / SCAN_DT))]
         assert box[0] - first > 2.0 or first < 0.05  # first reported more than 2 m ahead, or at once when nearer
         assert abs(track.obstacle.center[1] - box[4]) < 0.05  # the fan's lateral extent, centred on the path
+
+
+@pytest.fixture(scope="module")
+def g1():
+    from robots import load_robot
+
+    return load_robot("g1")
+
+
+def test_the_g1s_rays_see_the_ground_from_0_51_to_2_20_m_and_report_its_lowest_box(g1):
+    """The G1's fan (its preset's [perception], docs/perception.md "The G1's rangefinders"): standing, every ray
+    meets the ground 0.12 + 0.757 / tan(p) m ahead of the pelvis, 0.514 m (62.5 deg) to 2.199 m (20 deg), and the
+    campaign's lowest box (0.08 m) is reported within 1 cm of its height and near edge with its near edge 1 m ahead."""
+    with (PRESET_DIR / "g1.toml").open("rb") as stream:
+        stated = set(tomllib.load(stream)["perception"])
+    assert {f.name for f in dataclasses.fields(PerceptionConfig)} <= stated
+    config = load_walking_preset("g1").perception
+    assert config.enabled and config.n_rays == len(config.pitch_deg) * len(config.yaw_deg) == 126
+    model, data = scene(g1, config, [])
+    pipeline, _ = approach(g1, model, data, config, stop_x=0.0)  # one scan, standing at base x = 0
+    q = np.array(g1.q_reference)
+    q[0] = 0.0
+    points = pipeline.sensor.last.points_world(q[:7])
+    assert np.all(np.isfinite(points)) and np.all(np.abs(points[:, 2]) < 1e-3)  # every ray on the ground
+    ahead = points[np.abs(points[:, 1]) < 1e-9, 0]  # the rays of yaw 0 (the +-15 deg ones: 0.500-2.128 m along x)
+    assert len(ahead) == len(config.pitch_deg)
+    assert ahead.min() == pytest.approx(0.514, abs=2e-3) and ahead.max() == pytest.approx(2.199, abs=2e-3)
+    assert pipeline.estimator.obstacles == ()
+    box = [2.0, 0.15, 1.2, 0.08, 0.0]
+    model, data = scene(g1, config, [box])
+    pipeline, _ = approach(g1, model, data, config, stop_x=box[0] - 1.0)
+    height_error, near_error, far_error = estimate_errors(pipeline, box)
+    assert abs(height_error) < 0.01 and abs(near_error) < 0.01
 
 
 @needs_h1_extra

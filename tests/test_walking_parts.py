@@ -287,7 +287,7 @@ RUN_OPTIONS = {"mpc_prepare", "mpc_time_budget", "delay_nodes", "computation_del
                "mpc_failure_times", "sequencer_params_from"}
 LIPM_CORRECTIONS = {"swing_drift", "dcm_offset_bias", "stance_drift"}  # initial values, identified online
 # obstacle negotiation (sequencer.footholds, the OCP's clearance terms, wbmpc.walking.negotiation): tuned for the
-# H1 only; Bolt's and the G1's presets keep the defaults (no negotiation: negotiation_lookahead = 0)
+# H1, scaled from it for the G1 (its obstacle runs turn the negotiation on); Bolt's preset keeps the defaults
 OBSTACLE_FIELDS = {
     "planner": {"obstacle_margin", "obstacle_approach_margin", "obstacle_step_length_max",
                 "obstacle_step_duration_min", "obstacle_step_duration_max", "obstacle_swing_length_max",
@@ -341,11 +341,57 @@ def test_bolt_preset_states_every_tuned_number_and_takes_overrides():
 
 
 def test_g1_preset_states_every_tuned_number():
-    preset = _assert_preset_states_every_field("g1", LIPM_CORRECTIONS)
+    preset = _assert_preset_states_every_field("g1", LIPM_CORRECTIONS, obstacles=True)
     assert preset.ocp.wrench_cone_weight > 0 and preset.controller.start_double_support > 0
     assert preset.planner.double_support > 0 and preset.command.yaw_rate[1] > 0
     weights = preset.ocp.state_weights
     assert dict(weights.joint_position_by_name)["waist"] > weights.joint_position
+
+
+G1_OBSTACLE_CAMPAIGN = "sim/campaigns/examples/g1_obstacles.toml"
+
+
+def test_g1_obstacle_settings_keep_its_walking_and_load_for_its_obstacle_runs():
+    """The G1 preset's obstacle settings (scaled from the H1's) leave its walking as it was (no negotiation with the
+    ALIP planner, no obstacle term in the batched OCP); with the overrides of its obstacle campaign the DCM planner
+    keeps the whole foot mesh off the box, crosses boxes up to 0.52 - 0.337 = 0.183 m deep, and the OCP holds
+    the clearance terms on the G1's knee frames."""
+    from pathlib import Path
+
+    from robots.g1 import SOLE_CENTER_IN_ANKLE, SOLE_SPHERES_IN_ANKLE
+    from sequencer.dcm_planner import DcmFootstepPlanner
+    from sequencer.obstacles import Obstacle
+    from sim.campaigns.spec import CampaignSpec
+    from sim.campaigns.trial import _trial_preset, resolve_arguments
+    from wbmpc.walking.ocp import WalkingOCP
+
+    walking = load_walking_preset("g1")
+    assert walking.footstep_planner.kind == "alip" and walking.controller.negotiation_lookahead == 0.0
+    assert walking.ocp.obstacle_clearance_weight == walking.ocp.obstacle_swing_path_weight == 0.0
+    assert walking.ocp.obstacle_com_weight == 0.0
+    planner = walking.planner
+    spheres = np.array(SOLE_SPHERES_IN_ANKLE)[:, :2] - SOLE_CENTER_IN_ANKLE[:2]  # sole frame [m]
+    assert np.all(spheres[:, 0] < planner.sole_front) and np.all(-spheres[:, 0] < planner.sole_rear)
+    assert np.all(np.abs(spheres[:, 1]) < planner.sole_half_width)
+    assert [tuple(p) for p in walking.ocp.obstacle_sole_points] == [(planner.sole_front, 0.0, 0.0),
+                                                                     (-planner.sole_rear, 0.0, 0.0)]
+
+    spec = CampaignSpec.from_toml(Path(__file__).resolve().parents[1] / G1_OBSTACLE_CAMPAIGN)
+    assert (spec.robot, spec.scenario, spec.seeds) == ("g1", "obstacle", list(range(20)))
+    assert spec.grid["height"] == [0.08, 0.16, 0.24, 0.32]  # the H1's 0.1-0.4 m x 0.80
+    arguments = resolve_arguments(spec.scenario, spec.controller, spec.duration, {**spec.params, "height": 0.08},
+                                  spec.robot)
+    run = _trial_preset(spec.robot, spec.scenario, arguments)
+    assert run.footstep_planner.kind == "dcm" and run.controller.planner_backend == "exact"
+    assert run.controller.negotiation_lookahead > 0 and run.perception.enabled
+    dcm = DcmFootstepPlanner(run.planner)
+    for depth, crossable in ((0.18, True), (0.19, False)):
+        box = Obstacle(center=np.array([1.0 + 0.5 * depth, 0.0]), yaw=0.0, depth=depth, width=1.2, height=0.08)
+        assert bool(dcm.can_cross(box, np.array([0.5, 0.0]), 0.0)) is crossable, depth
+    ocp = WalkingOCP(load_robot("g1"), run.ocp, n_nodes=2, dt=0.02)
+    terms = ocp.problem.running_models[0].differential.costs.costs
+    assert {"left_clearance_shank", "right_clearance_sole1", "com_path"} <= set(terms)
+    assert ocp.evaluation == "nodes"
 
 
 def test_h1_preset_states_every_tuned_number():
