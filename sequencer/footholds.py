@@ -86,6 +86,15 @@ QP of the step ℓ + δ_c from the initial offset (ξ_0 - p_0) + δ_c (its lengt
 crossing, pivoting on the heel side, reaches its aim, (ℓ_c + δ + b_c) exp(-ω T_c,aim) - δ (at least the nominal
 offset).
 
+**The crossing's momentum.** The lead crossing lands with the DCM ahead of its foothold by the nominal offset:
+what the trailing swing needs for the body to carry on over the lead foot. A whole-body robot loses part of it at
+the lead touchdown (the H1's DCM 5-10 cm behind where it was just before, measured with the lead step 0.6 m long) and
+more over the trailing swing (the swing leg accelerated forwards moves the centre of pressure towards the toe), and
+fell backwards with the trailing foot beyond the box, where it cannot step back. With ``obstacle_crossing_offset``
+Δb > 0 the lead crossing aims at b_nom + Δb (its QP lengthens the crossing's duration, within its bound, for the
+DCM to get there), and the last step before the obstacle at the offset from which it does; the DCM check ("cross,
+unless the DCM cannot carry it") still compares with the crossing's aim without Δb.
+
 **The lateral aim.** A crossing step lasts longer than a walking step (T_c against t_nom), and the lateral DCM
 offset it starts from grows by exp(ω T_c), not exp(ω t_nom): from the nominal offset b_y,nom the crossing spreads
 the feet (on the H1 a 0.6 s crossing lands 0.2 m wider than the nominal width, and the QP's lateral cost bounded
@@ -164,6 +173,9 @@ class FootholdGeometry:
         crossing_cop: δ [m] >= 0: every swing over an obstacle pivots on a centre of pressure within δ of its stance
             foothold along the heading, chosen by its QP ("The crossing's centre of pressure" in the module
             docstring); 0: the foothold.
+        crossing_offset: Δb [m] >= 0: the lead crossing aims at the nominal DCM offset along the heading plus Δb at
+            its touchdown, the last step before the obstacle at the offset that reaches it ("The crossing's momentum"
+            in the module docstring); 0: the nominal offset.
         lateral_aim_fraction: the last step before an obstacle and the lead crossing aim at this fraction of the
             nominal lateral DCM offset, exp(-ω (T_lat - t_nom)) in (0, 1] ("The lateral aim" in the module docstring);
             1: the nominal.
@@ -190,6 +202,7 @@ class FootholdGeometry:
     crossing_drift: float = 0.0
     lateral_aim_fraction: float = 1.0
     crossing_cop: float = 0.0
+    crossing_offset: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -406,7 +419,8 @@ class FootholdConstraints:
                 elif cross is None:
                     checked = self._solve_option(solve, along[0][0], None, True, step_length_nominal, offset_nominal,
                                                  lift_along)
-                    target = offset_nominal if checked[2] is None else checked[2]
+                    # the crossing's aim without its momentum Δb: whether the DCM can carry the crossing at all
+                    target = offset_nominal if checked[2] is None else checked[2] - sign * self.geometry.crossing_offset
                     late = sign * (target - checked[0].hx) > self.geometry.offset_tolerance
                 else:
                     late = not cross
@@ -470,12 +484,13 @@ class FootholdConstraints:
         beyond, with a swing travel bound) aims at b_c of "Two steps ahead" in the module docstring. Three
         fixed-point passes: the foothold moves with the aim. A crossing's candidate carries the crossing drift
         (:meth:`swing_solve`; ``lift_along``: its lift-off along the heading from this stance [m], None: unknown)."""
+        sign = 1.0 if step_length_nominal > 0.0 else -1.0
         if far is None and not (crossing and self.geometry.swing_length_max > 0.0):
             if crossing:  # the lead crossing: the trailing crossing swing follows it (the lateral aim)
-                return self.swing_solve(solve, bounds, None, offset_nominal, lift_along,
-                                        self.geometry.lateral_aim_fraction), bounds, None
+                aim = offset_nominal + sign * self.geometry.crossing_offset if self.geometry.crossing_offset else None
+                return self.swing_solve(solve, bounds, aim, offset_nominal, lift_along,
+                                        self.geometry.lateral_aim_fraction), bounds, aim
             return solve(bounds, None), bounds, None
-        sign = 1.0 if step_length_nominal > 0.0 else -1.0
         foothold = bounds[1] if sign > 0.0 else bounds[0]
         aim, candidate = None, None
         for _ in range(3):
@@ -526,13 +541,14 @@ class FootholdConstraints:
     def last_step_aim(self, crossing_length: float, sign: float, step_length_nominal: float,
                       offset_nominal: float, travel: float = 0.0) -> float:
         """b_x [m], heading frame: the DCM offset the last step before an obstacle aims at, from which the crossing
-        step of ``crossing_length`` [m] reaches its own aim (b_c, or the nominal offset without a travel bound)
+        step of ``crossing_length`` [m] reaches its own aim (b_c, or without a travel bound the nominal offset plus
+        the crossing's momentum sign Δb)
         within T_c,aim, and at least the nominal offset: sign max((ℓ_c + δ + sign b_c - κ_c d_c) exp(-ω T_c,aim) - δ,
         sign b_nom), d_c = ``travel`` [m] the crossing swing's travel from its lift-off (the crossing drift), δ the
         crossing's centre of pressure behind its stance foothold (``crossing_cop``)."""
         decay = math.exp(-self.omega * (self.geometry.aim_duration or self.geometry.step_duration_max))
         target = self._crossing_aim(crossing_length, sign, step_length_nominal, offset_nominal) \
-            if self.geometry.swing_length_max > 0.0 else offset_nominal
+            if self.geometry.swing_length_max > 0.0 else offset_nominal + sign * self.geometry.crossing_offset
         drift = self.geometry.crossing_drift * abs(travel)
         cop = self.geometry.crossing_cop
         return sign * max((crossing_length + cop + sign * target - drift) * decay - cop, sign * offset_nominal)
@@ -558,9 +574,11 @@ class FootholdConstraints:
                       offset_nominal: float) -> float:
         """b_c [m], heading frame: the DCM offset at the touchdown of a crossing step of ``crossing_length`` [m]
         from which the trailing step, ℓ_t = min(|l_nom|, max(0, s_max - crossing_length)) long and lasting the
-        crossing's least duration, ends at ``offset_nominal``: sign (ℓ_t + sign b_nom) exp(-ω T_c,min)."""
+        crossing's least duration, ends at ``offset_nominal``: sign (ℓ_t + sign b_nom) exp(-ω T_c,min), plus the
+        crossing's momentum sign Δb (``crossing_offset``)."""
         trailing = min(abs(step_length_nominal), max(0.0, self.geometry.swing_length_max - crossing_length))
-        return sign * (trailing + sign * offset_nominal) * math.exp(-self.omega * self.geometry.step_duration_min)
+        return sign * ((trailing + sign * offset_nominal) * math.exp(-self.omega * self.geometry.step_duration_min)
+                       + self.geometry.crossing_offset)
 
     def _trailing_bounds(self, bounds: StepBounds, p0, yaw: float, liftoff, boxes=(), free: float | None = None
                          ) -> StepBounds:

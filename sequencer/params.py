@@ -124,6 +124,10 @@ class SequencerParams:
             pressure" in :mod:`sequencer.footholds`; the 'exact' backend only); 0: the foothold (a point foot's).
             The plan's CoM prediction pivots there too (``PlannedStep.cop_offset``), so the OCP's terminal CoM
             follows.
+        obstacle_crossing_offset: Δb [m] in [0, 0.3): the lead crossing (the step from before an obstacle to beyond it)
+            aims at the nominal DCM offset along the heading plus Δb at its touchdown, and the last step before the
+            obstacle at the offset that reaches it ("The crossing's momentum" in :mod:`sequencer.footholds`): the
+            body keeps moving over the lead foot through the trailing swing; 0: the nominal offset.
         obstacle_lateral_aim_duration: T_lat [s], 0 (off) or in [t_nom, max(t_max, obstacle_step_duration_max)]:
             the last step before an obstacle and the lead crossing aim at the lateral DCM offset
             b_y,nom exp(-ω (T_lat - t_nom)) instead of b_y,nom, the one from which a crossing step lasting T_lat ends at
@@ -172,6 +176,7 @@ class SequencerParams:
     obstacle_crossing_drift: float = 0.0
     obstacle_lateral_aim_duration: float = 0.0
     obstacle_crossing_cop: float = 0.0
+    obstacle_crossing_offset: float = 0.0
     sole_front: float = 0.0
     sole_rear: float = 0.0
     sole_half_width: float = 0.0
@@ -250,6 +255,9 @@ class SequencerParams:
         if not (0.0 <= self.obstacle_crossing_cop < 0.2):
             raise ParameterError(f"obstacle_crossing_cop={self.obstacle_crossing_cop} m must be in [0, 0.2) m "
                                  f"(0: the foothold, a point foot's centre of pressure)")
+        if not (0.0 <= self.obstacle_crossing_offset < 0.3):
+            raise ParameterError(f"obstacle_crossing_offset={self.obstacle_crossing_offset} m must be in [0, 0.3) m "
+                                 f"(0: the lead crossing aims at the nominal DCM offset)")
         lateral = self.obstacle_lateral_aim_duration
         if not (lateral == 0.0 or self.t_nom <= lateral <= crossing_max):
             raise ParameterError(f"obstacle_lateral_aim_duration={lateral} s must be 0 (off) or in [t_nom={self.t_nom} s, "
@@ -298,6 +306,7 @@ class SequencerParams:
                                 approach_distance=self.obstacle_approach_distance,
                                 crossing_drift=self.obstacle_crossing_drift,
                                 crossing_cop=self.obstacle_crossing_cop,
+                                crossing_offset=self.obstacle_crossing_offset,
                                 lateral_aim_fraction=math.exp(-self.omega * (self.obstacle_lateral_aim_duration - self.t_nom))
                                 if self.obstacle_lateral_aim_duration > 0.0 else 1.0)
 

@@ -417,6 +417,31 @@ def test_a_crossing_swing_pivots_on_the_centre_of_pressure_its_qp_chooses():
             0.0, stance, measured, COMMAND, obstacles=(box,))
 
 
+def test_the_lead_crossing_aims_at_its_momentum_beyond_the_nominal_offset():
+    """obstacle_crossing_offset Δb: the lead crossing lands on the same foothold along the heading (its bound
+    beyond the box) with the DCM further ahead, towards Δb beyond the nominal offset, its swing lasting longer for
+    the DCM to get there; the DCM check still compares with the nominal aim (the lead still crosses at once)."""
+    box = Obstacle(np.array([0.7425, 0.0]), 0.0, 0.1, 1.2, 0.1)  # near side 0.6925 m
+    stance = StanceState("left", np.array([0.45, 0.203]), 0.0, 0.0, swing_liftoff=np.array([0.33, -0.203]))
+    dcm = stance.position + np.array([0.06, -0.09])
+    measured = ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm)
+    params = dataclasses.replace(H1, obstacle_crossing_cop=0.05)
+    plans = {extra: DcmFootstepPlanner(dataclasses.replace(params, obstacle_crossing_offset=extra)).plan(
+        0.0, stance, measured, COMMAND, obstacles=(box,)) for extra in (0.0, 0.06)}
+    lead = {extra: plan.steps[0] for extra, plan in plans.items()}
+    assert all(step.crossing is not None for step in lead.values())
+    assert lead[0.06].position[0] == pytest.approx(lead[0.0].position[0], abs=1e-9)  # along: on its bound
+    # the QP trades it against the lateral offset (the crossing's width on its bound: the longer swing lands with
+    # the lateral DCM nearer the foot): 0.039 m of the 0.06 m here
+    gain = lead[0.06].dcm_offset[0] - lead[0.0].dcm_offset[0]
+    assert 0.03 < gain <= 0.06 + 1e-9, gain
+    assert lead[0.06].duration > lead[0.0].duration + 0.015
+    for step in plans[0.06].steps:
+        np.testing.assert_allclose(plans[0.06].dcm_at(step.touchdown_time - 1e-9), step.dcm_at_touchdown, atol=1e-6)
+    with pytest.raises(ParameterError, match=r"obstacle_crossing_offset=0.3 m must be in \[0, 0.3\) m"):
+        dataclasses.replace(H1, obstacle_crossing_offset=0.3)
+
+
 def test_trailing_settle_and_aim_duration_bad_input():
     for value in (0.05, 6.0, float("nan")):
         with pytest.raises(ParameterError, match="obstacle_trailing_double_support"):

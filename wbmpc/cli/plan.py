@@ -69,6 +69,7 @@ _HELP = {
                                      "obstacle aims at (0: off)",
     "obstacle_crossing_cop": "bound of a crossing swing's centre of pressure from its stance foothold along the "
                              "heading [m] (0: the foothold)",
+    "obstacle_crossing_offset": "DCM offset the lead crossing aims at beyond the nominal one [m] (0: the nominal)",
     "obstacle_approach_distance": "even steps to the last foothold before an obstacle within this distance [m] "
                                   "(0: greedy)",
     "sole_half_width": "sole half width [m]",
