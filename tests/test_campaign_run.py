@@ -156,6 +156,24 @@ def test_a_trial_that_raises_is_recorded_with_its_error_and_the_campaign_goes_on
     assert summary["errors"][0]["count"] == 1 and "no_such_body" in summary["errors"][0]["error"]
 
 
+def test_a_record_names_the_code_at_the_start_of_its_trial(monkeypatch):
+    """The record's code is read before the trial runs (a commit made during a long trial is not what it ran)."""
+    import sim.campaigns.trial as trial_module
+    import sim.runner
+
+    checkout = {"head": "a" * 40}
+
+    def run_scenario(*args, **kwargs):
+        checkout["head"] = "b" * 40  # a commit while the trial runs
+        raise ValueError("stopped after the commit")
+
+    monkeypatch.setattr(trial_module, "code_version", lambda: checkout["head"])
+    monkeypatch.setattr(sim.runner, "run_scenario", run_scenario)
+    trial = trial_module.make_trials(small_push_map())[0]
+    record = trial_module.run_trial(trial)
+    assert record["status"] == "error" and record["code"] == "a" * 40
+
+
 def test_every_record_names_the_code_it_ran_and_the_report_warns_on_a_mix(tmp_path, inline_reference):
     from sim.campaigns.report import format_summary, summarize
     from sim.campaigns.trial import code_version

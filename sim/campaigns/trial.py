@@ -296,6 +296,7 @@ def run_trial(trial: Trial) -> dict[str, Any]:
     """
     from sim.runner import run_scenario
 
+    code = code_version()  # before the trial: a commit checked out while it runs is not the code it ran
     record: dict[str, Any] = {
         "key": trial.key,
         "index": trial.index,
@@ -341,7 +342,7 @@ def run_trial(trial: Trial) -> dict[str, Any]:
             metrics=_jsonable(metrics),
         )
     record.update(
-        code=code_version(),
+        code=code,
         wall_time=time.perf_counter() - tic,
         cpu_time=time.process_time() - cpu_tic,
         host=socket.gethostname(),
@@ -356,7 +357,9 @@ def code_version() -> str:
     """The code a trial ran: the git commit of the checkout the ``sim`` package is imported from, with
     ``-dirty`` when its tracked files differ from the commit, or ``unknown`` outside a git checkout (an
     installed wheel). A campaign resumed in a later session can thus tell its trials' code versions apart;
-    computed once per worker process (its modules are imported once too)."""
+    computed once per worker process, when its first trial starts (:func:`run_trial`; its modules are imported
+    once, by the forkserver at the campaign's start: a checkout during a campaign is not the code its trials run,
+    and their records still name the commit of the worker's first trial)."""
     root = Path(__file__).resolve().parents[2]
 
     def git(*args: str) -> str:
