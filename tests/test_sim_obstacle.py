@@ -58,7 +58,8 @@ def h1():
 
 
 def obstacle_model(h1, seed=0, **params):
-    """The obstacle scene's compiled model for the H1 and its scenario (box drawn from ``seed``)."""
+    """The obstacle scene's compiled model for the robot ``h1`` (the H1 unless another is given) and its scenario
+    (box drawn from ``seed``)."""
     from robots.mujoco_model import build_mujoco_spec
 
     scenario = make_scenario("obstacle", **params)
@@ -102,6 +103,30 @@ def test_contacts_with_the_box_are_obstacle_contacts_not_falls(h1):
     mujoco.mj_forward(model, data)
     feet, other, obstacle = sensor.classify_with_obstacles(data)
     assert obstacle[-1] and other is None  # the shank guard touches the box: not a fall
+
+
+def test_the_shank_guard_spans_the_lower_leg_from_knee_to_ankle():
+    """Each lower leg's capsule runs from the knee to the foot body: on the G1, whose foot hangs from a 1.8 cm
+    ankle link, it is the knee link's and 0.318 m long (the shin), not 1.8 cm; on Bolt the lower leg's."""
+    from robots import load_robot
+    from sim.scenarios.obstacle import SHANK_GEOM_PREFIX
+
+    for name, body, length in (("g1", "left_knee_link", 0.318), ("bolt", "FL_LOWER_LEG", 0.2)):
+        robot = load_robot(name)
+        model, _ = obstacle_model(robot, height=0.1)
+        geom = model.geom(f"{SHANK_GEOM_PREFIX}left")
+        assert model.body(model.geom_bodyid[geom.id]).name == body
+        assert 2.0 * model.geom_size[geom.id][1] == pytest.approx(length, abs=2e-3), name
+
+
+@needs_h1_extra
+def test_the_h1_shank_guard_is_its_knee_link(h1):
+    from sim.scenarios.obstacle import SHANK_GEOM_PREFIX
+
+    model, _ = obstacle_model(h1, height=0.1)
+    geom = model.geom(f"{SHANK_GEOM_PREFIX}right")
+    assert model.body(model.geom_bodyid[geom.id]).name == "right_knee_link"
+    assert 2.0 * model.geom_size[geom.id][1] == pytest.approx(0.4, abs=1e-9)
 
 
 # ---------------------------------------------------------------------------------------- metrics

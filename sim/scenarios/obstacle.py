@@ -29,6 +29,7 @@ from sim.scenarios.base import Scenario, _check_range, register
 BOX_GEOM_NAME = f"{OBSTACLE_GEOM_PREFIX}_box"
 SHANK_GEOM_PREFIX = "shank_guard_"
 SHANK_RADIUS = 0.035  # [m], the capsule along each lower leg
+SHANK_LENGTH_MIN = 0.1  # [m]: the lower leg is the first ancestor of the foot body at least this far from it
 OBSTACLE_ONLY_BIT = 2  # contype/conaffinity bit the shank capsules share with the box only
 HEIGHT_RANGE = (0.02, 0.6)  # [m], box heights accepted
 DISTANCE_RANGE = (0.5, 20.0)  # [m], near-edge distances accepted
@@ -100,17 +101,25 @@ class Obstacle(Scenario):
 
 
 def _add_shank_guards(spec, robot) -> None:
-    """A capsule from each lower leg's origin to its foot body's, colliding with the box only."""
+    """A capsule from each lower leg's origin (the knee) to its foot body's, colliding with the box only.
+
+    The lower leg is the foot body's first ancestor at least :data:`SHANK_LENGTH_MIN` from it: the H1's and
+    Bolt's foot hangs from the shank itself; the G1's from a 1.8 cm ankle link (pitch, then roll), whose capsule
+    would leave the shin, 0.3 m, without a guard."""
     import mujoco
 
     for side, geoms in robot.mujoco_foot_geoms.items():
         foot = spec.body(geoms[0][0])
-        shank = foot.parent
+        shank, end = foot.parent, np.array(foot.pos, dtype=float)  # the foot's origin in the shank's frame [m]
+        while shank is not None and shank.name != "world" and np.linalg.norm(end) < SHANK_LENGTH_MIN:
+            rotated = np.zeros(3)
+            mujoco.mju_rotVecQuat(rotated, end, np.array(shank.quat, dtype=float))
+            shank, end = shank.parent, np.array(shank.pos, dtype=float) + rotated
         if shank is None or shank.name == "world":
             continue
         shank.add_geom(
             name=f"{SHANK_GEOM_PREFIX}{side}", type=mujoco.mjtGeom.mjGEOM_CAPSULE,
-            fromto=[0.0, 0.0, 0.0, *[float(v) for v in foot.pos]], size=[SHANK_RADIUS, 0.0, 0.0],
+            fromto=[0.0, 0.0, 0.0, *[float(v) for v in end]], size=[SHANK_RADIUS, 0.0, 0.0],
             contype=OBSTACLE_ONLY_BIT, conaffinity=OBSTACLE_ONLY_BIT, group=3,
             rgba=[0.6, 0.6, 0.6, 0.0],  # alpha 0: the rays skip it (they see the leg's own mesh)
             mass=0.0, density=0.0,
