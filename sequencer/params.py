@@ -74,7 +74,7 @@ class SequencerParams:
         obstacle_step_length_max: length bound [m], > 0, of a step that goes beyond an obstacle (the planner
             uses max(l_max, this): the crossing step may be longer than a walking one).
         obstacle_step_duration_min: duration lower bound [s] of a step whose swing passes over an obstacle
-            (the planner uses max(t_min, this)), <= t_max.
+            (the planner uses max(t_min, this)), <= max(t_max, obstacle_step_duration_max).
         obstacle_step_duration_max: duration upper bound [s] of a step whose swing passes over an obstacle,
             0 (t_max, the walking bound) or in [max(t_min, obstacle_step_duration_min), 3]: a crossing step is
             longer than a walking one and its DCM, from a walking offset, needs longer to travel it (from 3 cm,
@@ -224,9 +224,10 @@ class SequencerParams:
                 raise ParameterError(f"{name}={getattr(self, name)} m must be >= 0")
         if not self.obstacle_step_length_max > 0:
             raise ParameterError(f"obstacle_step_length_max={self.obstacle_step_length_max} m must be > 0")
-        if not 0.0 <= self.obstacle_step_duration_min <= self.t_max:
+        crossing_longest = max(self.t_max, self.obstacle_step_duration_max)
+        if not 0.0 <= self.obstacle_step_duration_min <= crossing_longest:
             raise ParameterError(f"obstacle_step_duration_min={self.obstacle_step_duration_min} s must be in "
-                                 f"[0, t_max={self.t_max} s]")
+                                 f"[0, max(t_max, obstacle_step_duration_max)={crossing_longest} s]")
         crossing_min = max(self.t_min, self.obstacle_step_duration_min)
         if not (self.obstacle_step_duration_max == 0.0 or crossing_min <= self.obstacle_step_duration_max <= 3.0):
             raise ParameterError(f"obstacle_step_duration_max={self.obstacle_step_duration_max} s must be 0 or in "

@@ -213,3 +213,7 @@ def test_the_campaign_times_the_planner_the_trial_runs():
     g1_planner = load_walking_preset("g1").planner
     assert dcm["sequencer_params"] == g1_planner and dcm["push_time"] == pytest.approx(2.0 + 0.5 * g1_planner.t_nom)
     assert dcm["sequencer_params_from"][1].t_min == dcm["sequencer_params_from"][1].t_max == g1_planner.t_nom
+    # the walking steps' timing is fixed, a step over an obstacle keeps its duration range (0.6-0.8 s on the G1)
+    crossing = dcm["sequencer_params_from"][1].foothold_geometry()
+    assert (crossing.step_duration_min, crossing.step_duration_max) == (g1_planner.obstacle_step_duration_min,
+                                                                       g1_planner.t_max)

@@ -151,8 +151,12 @@ def test_obstacle_helpers_and_bad_input():
         box.grown(-0.1)
     with pytest.raises(ParameterError, match="obstacle_step_length_max=0.0 m must be > 0"):
         dataclasses.replace(H1, obstacle_step_length_max=0.0)
-    with pytest.raises(ParameterError, match=r"obstacle_step_duration_min=0.9 s must be in \[0, t_max=0.8 s\]"):
+    with pytest.raises(ParameterError, match=r"obstacle_step_duration_min=0.9 s must be in "
+                                             r"\[0, max\(t_max, obstacle_step_duration_max\)=0.8 s\]"):
         dataclasses.replace(H1, obstacle_step_duration_min=0.9)
+    # a crossing longer than any walking step (its own upper bound beyond t_max)
+    assert dataclasses.replace(H1, obstacle_step_duration_min=0.9, obstacle_step_duration_max=1.0).foothold_geometry() \
+        .step_duration_min == 0.9
     with pytest.raises(ParameterError, match="sole_front=-0.01 m must be >= 0"):
         dataclasses.replace(H1, sole_front=-0.01)
     planner = DcmFootstepPlanner(H1)

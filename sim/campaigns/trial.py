@@ -266,8 +266,10 @@ def timed_planner_params(step_timing: str, params):
             timed = params.fixed_timing(ALIP_FIXED_STEP_PERIOD)
         else:
             timed = dataclasses.replace(params, r_period=STIFF_TIMING_WEIGHT)
-    elif step_timing == "fixed":
-        timed = dataclasses.replace(params, t_min=params.t_nom, t_max=params.t_nom)
+    elif step_timing == "fixed":  # the walking steps' timing; a step over an obstacle keeps its duration range
+        crossing_max = max(params.t_max, params.obstacle_step_duration_max)
+        timed = dataclasses.replace(params, t_min=params.t_nom, t_max=params.t_nom,
+                                    obstacle_step_duration_max=crossing_max if crossing_max > params.t_nom else 0.0)
     else:
         timed = dataclasses.replace(params, alpha2=STIFF_TIMING_WEIGHT)
     return dataclasses.replace(timed, name=f"{params.name}+{step_timing}_timing")
