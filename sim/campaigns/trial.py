@@ -251,8 +251,9 @@ def nominal_step_period(robot: str, scenario: str, arguments: dict[str, Any]) ->
 def timed_planner_params(step_timing: str, params):
     """The footstep planner's parameters ``params`` (``SequencerParams`` or ``AlipParams``) with ``step_timing``.
 
-    "adaptive": unchanged; "fixed": one step period (DCM: T_min = T_max = T_nom; ALIP:
-    ``ALIP_FIXED_STEP_PERIOD``); "stiff": the timing weight set to ``STIFF_TIMING_WEIGHT`` (DCM alpha_2,
+    "adaptive": unchanged; "fixed": one step period (DCM: T_min = T_max = T_nom, a step over an obstacle keeping its
+    own range when the parameters bound it, ``obstacle_step_duration_min`` > 0; ALIP: ``ALIP_FIXED_STEP_PERIOD``);
+    "stiff": the timing weight set to ``STIFF_TIMING_WEIGHT`` (DCM alpha_2,
     ALIP R_T), the bounds kept.
     """
     from sequencer.alip.params import AlipParams
@@ -266,10 +267,11 @@ def timed_planner_params(step_timing: str, params):
             timed = params.fixed_timing(ALIP_FIXED_STEP_PERIOD)
         else:
             timed = dataclasses.replace(params, r_period=STIFF_TIMING_WEIGHT)
-    elif step_timing == "fixed":  # the walking steps' timing; a step over an obstacle keeps its duration range
-        crossing_max = max(params.t_max, params.obstacle_step_duration_max)
-        timed = dataclasses.replace(params, t_min=params.t_nom, t_max=params.t_nom,
-                                    obstacle_step_duration_max=crossing_max if crossing_max > params.t_nom else 0.0)
+    elif step_timing == "fixed":
+        crossing = {}  # the walking steps' timing; a step over an obstacle keeps its duration range (its lower
+        if params.obstacle_step_duration_min > 0.0:  # bound is above t_nom on the H1 and the G1)
+            crossing["obstacle_step_duration_max"] = max(params.t_max, params.obstacle_step_duration_max)
+        timed = dataclasses.replace(params, t_min=params.t_nom, t_max=params.t_nom, **crossing)
     else:
         timed = dataclasses.replace(params, alpha2=STIFF_TIMING_WEIGHT)
     return dataclasses.replace(timed, name=f"{params.name}+{step_timing}_timing")
