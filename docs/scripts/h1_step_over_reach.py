@@ -40,16 +40,20 @@ import pinocchio as pin
 from scipy.optimize import minimize
 
 from robots import load_robot
-from robots.h1 import TOE_HALF_WIDTH
+from robots.h1 import HEEL_X, SOLE_CENTER_IN_ANKLE, TOE_HALF_WIDTH, TOE_X
+from wbmpc.walking.preset import load_walking_preset
 
-TOE, HEEL = np.array([0.1025, 0.0, 0.0]), np.array([-0.1375, 0.0, 0.0])  # ocp.obstacle_sole_points [m], sole frame
-CLEARANCE = 0.05      # [m] ocp.obstacle_clearance_margin = obstacle_shank_margin
-GROWN = 0.03          # [m] ocp.obstacle_footprint_margin
-SOLE_FRONT, SOLE_REAR = 0.1025, 0.1375  # [m] planner.sole_front / sole_rear
+PRESET = load_walking_preset("h1")  # the numbers below are the preset's, so the script follows it
+TOE, HEEL = (np.array(point) for point in PRESET.ocp.obstacle_sole_points)  # [m], sole frame
+CLEARANCE = PRESET.ocp.obstacle_clearance_margin  # [m] (= obstacle_shank_margin in the preset)
+GROWN = PRESET.ocp.obstacle_footprint_margin  # [m]
+SOLE_FRONT, SOLE_REAR = PRESET.planner_params.sole_front, PRESET.planner_params.sole_rear  # [m]
+MARGIN = PRESET.planner_params.obstacle_margin  # [m] stance sole to the box's edge
 PITCH_MAX = np.radians(15.0)  # pelvis pitch bound
-PELVIS_MIN = 0.60     # [m] fall.min_base_height
-SUPPORT = (-0.1075, 0.0725)  # [m] the heel and toe spheres along the sole frame's x (robots.h1: ankle x -0.035, 0.145)
-APEX_CAP = 0.45       # [m] ocp.obstacle_apex_height_max
+PELVIS_MIN = PRESET.fall.min_base_height  # [m]
+SUPPORT = (HEEL_X - SOLE_CENTER_IN_ANKLE[0], TOE_X - SOLE_CENTER_IN_ANKLE[0])  # [m] the heel and toe spheres along
+#                                                                                the sole frame's x
+APEX_CAP = PRESET.ocp.obstacle_apex_height_max  # [m]
 SWING, STANCE = "left", "right"
 LEG_JOINTS = ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ankle")
 VARIABLES = tuple(f"{role} {joint}" for role in ("stance", "swing") for joint in LEG_JOINTS)
@@ -138,7 +142,7 @@ class Case:
     knee: bool = True     # the swing knee at least t high too
     gating: bool = False  # only the sole points over the grown box held at t (the OCP's rule), else the whole sole
     hip_extension: float | None = None  # swing hip pitch upper bound [rad] (None: its joint limit, 1.57)
-    margin: float = 0.08
+    margin: float = MARGIN
 
     def stance_x(self) -> float:
         return -self.margin - SOLE_FRONT if self.swing == "lead" else self.depth + self.margin + SOLE_REAR
@@ -294,8 +298,8 @@ def plot(curves: dict, heights, knee_floor: float, path: str) -> None:
     h = np.asarray(heights)
     fig, axes = plt.subplots(1, 2, figsize=(13, 5.5), sharey=True)
     for ax, swing in zip(axes, ("lead", "trailing")):
-        ax.plot(h, h + CLEARANCE, "k-", lw=2.5, label="required: h + 5 cm")
-        ax.axhline(APEX_CAP, color="grey", ls=":", label="the preset's apex cap, 0.45 m")
+        ax.plot(h, h + CLEARANCE, "k-", lw=2.5, label=f"required: h + {100 * CLEARANCE:g} cm")
+        ax.axhline(APEX_CAP, color="grey", ls=":", label=f"the preset's apex cap, {APEX_CAP:g} m")
         ax.axhline(knee_floor, color="grey", ls="-.", label=f"knee height with the sole flat on the floor, {knee_floor:.2f} m")
         for (sw, _), curve in curves.items():
             if sw != swing:
@@ -319,7 +323,7 @@ def plot(curves: dict, heights, knee_floor: float, path: str) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--heights", type=float, nargs="+", default=[0.1, 0.2, 0.3, 0.4, 0.5], help="box heights [m]")
-    parser.add_argument("--margin", type=float, default=0.08, help="stance sole to box edge [m] (planner.obstacle_margin)")
+    parser.add_argument("--margin", type=float, default=MARGIN, help="stance sole to box edge [m] (planner.obstacle_margin)")
     parser.add_argument("--hip-extension-cap", type=float, default=0.5, help="the trailing swing hip's pitch bound [rad]")
     parser.add_argument("--table-height", type=float, default=0.4, help="the box height of the per-edge table [m]")
     parser.add_argument("--starts", type=int, default=4, help="random starts at the first height (besides SEEDS)")
@@ -362,6 +366,7 @@ def main() -> None:
     ]
     curves = {}
     for swing, key, case, label, style in specs:
+        case = replace(case, margin=args.margin)
         curves[swing, key] = {"case": case, "label": label, "style": style,
                               "results": series(reach, case, heights, args.starts, rng)}
 
