@@ -15,7 +15,9 @@ Per running node k (time t0 + k dt), with the feet in contact given by the sched
   the MuJoCo closed loop (one iteration per tick, foothold tracking) Bolt fell at 1.6 s with
   them (weights 1e5 / 1e3) and walked without them;
 - ``control_regularization``: ‖u‖², eq. (20);
-- ``state_regularization``: ‖x ⊖ x*‖²_W around the reference posture, eq. (21);
+- ``state_regularization``: ‖x ⊖ x*‖²_W around the reference posture, eq. (21) (with
+  ``obstacle_leg_posture_scale`` ≠ 1 its leg joint-position rows are the term ``leg_posture``, scaled while
+  the horizon holds a crossing swing);
 - ``control_bounds``: quadratic barrier outside the robot's torque limits, eq. (22);
 - optional ``{foot}_foothold`` (track the planned touchdown xy at the last swing node; off by
   default: footholds emerge, the paper's choice), ``{foot}_contact_force`` (regularise the
@@ -229,6 +231,11 @@ class WalkingOCPConfig:
             planned on the heel side of the stance foot carries the CoM further than the foothold's pendulum);
             0 = the term is absent (only the terminal CoM reference ties the OCP to the plan's momentum, and the H1
             realised the point-foot DCM travel, landing the lead crossing with the DCM behind it).
+        obstacle_leg_posture_scale: factor on the legs' joint-position weights of the state regularisation (the
+            joints supporting the feet) at every node while the horizon holds a crossing swing, >= 0: the standing
+            posture's legs pull the pelvis between feet 0.6 m apart, against the ``com_path`` that carries it over
+            the lead foot (docs/ocp.md "The legs' posture over a crossing"). 1 = unchanged (one
+            ``state_regularization`` term); otherwise those rows are the separate term ``leg_posture``.
         max_line_search_trials: FDDP line-search steps tried (1, ½, …).
         reg_min, reg_max: FDDP regularisation bounds.
         th_stop: FDDP stopping threshold.
@@ -273,6 +280,7 @@ class WalkingOCPConfig:
     obstacle_swing_path_weight: float = 0.0
     obstacle_foothold_weight: float = 0.0
     obstacle_com_weight: float = 0.0
+    obstacle_leg_posture_scale: float = 1.0
     max_line_search_trials: int = 10
     reg_min: float = 1e-9
     reg_max: float = 1e9
@@ -283,7 +291,8 @@ class WalkingOCPConfig:
                      "control_weight", "control_bound_weight",
                      "com_terminal_weight", "foothold_weight", "contact_force_weight", "friction_cone_weight",
                      "wrench_cone_weight", "swing_orientation_weight", "obstacle_clearance_weight",
-                     "obstacle_swing_path_weight", "obstacle_foothold_weight", "obstacle_com_weight"):
+                     "obstacle_swing_path_weight", "obstacle_foothold_weight", "obstacle_com_weight",
+                     "obstacle_leg_posture_scale"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f"{name}={value} must be finite and >= 0")
@@ -503,6 +512,12 @@ class WalkingOCP:
         self.mass = float(sum(inertia.mass for inertia in model.inertias))
         self.x_reference = np.concatenate([np.asarray(robot.q_reference, dtype=float), np.zeros(model.nv)])
         self._shank_frame_ids = self._shank_frames(config.obstacle_shank_frames)
+        #: rows of the state residual (tangent, (2 nv,)) that are the legs' joint positions: the joints supporting
+        #: the feet, the free flyer excluded
+        self.leg_position_rows = np.array(sorted({
+            model.joints[j].idx_v + i for fid in self.foot_frame_ids.values()
+            for j in model.supports[model.frames[fid].parentJoint] if j > 1
+            for i in range(model.joints[j].nv)}), dtype=int)
         pdata = model.createData()
         pin.framesForwardKinematics(model, pdata, self.x_reference[: model.nq])
         self._reference_placements = {foot: pin.SE3(pdata.oMf[fid]) for foot, fid in self.foot_frame_ids.items()}
@@ -514,6 +529,11 @@ class WalkingOCP:
         self._node_terms = []
         self._state_residuals = [model.differential.costs.costs["state_regularization"].cost.residual
                                  for model in running + [terminal]]
+        # per node: the legs' posture cost item (with obstacle_leg_posture_scale != 1), its residual turned as above
+        self._leg_posture_terms = [model.differential.costs.costs["leg_posture"] for model in running + [terminal]
+                                   ] if config.obstacle_leg_posture_scale != 1.0 else None
+        if self._leg_posture_terms is not None:
+            self._state_residuals += [item.cost.residual for item in self._leg_posture_terms]
         # the reference posture's base orientation (Pinocchio's q[3:7] = (x, y, z, w)), turned by the heading
         self._base_rotation_reference = pin.Quaternion(self.x_reference[3:7]).toRotationMatrix()
         for model in running + [terminal]:
@@ -577,9 +597,19 @@ class WalkingOCP:
         state, nu = self.state, self.nu
         costs = CostModelSum(state, nu)
         w_state = cfg.state_weights.vector(state.nv, tuple(self.robot.actuated_joint_names))
+        w_legs = None
+        if cfg.obstacle_leg_posture_scale != 1.0:  # the legs' joint-position rows as their own term
+            w_legs = np.zeros_like(w_state)
+            w_legs[self.leg_position_rows] = w_state[self.leg_position_rows]
+            w_state = w_state.copy()
+            w_state[self.leg_position_rows] = 0.0
         costs.add("state_regularization",
                   CostModelResidual(ResidualState(state, self.x_reference, nu), ActivationWeightedQuad(w_state)),
                   cfg.state_weight)
+        if w_legs is not None:
+            costs.add("leg_posture",
+                      CostModelResidual(ResidualState(state, self.x_reference, nu), ActivationWeightedQuad(w_legs)),
+                      cfg.state_weight)
         if not terminal:
             costs.add("control_regularization", CostModelResidual(ResidualControl(state, nu)), cfg.control_weight)
             limit = cfg.control_bound_fraction * self.torque_limit
@@ -790,9 +820,17 @@ class WalkingOCP:
         if cfg.base_yaw_reference == "footholds":
             heading = foothold_heading(in_contact, np.asarray(schedule.contact_yaw, dtype=float)[:, columns],
                                        np.asarray(schedule.touchdown_yaw, dtype=float)[:, columns])
-            for residual, yaw in zip(self._state_residuals, heading.tolist()):  # (a batched problem's rows)
-                residual.reference[3:7] = pin.Quaternion(yaw_rotation(yaw) @ self._base_rotation_reference).coeffs()
+            base_quaternions = [pin.Quaternion(yaw_rotation(yaw) @ self._base_rotation_reference).coeffs()
+                                for yaw in heading.tolist()]
+            # the state residuals of every node, then the legs' posture ones (a batched problem's rows)
+            for i, residual in enumerate(self._state_residuals):
+                residual.reference[3:7] = base_quaternions[i % len(base_quaternions)]
         self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
+        if self._leg_posture_terms is not None:
+            leg_weight = cfg.state_weight * (cfg.obstacle_leg_posture_scale if crossings is not None else 1.0)
+            for item in self._leg_posture_terms:
+                if item.weight != leg_weight:
+                    item.weight = leg_weight
         if self._com_path_terms is not None:
             tracking = crossings is not None and com_path is not None
             if tracking:
