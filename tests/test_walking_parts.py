@@ -301,7 +301,7 @@ OBSTACLE_FIELDS = {
             "obstacle_shank_margin", "obstacle_footprint_margin", "obstacle_apex_margin", "obstacle_apex_height_max",
             "obstacle_swing_profile", "obstacle_plateau_transition_min", "obstacle_swing_path_timing",
             "obstacle_swing_path_weight", "obstacle_foothold_weight", "obstacle_clearance_gating",
-            "obstacle_profile_transition", "obstacle_com_weight"},
+            "obstacle_profile_transition", "obstacle_com_weight", "obstacle_leg_posture_scale"},
     "controller": {"negotiation_lookahead", "negotiation_corridor", "negotiation_release", "negotiation_speed_max",
                    "negotiation_max_iterations", "crossing_max_iterations", "crossing_iterations_hold"},
 }

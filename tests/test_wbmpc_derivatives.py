@@ -608,6 +608,50 @@ def test_h1_com_path_is_tracked_only_while_the_horizon_holds_a_crossing():
         WalkingOCPConfig(obstacle_com_weight=-1.0)
 
 
+@needs_h1_extra
+def test_h1_leg_posture_is_scaled_only_while_the_horizon_holds_a_crossing():
+    """``obstacle_leg_posture_scale`` != 1: the legs' joint-position rows (the ten joints from the hips to the
+    ankles, not the torso or arms) are the separate term ``leg_posture``; the problem's cost equals the unsplit
+    one without a crossing and drops by (1 - scale) x the legs' posture cost with one; the turned base reference
+    reaches both terms."""
+    from wbmpc.errors import ParameterError
+
+    h1, ocp, schedule, crossings = _h1_crossing()
+    assert "leg_posture" not in ocp.problem.running_models[0].differential.costs.costs  # scale 1: one term
+    model = h1.pinocchio_model
+    legs = [model.names[j] for j in range(model.njoints) if model.joints[j].idx_v in ocp.leg_position_rows]
+    assert sorted(legs) == sorted(f"{side}_{joint}" for side in ("left", "right")
+                                  for joint in ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ankle"))
+    scale = 0.1
+    split, free = (WalkingOCP(h1, dataclasses.replace(ocp.config, obstacle_leg_posture_scale=value),
+                              n_nodes=ocp.n_nodes, dt=0.02) for value in (scale, 0.0))
+    x0 = standing_state(h1)
+    x0[7:] += 0.1 * np.sin(np.arange(x0.size - 7))  # off the reference posture
+    xs, us = [x0] * (ocp.n_nodes + 1), [np.zeros(ocp.nu)] * ocp.n_nodes
+    com = np.array([0.1, 0.0, 0.97])
+    items = [m.differential.costs.costs["leg_posture"]
+             for m in list(split.problem.running_models) + [split.problem.terminal_model]]
+    for crossing in (None, crossings):
+        costs = []
+        for problem in (ocp, split, free):
+            problem.update(x0, schedule, com, crossings=crossing)
+            costs.append(problem.problem.calc(xs, us))
+        whole, parts, without_legs = costs
+        assert all(item.weight == pytest.approx(ocp.config.state_weight * (1.0 if crossing is None else scale))
+                   for item in items)
+        if crossing is None:
+            assert parts == pytest.approx(whole, rel=1e-12) and without_legs == pytest.approx(whole, rel=1e-12)
+        else:  # the legs' posture cost whole - without_legs, scaled
+            assert whole - without_legs > 0.01
+            assert parts == pytest.approx(without_legs + scale * (whole - without_legs), rel=1e-12)
+    for m in split.problem.running_models:
+        costs = m.differential.costs.costs
+        assert np.array_equal(costs["leg_posture"].cost.residual.reference,
+                              costs["state_regularization"].cost.residual.reference)
+    with pytest.raises(ParameterError, match="obstacle_leg_posture_scale=-0.5 must be finite and >= 0"):
+        WalkingOCPConfig(obstacle_leg_posture_scale=-0.5)
+
+
 def test_the_swing_path_timings_go_from_lift_off_to_touchdown_and_smooth_lands_at_rest():
     from wbmpc.errors import ParameterError
     phase = np.linspace(0.0, 1.0, 101)
