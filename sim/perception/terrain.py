@@ -15,8 +15,10 @@ Pure numpy. Each :meth:`TerrainEstimator.update`:
    them (touching bins of side ``cluster_gap / 2``, transitively: :func:`_groups`) and reports each group holding
    at least ``min_returns`` returns as a :class:`sequencer.obstacles.Obstacle`:
 
-   - its depth axis is the robot's measured heading when the group was first reported (the
-     obstacle's own orientation is not estimated: a box across the path is crossed along it);
+   - its depth axis (``obstacle_axis``): ``"heading"``, the robot's measured heading when the group
+     was first reported (the obstacle's own orientation is not estimated: a box across the path is
+     crossed along it); ``"near_edge"``, the normal of the box's near edge fitted to its cells'
+     returns at every estimate (:func:`near_edge_yaw`), that heading when the fit is not trusted;
    - near / far edge and width: the extreme positions of its cells' returns above the ground by
      ``obstacle_min_height`` (the ground level of the previous scan), along and across that axis.
      The near edge is seen on the box's front face and is sharp; the far edge is the last return
@@ -46,6 +48,12 @@ from wbmpc.walking.perception_config import PerceptionConfig
 
 GROUND_CHANGE = 1e-4  # [m], a ground level change that re-estimates the obstacles without new returns on them
 
+# The near-edge fit (obstacle_axis = "near_edge", :func:`near_edge_yaw`)
+NEAR_EDGE_BIN_CELLS = 3  # [cells] width of the bins across the heading, in map cells (6 cm at 2 cm cells)
+NEAR_EDGE_MIN_SPAN = 0.3  # [m] the near edge's points must span this much across the heading ...
+NEAR_EDGE_MIN_BINS = 4  # ... in at least this many bins; else the heading is kept
+NEAR_EDGE_MAX_CORRECTION = 0.4  # [rad] a fitted axis farther than this from the heading is not trusted: heading kept
+
 
 @dataclass
 class ObstacleTrack:
@@ -53,13 +61,18 @@ class ObstacleTrack:
 
     Attributes:
         first_seen: time it was first reported [s].
-        yaw: its depth axis, the measured base heading at ``first_seen`` [rad], world frame.
+        heading: the measured base heading at ``first_seen`` [rad], world frame (the reference of the
+            near-edge fit and its fallback).
+        yaw: its depth axis, that of the current estimate [rad], world frame: ``heading`` with
+            ``obstacle_axis = "heading"``, the near edge's normal (refitted at every estimate) with
+            ``"near_edge"``.
         obstacle: the current estimate.
         n_returns: returns in its cells [-].
         n_cells: cells [-].
     """
 
     first_seen: float
+    heading: float
     yaw: float
     obstacle: Obstacle
     n_returns: int
@@ -147,15 +160,16 @@ class TerrainEstimator:
             else:
                 assigned.setdefault(match, []).append(cells)
         for k, parts in assigned.items():
-            estimate = self._estimate(np.concatenate(parts), self.tracks[k].yaw)
+            track = self.tracks[k]
+            estimate = self._estimate(np.concatenate(parts), track.heading)
             if estimate is not None:
-                track = self.tracks[k]
                 track.obstacle, track.n_returns, track.n_cells = estimate
+                track.yaw = track.obstacle.yaw
         for cells in new:
             estimate = self._estimate(cells, heading)
             if estimate is not None:
                 obstacle, n_returns, n_cells = estimate
-                self.tracks.append(ObstacleTrack(t, heading, obstacle, n_returns, n_cells))
+                self.tracks.append(ObstacleTrack(t, heading, obstacle.yaw, obstacle, n_returns, n_cells))
         self._merge_overlapping()
 
     def _merge_overlapping(self) -> None:
@@ -172,17 +186,21 @@ class TerrainEstimator:
                 host.first_seen = min(host.first_seen, track.first_seen)
         self.tracks = sorted(kept, key=lambda tr: tr.first_seen)
 
-    def _estimate(self, cells: np.ndarray, yaw: float) -> tuple[Obstacle, int, int] | None:
-        """The obstacle of ``cells`` (rows of the map) with depth axis ``yaw``, or None below ``min_returns``."""
+    def _estimate(self, cells: np.ndarray, heading: float) -> tuple[Obstacle, int, int] | None:
+        """The obstacle of ``cells`` (rows of the map), or None below ``min_returns``; its depth axis is
+        ``heading`` [rad] (world frame) or, with ``obstacle_axis = "near_edge"``, the near edge's normal
+        fitted to the cells' returns above the ground (:func:`near_edge_yaw`; ``heading`` when not trusted)."""
         n_returns = int(self.map.count[cells].sum())
         if n_returns < self.config.min_returns:
             return None
         bounds = self.map.high_bounds[cells]
         seen_high = np.isfinite(bounds[:, 0])
+        yaw = heading
+        if self.config.obstacle_axis == "near_edge":
+            fitted = near_edge_yaw(bounds[seen_high], heading, NEAR_EDGE_BIN_CELLS * self.config.cell_size)
+            yaw = heading if fitted is None else fitted
         bounds = np.where(seen_high[:, None], bounds, self.map.bounds[cells])  # a cell made high by its mean only
-        x_min, x_max, y_min, y_max = bounds.T
-        corners = np.stack([np.column_stack([x_min, y_min]), np.column_stack([x_max, y_min]),
-                            np.column_stack([x_max, y_max]), np.column_stack([x_min, y_max])]).reshape(-1, 2)
+        corners = _box_corners(bounds)
         axes = np.array([[np.cos(yaw), np.sin(yaw)], [-np.sin(yaw), np.cos(yaw)]])
         local = corners @ axes.T
         low, high = local.min(axis=0), local.max(axis=0)
@@ -192,6 +210,48 @@ class TerrainEstimator:
         top = heights >= 0.5 * np.percentile(heights, 90)  # the top's cells, not those of the front face below it
         height = float(np.median(heights[top]))
         return Obstacle(center=center, yaw=yaw, depth=size[0], width=size[1], height=height), n_returns, len(cells)
+
+
+def near_edge_yaw(high_bounds: np.ndarray, heading: float, bin_width: float) -> float | None:
+    """The normal of an obstacle's near edge (the face toward the robot) [rad], world frame, or None
+    when the fit is not trusted.
+
+    In the frame of ``heading`` [rad] (along it, across it to the left), the corners of the cells'
+    bounding boxes of returns above the ground (``high_bounds``: x_min, x_max, y_min, y_max, world
+    frame [m], shape (n, 4), finite rows) are binned across the heading (bins of ``bin_width`` [m]);
+    each bin keeps its nearest corner along the heading (the front face: nearer than the top behind
+    it), and a line along = c + m * across is fitted to those points by Theil-Sen (the median of the
+    slopes of the pairs at least a bin apart across: robust to the bins whose nearest point is on the
+    top or a side face). The edge's normal is then ``heading - atan(m)``.
+
+    None (keep the heading) when the points span less than ``NEAR_EDGE_MIN_SPAN`` across or fill fewer
+    than ``NEAR_EDGE_MIN_BINS`` bins, or when the normal is more than ``NEAR_EDGE_MAX_CORRECTION`` from
+    the heading.
+    """
+    corners = _box_corners(np.asarray(high_bounds, dtype=float).reshape(-1, 4))
+    along = corners @ np.array([np.cos(heading), np.sin(heading)])
+    across = corners @ np.array([-np.sin(heading), np.cos(heading)])
+    bins = np.floor(across / bin_width).astype(np.int64)
+    order = np.lexsort((along, bins))  # by bin, then nearest first
+    _, first = np.unique(bins[order], return_index=True)
+    edge_along, edge_across = along[order][first], across[order][first]
+    if len(first) < NEAR_EDGE_MIN_BINS or np.ptp(edge_across) < NEAR_EDGE_MIN_SPAN:
+        return None
+    i, j = np.triu_indices(len(first), 1)
+    apart = np.abs(edge_across[j] - edge_across[i]) >= bin_width
+    if not apart.any():
+        return None
+    slope = float(np.median((edge_along[j] - edge_along[i])[apart] / (edge_across[j] - edge_across[i])[apart]))
+    correction = -float(np.arctan(slope))
+    return heading + correction if abs(correction) <= NEAR_EDGE_MAX_CORRECTION else None
+
+
+def _box_corners(bounds: np.ndarray) -> np.ndarray:
+    """The four corners (x, y) [m] of each of the boxes ``bounds`` (n, 4) (x_min, x_max, y_min, y_max),
+    shape (4 n, 2), world frame."""
+    x_min, x_max, y_min, y_max = bounds.T
+    return np.stack([np.column_stack([x_min, y_min]), np.column_stack([x_max, y_min]),
+                     np.column_stack([x_max, y_max]), np.column_stack([x_min, y_max])]).reshape(-1, 2)
 
 
 def segment_distance(points: np.ndarray, segments: np.ndarray) -> np.ndarray:

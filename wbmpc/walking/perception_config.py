@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 from wbmpc.errors import ParameterError
 
+OBSTACLE_AXES = ("heading", "near_edge")  # the values of PerceptionConfig.obstacle_axis
+
 
 def _number(name: str, value, low: float, high: float, unit: str, low_open: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -90,6 +92,12 @@ class PerceptionConfig:
         min_returns: returns an obstacle needs, summed over its cells, to be reported [-].
         ground_radius: the ground level is the median height of the non-obstacle cells within this
             horizontal distance of the base [m].
+        obstacle_axis: how a reported obstacle's depth axis (``Obstacle.yaw``, world frame) is chosen:
+            ``"heading"``, the robot's measured base heading when the obstacle was first reported (the
+            box's own orientation is not estimated); ``"near_edge"``, the normal of the box's near edge
+            (the face toward the robot) fitted to the obstacle cells' returns, refitted at every
+            re-estimate, the heading when the fit is not trusted (``sim.perception.terrain``,
+            :func:`~sim.perception.terrain.near_edge_yaw`).
     """
 
     enabled: bool = True
@@ -109,6 +117,7 @@ class PerceptionConfig:
     cluster_gap: float = 0.3
     min_returns: int = 12
     ground_radius: float = 3.0
+    obstacle_axis: str = "heading"
 
     def __post_init__(self) -> None:
         if not isinstance(self.enabled, bool):
@@ -142,6 +151,8 @@ class PerceptionConfig:
                 raise ParameterError(f"perception.{name}={value!r} must be an integer >= 1")
         object.__setattr__(self, "ground_radius",
                            _number("ground_radius", self.ground_radius, 0.0, 100.0, "m", low_open=True))
+        if self.obstacle_axis not in OBSTACLE_AXES:
+            raise ParameterError(f"perception.obstacle_axis={self.obstacle_axis!r} must be one of {OBSTACLE_AXES}")
         if self.min_ground_distance >= self.max_range:
             raise ParameterError(f"perception.min_ground_distance={self.min_ground_distance} m must be below "
                                  f"max_range={self.max_range} m")
