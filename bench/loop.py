@@ -116,18 +116,18 @@ def pinocchio_floor(mpc, rollouts_per_update: float, repeats: int = 10) -> dict:
                           lambda q=q, v=v, tau=tau: pin.computeABADerivatives(model, plain, q, v, tau)))
     dynamics = derivatives = float("inf")
     for _ in range(3):
-        dyn = both = 0.0
+        dyn = der = 0.0
         for calc, diff in calls:
             tic = time.perf_counter()
             for _ in range(repeats):
                 calc()
             dyn += time.perf_counter() - tic
-            tic = time.perf_counter()
-            for _ in range(repeats):
-                calc()
+            for _ in range(repeats):  # each derivative call timed alone after its dynamics (not as a difference
+                calc()                # of two timings, which a loaded machine can make negative)
+                tic = time.perf_counter()
                 diff()
-            both += time.perf_counter() - tic
-        dynamics, derivatives = min(dynamics, dyn / repeats), min(derivatives, (both - dyn) / repeats)
+                der += time.perf_counter() - tic
+        dynamics, derivatives = min(dynamics, dyn / repeats), min(derivatives, der / repeats)
     n = len(calls)
     return {
         "dynamics_per_node": dynamics / n,
