@@ -63,9 +63,6 @@ class ObstacleTrack:
         first_seen: time it was first reported [s].
         heading: the measured base heading at ``first_seen`` [rad], world frame (the reference of the
             near-edge fit and its fallback).
-        yaw: its depth axis, that of the current estimate [rad], world frame: ``heading`` with
-            ``obstacle_axis = "heading"``, the near edge's normal (refitted at every estimate) with
-            ``"near_edge"``.
         obstacle: the current estimate.
         n_returns: returns in its cells [-].
         n_cells: cells [-].
@@ -73,10 +70,15 @@ class ObstacleTrack:
 
     first_seen: float
     heading: float
-    yaw: float
     obstacle: Obstacle
     n_returns: int
     n_cells: int
+
+    @property
+    def yaw(self) -> float:
+        """Its depth axis, the current estimate's [rad], world frame: ``heading`` with ``obstacle_axis =
+        "heading"``, the near edge's normal (refitted at every estimate) with ``"near_edge"``."""
+        return self.obstacle.yaw
 
 
 class TerrainEstimator:
@@ -164,12 +166,11 @@ class TerrainEstimator:
             estimate = self._estimate(np.concatenate(parts), track.heading)
             if estimate is not None:
                 track.obstacle, track.n_returns, track.n_cells = estimate
-                track.yaw = track.obstacle.yaw
         for cells in new:
             estimate = self._estimate(cells, heading)
             if estimate is not None:
                 obstacle, n_returns, n_cells = estimate
-                self.tracks.append(ObstacleTrack(t, heading, obstacle.yaw, obstacle, n_returns, n_cells))
+                self.tracks.append(ObstacleTrack(t, heading, obstacle, n_returns, n_cells))
         self._merge_overlapping()
 
     def _merge_overlapping(self) -> None:
