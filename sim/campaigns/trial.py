@@ -268,8 +268,10 @@ def timed_planner_params(step_timing: str, params):
         else:
             timed = dataclasses.replace(params, r_period=STIFF_TIMING_WEIGHT)
     elif step_timing == "fixed":
-        crossing = {}  # the walking steps' timing; a step over an obstacle keeps its duration range (its lower
-        if params.obstacle_step_duration_min > 0.0:  # bound is above t_nom on the H1 and the G1)
+        # the walking steps' timing; a step over an obstacle keeps its duration range (its lower bound is above
+        # t_nom on the H1 and the G1)
+        crossing = {}
+        if params.obstacle_step_duration_min > 0.0:
             crossing["obstacle_step_duration_max"] = max(params.t_max, params.obstacle_step_duration_max)
         timed = dataclasses.replace(params, t_min=params.t_nom, t_max=params.t_nom, **crossing)
     else:

@@ -527,13 +527,15 @@ class WalkingOCP:
         # foothold, contact force, friction cone, wrench cone, orientation) cost items, None where
         # the term is absent)
         self._node_terms = []
-        self._state_residuals = [model.differential.costs.costs["state_regularization"].cost.residual
-                                 for model in running + [terminal]]
-        # per node: the legs' posture cost item (with obstacle_leg_posture_scale != 1), its residual turned as above
+        # per node: the legs' posture cost item (with obstacle_leg_posture_scale != 1)
         self._leg_posture_terms = [model.differential.costs.costs["leg_posture"] for model in running + [terminal]
                                    ] if config.obstacle_leg_posture_scale != 1.0 else None
-        if self._leg_posture_terms is not None:
-            self._state_residuals += [item.cost.residual for item in self._leg_posture_terms]
+        # per node: the state residuals whose base orientation follows the heading (the regularisation's, and the
+        # legs' posture one when it is a term of its own)
+        self._state_residuals = [
+            [model.differential.costs.costs[name].cost.residual for name in ("state_regularization", "leg_posture")
+             if name in model.differential.costs.costs]
+            for model in running + [terminal]]
         # the reference posture's base orientation (Pinocchio's q[3:7] = (x, y, z, w)), turned by the heading
         self._base_rotation_reference = pin.Quaternion(self.x_reference[3:7]).toRotationMatrix()
         for model in running + [terminal]:
@@ -820,11 +822,10 @@ class WalkingOCP:
         if cfg.base_yaw_reference == "footholds":
             heading = foothold_heading(in_contact, np.asarray(schedule.contact_yaw, dtype=float)[:, columns],
                                        np.asarray(schedule.touchdown_yaw, dtype=float)[:, columns])
-            base_quaternions = [pin.Quaternion(yaw_rotation(yaw) @ self._base_rotation_reference).coeffs()
-                                for yaw in heading.tolist()]
-            # the state residuals of every node, then the legs' posture ones (a batched problem's rows)
-            for i, residual in enumerate(self._state_residuals):
-                residual.reference[3:7] = base_quaternions[i % len(base_quaternions)]
+            for residuals, yaw in zip(self._state_residuals, heading.tolist()):  # (a batched problem's rows)
+                quaternion = pin.Quaternion(yaw_rotation(yaw) @ self._base_rotation_reference).coeffs()
+                for residual in residuals:
+                    residual.reference[3:7] = quaternion
         self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
         if self._leg_posture_terms is not None:
             leg_weight = cfg.state_weight * (cfg.obstacle_leg_posture_scale if crossings is not None else 1.0)
