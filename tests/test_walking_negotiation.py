@@ -16,7 +16,7 @@ from wbmpc.errors import ParameterError
 from wbmpc.walking.negotiation import NEGOTIATION, WALKING, NegotiationMode
 from wbmpc.walking.planning import PlanningStage
 from wbmpc.walking.preset import load_walking_preset
-from wbmpc.walking.reference import crossing_schedule
+from wbmpc.walking.reference import crossing_schedule, swing_liftoffs
 
 BOX = Obstacle(np.array([0.5, 0.0]), 0.0, 0.1, 1.0, 0.1)  # across the path, near edge 0.45 m ahead
 FEET = np.array([[0.0, 0.2], [0.0, -0.2]])
@@ -159,3 +159,32 @@ def test_a_negotiation_with_a_planner_that_cannot_avoid_obstacles_is_refused():
         PlanningStage(robot, planner, config)
     with pytest.raises(ParameterError, match=r"negotiation_lookahead=-1.0 m must be in \[0, 10.0\] m"):
         dataclasses.replace(preset.controller, negotiation_lookahead=-1.0)
+
+
+def test_every_swing_lifts_off_from_its_previous_foothold_and_crossings_agree():
+    """:func:`swing_liftoffs`: each swing on the OCP grid lifts off from its foot's previous foothold in the plan (the
+    plan's stance position for the stance foot's first step, the given lift-off for the swinging foot's), NaN in
+    contact; over the crossing swings it is the lift-off the planner gave the crossing."""
+    robot, stage, x0 = _bolt_stage(negotiation_lookahead=1.0, negotiation_speed_max=0.2)
+    box = Obstacle(np.array([0.3, 0.0]), 0.0, 0.05, 0.6, 0.03)
+    plan, _, _ = stage.update(0.0, x0, np.ones(2, dtype=bool), obstacles=(box,))
+    schedule = contact_schedule(plan, 0.0, 0.01, 250, rounding="nearest")
+    liftoff = swing_liftoffs(plan, schedule, stage.swing_liftoff)
+    swinging = ~schedule.in_contact
+    assert liftoff.shape == schedule.touchdown_position.shape and np.all(np.isnan(liftoff[~swinging]))
+    assert np.all(np.isfinite(liftoff[swinging]))
+    for j, foot in enumerate(schedule.feet):
+        footholds = [plan.stance_position if foot == plan.stance_foot else stage.swing_liftoff]
+        footholds += [step.position for step in plan.steps if step.foot == foot]
+        for k in np.flatnonzero(swinging[:, j]):
+            i = next(i for i, p in enumerate(footholds[1:]) if np.allclose(p, schedule.touchdown_position[k, j]))
+            assert liftoff[k, j] == pytest.approx(footholds[i]), (foot, k)
+    crossings = crossing_schedule(plan, schedule)
+    over = crossings.index >= 0
+    assert over.any() and np.allclose(liftoff[over], crossings.liftoff_xy[over], rtol=0.0, atol=1e-12)
+    unknown = swing_liftoffs(plan, schedule, None)  # the swinging foot's lift-off not known: its first swing NaN
+    first = next(step for step in plan.steps).foot
+    assert first != plan.stance_foot
+    j = schedule.feet.index(first)
+    k = int(np.flatnonzero(swinging[:, j])[0])
+    assert np.all(np.isnan(unknown[k, j])) and np.array_equal(np.isnan(unknown[:, 1 - j]), np.isnan(liftoff[:, 1 - j]))

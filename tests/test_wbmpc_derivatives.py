@@ -709,6 +709,55 @@ def test_h1_smooth_crossing_swing_is_tracked_along_its_path_and_gated_where_that
 
 
 @needs_h1_extra
+def test_h1_every_swing_tracks_its_path_from_its_liftoff_with_the_swing_path_weight():
+    """``swing_path_weight`` > 0: ``{foot}_swing_path`` is active at every running swing node whose lift-off is given,
+    with the ``swing_path_timing`` path from it to the touchdown as reference and that weight; off where the lift-off
+    is NaN or not given. A crossing swing tracks its own path with ``obstacle_swing_path_weight`` when that is > 0,
+    and the next update without the crossing restores the weight. A lift-off array of the wrong shape is refused."""
+    from wbmpc.errors import ParameterError
+
+    h1, ocp, schedule, crossings = _h1_crossing()
+    config = dataclasses.replace(ocp.config, swing_path_weight=1e3, swing_path_timing="smooth")
+    paths = WalkingOCP(h1, config, n_nodes=ocp.n_nodes, dt=0.02)
+    x0, com = standing_state(h1), np.array([0.1, 0.0, 0.97])
+    swinging = ~schedule.in_contact
+    liftoff = np.where(swinging[..., None], np.array([[-0.3, 0.2], [-0.1, -0.25]]), np.nan)
+    liftoff[2] = np.nan  # a node whose swing's lift-off is unknown
+    costs = [model.differential.costs.costs for model in paths.problem.running_models]
+    paths.update(x0, schedule, com)
+    assert not any(node[f"{foot}_swing_path"].active for node in costs for foot in ("left", "right"))
+    paths.update(x0, schedule, com, swing_liftoff=liftoff)
+    expected = swing_path(np.nan_to_num(liftoff), np.nan_to_num(schedule.touchdown_position),
+                          np.nan_to_num(schedule.swing_phase), "smooth")
+    for k, node in enumerate(costs):
+        for j, foot in enumerate(("left", "right")):
+            item = node[f"{foot}_swing_path"]
+            assert item.active == (swinging[k, j] and k != 2), (k, foot)
+            if item.active:
+                assert item.weight == 1e3 and item.cost.residual.reference[:2] == pytest.approx(expected[k, j])
+    assert sum(node["right_swing_path"].active for node in costs) >= 3
+    crossing = WalkingOCP(h1, dataclasses.replace(config, obstacle_swing_path_weight=1e4,
+                                                  obstacle_swing_path_timing="straight"), n_nodes=ocp.n_nodes, dt=0.02)
+    costs = [model.differential.costs.costs for model in crossing.problem.running_models]
+    crossing.update(x0, schedule, com, crossings=crossings, swing_liftoff=liftoff)
+    straight = swing_path(crossings.liftoff_xy, schedule.touchdown_position, schedule.swing_phase)
+    for k, node in enumerate(costs):  # the fixture's swings all cross: the crossing's path and weight everywhere
+        for j, foot in enumerate(("left", "right")):
+            item = node[f"{foot}_swing_path"]
+            assert item.active == swinging[k, j], (k, foot)
+            if item.active:
+                assert item.weight == 1e4 and item.cost.residual.reference[:2] == pytest.approx(straight[k, j])
+    crossing.update(x0, schedule, com, swing_liftoff=liftoff)
+    assert all(node["right_swing_path"].weight == 1e3 for k, node in enumerate(costs) if swinging[k, 1] and k != 2)
+    with pytest.raises(ParameterError, match=r"swing_liftoff has shape \(3, 2, 2\), the schedule's touchdowns"):
+        paths.update(x0, schedule, com, swing_liftoff=liftoff[:3])
+    with pytest.raises(ParameterError, match="swing_path_timing='linear' must be one of"):
+        WalkingOCPConfig(swing_path_timing="linear")
+    with pytest.raises(ParameterError, match="swing_path_weight=-1.0 must be finite and >= 0"):
+        WalkingOCPConfig(swing_path_weight=-1.0)
+
+
+@needs_h1_extra
 def test_h1_crossing_swing_holds_a_plateau_over_the_box_and_turns_the_clearance_on_only_over_it():
     h1, ocp, schedule, crossings = _h1_crossing()
     x0 = standing_state(h1)

@@ -181,7 +181,9 @@ class WalkingController:
                 f"{t + self.reference_stage.horizon:.3f} s: nothing left to follow"
             )
         tic = time.perf_counter()
-        reference = self.reference_stage.sample(plan, t, measured.com[:2], measurement.foot_in_contact)
+        reference = self.reference_stage.sample(plan, t, measured.com[:2], measurement.foot_in_contact,
+                                                planning.swing_liftoff,
+                                                liftoffs=self.mpc.ocp.config.swing_path_weight > 0)
         if cfg.touchdown_detection == "contact":
             record["touchdown_wait"] = reference.touchdown_wait
         record["crossing_nodes"] = 0.0 if reference.crossings is None else float(np.sum(reference.crossings.index >= 0))
@@ -193,7 +195,7 @@ class WalkingController:
         else:
             solution = self.mpc.update(t, x, reference.schedule, reference.com_terminal, reference.touchdown_depth,
                                        reference.crossings, max_iterations=self._iteration_budget(record, t),
-                                       com_path=reference.com_path)
+                                       com_path=reference.com_path, swing_liftoff=reference.swing_liftoff)
             ok, status = bool(solution.ok), str(solution.status)
             restart = bool(solution.restart)
             record["mpc_prepared_used"] = float(getattr(self.mpc.problem, "prepared_used", 0))

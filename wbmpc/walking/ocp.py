@@ -21,7 +21,11 @@ Per running node k (time t0 + k dt), with the feet in contact given by the sched
 - ``control_bounds``: quadratic barrier outside the robot's torque limits, eq. (22);
 - optional ``{foot}_foothold`` (track the planned touchdown xy at the last swing node; off by
   default: footholds emerge, the paper's choice), ``{foot}_contact_force`` (regularise the
-  stance forces towards m g / n_stance) and ``{foot}_friction_cone`` (point feet).
+  stance forces towards m g / n_stance) and ``{foot}_friction_cone`` (point feet);
+- optional ``{foot}_swing_path`` (``swing_path_weight`` > 0): the swing foot's (x, y) along its path from
+  lift-off to the planned foothold (:func:`swing_path`) at every swing node: without it the horizontal
+  motion between lift-off and the last node's foothold term is free (the H1 pulled its foot back 3-11 cm
+  at lift-off and swung it through at up to 3.5 m/s; docs/ocp.md "The swing path of every step").
 
 - optional obstacle clearance (``obstacle_clearance_weight`` > 0): ``{foot}_clearance_sole{i}`` keeps
   the swing sole's points ``obstacle_sole_points`` (toe and heel) and ``{foot}_clearance_shank`` the
@@ -154,6 +158,12 @@ class WalkingOCPConfig:
             centre of pressure use, (0, 1] (a margin against the sole's edges).
         swing_orientation_weight: flat feet: orientation of the swing foot towards flat with
             the planned touchdown yaw, log3(R_ref^T R) [rad], at every swing node; 0 = off.
+        swing_path_weight: weight of ``{foot}_swing_path`` at every swing node of every swing: the foot frame's
+            (x, y) [m] tracking its path from lift-off to the planned foothold (:func:`swing_path`, timed by
+            ``swing_path_timing``), when :meth:`WalkingOCP.update` is given the swings' lift-off points; 0 = off
+            (the swing's horizontal motion free between lift-off and the foothold term). A crossing swing
+            tracks its own path with ``obstacle_swing_path_weight`` instead, when that is > 0.
+        swing_path_timing: the timing of that path (:func:`swing_path_fraction`): "straight" or "smooth".
         base_yaw_reference: the world yaw of the base in the state regularisation's reference:
             "fixed" (the reference posture's, the paper's choice; Bolt cannot turn) or
             "footholds" (at each node the mean of the feet's planned yaws: the foothold each
@@ -222,7 +232,7 @@ class WalkingOCPConfig:
             ``{foot}_swing_path`` term.
         obstacle_swing_path_weight: weight of ``{foot}_swing_path``, the foot frame's (x, y) tracking that path
             at every node of a crossing swing (the foot neither goes back while rising nor overshoots its
-            foothold); 0 = the term is absent (the horizontal path is free between lift-off and foothold).
+            foothold); 0 = a crossing swing tracks no path of its own (the path of ``swing_path_weight``, if on).
         obstacle_foothold_weight: the ``{foot}_foothold`` weight of every swing while the horizon holds a
             crossing swing (the footholds next to an obstacle must be where the plan puts them, not where
             they emerge); 0 = ``foothold_weight`` always. Needs ``foothold_weight`` > 0 (the term exists).
@@ -258,6 +268,8 @@ class WalkingOCPConfig:
     wrench_cone_weight: float = 0.0
     cop_sole_fraction: float = 1.0
     swing_orientation_weight: float = 0.0
+    swing_path_weight: float = 0.0
+    swing_path_timing: str = "smooth"
     base_yaw_reference: str = "fixed"
     baumgarte_gains: tuple[float, float] = (0.0, 50.0)
     contact_damping: float = 0.0
@@ -290,7 +302,7 @@ class WalkingOCPConfig:
         for name in ("foot_height_weight", "touchdown_height_weight", "touchdown_velocity_weight", "state_weight",
                      "control_weight", "control_bound_weight",
                      "com_terminal_weight", "foothold_weight", "contact_force_weight", "friction_cone_weight",
-                     "wrench_cone_weight", "swing_orientation_weight", "obstacle_clearance_weight",
+                     "wrench_cone_weight", "swing_orientation_weight", "swing_path_weight", "obstacle_clearance_weight",
                      "obstacle_swing_path_weight", "obstacle_foothold_weight", "obstacle_com_weight",
                      "obstacle_leg_posture_scale"):
             value = getattr(self, name)
@@ -307,6 +319,8 @@ class WalkingOCPConfig:
                 0.0 < self.obstacle_plateau_transition_min <= 0.5):
             raise ParameterError(f"obstacle_plateau_transition_min={self.obstacle_plateau_transition_min!r} "
                                  "must be in (0, 0.5]")
+        if self.swing_path_timing not in SWING_PATH_TIMINGS:
+            raise ParameterError(f"swing_path_timing={self.swing_path_timing!r} must be one of {SWING_PATH_TIMINGS}")
         if self.obstacle_swing_path_timing not in SWING_PATH_TIMINGS:
             raise ParameterError(f"obstacle_swing_path_timing={self.obstacle_swing_path_timing!r} must be one of "
                                  f"{SWING_PATH_TIMINGS}")
@@ -554,7 +568,7 @@ class WalkingOCP:
         # per running node, per foot: the swing path tracking cost item
         self._swing_path_terms = [[items[f"{foot}_swing_path"] for foot in self.feet]
                                   for items in (model.differential.costs.costs for model in running)
-                                  ] if config.obstacle_swing_path_weight > 0 else None
+                                  ] if config.swing_path_weight > 0 or config.obstacle_swing_path_weight > 0 else None
         # per running node: the CoM path tracking cost item (while a crossing is in the horizon)
         self._com_path_terms = [model.differential.costs.costs["com_path"] for model in running
                                 ] if config.obstacle_com_weight > 0 else None
@@ -670,8 +684,9 @@ class WalkingOCP:
                               CostModelResidual(ResidualFramePointHeight(state, shank, np.zeros(3), 0.0, nu),
                                                 ActivationQuadraticBarrier(*barrier)),
                               cfg.obstacle_clearance_weight, active=False)
-            if not terminal and cfg.obstacle_swing_path_weight > 0:
-                costs.add(f"{foot}_swing_path", self._frame_xy_cost(foot), cfg.obstacle_swing_path_weight, active=False)
+            if not terminal and (cfg.swing_path_weight > 0 or cfg.obstacle_swing_path_weight > 0):
+                costs.add(f"{foot}_swing_path", self._frame_xy_cost(foot),
+                          cfg.swing_path_weight or cfg.obstacle_swing_path_weight, active=False)
             if not terminal and cfg.swing_orientation_weight > 0 and flat:
                 costs.add(f"{foot}_orientation",
                           CostModelResidual(ResidualFrameRotation(state, fid, self._reference_placements[foot].rotation,
@@ -715,7 +730,7 @@ class WalkingOCP:
 
     # ------------------------------------------------------------------ update
     def update(self, x0: np.ndarray, schedule, com_terminal_reference: np.ndarray,
-               touchdown_depth: float = 0.0, crossings=None, com_path=None) -> None:
+               touchdown_depth: float = 0.0, crossings=None, com_path=None, swing_liftoff=None) -> None:
         """Set the initial state, the per-node contacts and references from a schedule.
 
         Args:
@@ -733,6 +748,11 @@ class WalkingOCP:
             com_path: the footstep plan's CoM prediction at the nodes, (n_nodes + 1, 3) [m], world, or None: the
                 ``com_path`` references, active at every running node when ``crossings`` is given (with
                 ``obstacle_com_weight`` > 0).
+            swing_liftoff: world (x, y) [m] where the swing running at each node lifted off (or lifts off),
+                (n_nodes + 1, n_feet, 2) in the schedule's foot order, NaN in contact or where unknown
+                (:func:`wbmpc.walking.reference.swing_liftoffs`), or None: the ``{foot}_swing_path`` terms of
+                ``swing_path_weight`` track :func:`swing_path` from there to the schedule's touchdown (off at
+                NaN rows and with None).
         """
         self.problem.set_x0(x0)
         if schedule.n_nodes != self.n_nodes:
@@ -767,10 +787,16 @@ class WalkingOCP:
                         item.active = False
                     if shank is not None:
                         shank.active = False
-        if self._swing_path_terms is not None:  # off until a crossing swing turns them on
+        if self._swing_path_terms is not None:  # off until a swing with a known lift-off turns them on
             for node_items in self._swing_path_terms:
                 for item in node_items:
                     item.active = False
+            if cfg.swing_path_weight > 0 and swing_liftoff is not None:
+                liftoff = np.asarray(swing_liftoff, dtype=float)
+                if liftoff.shape != np.shape(schedule.touchdown_position):
+                    raise ParameterError(f"swing_liftoff has shape {liftoff.shape}, the schedule's touchdowns "
+                                         f"{np.shape(schedule.touchdown_position)}")
+                self._swing_paths(liftoff[:, columns], ~in_contact, np.nan_to_num(phase), touchdown)
         heights = self.ground_height + swing_height_reference(np.nan_to_num(phase), apex)
         if crossings is not None:
             crossing_heights = self._clearance(crossings, ~in_contact, np.nan_to_num(phase), touchdown, columns)
@@ -846,6 +872,22 @@ class WalkingOCP:
         if self.evaluation == "batched":  # contact sets (references, weights and activity are shared)
             self.problem.sync()
 
+    def _swing_paths(self, liftoff: np.ndarray, swinging: np.ndarray, phase: np.ndarray,
+                     touchdown: np.ndarray) -> None:
+        """Turn on ``{foot}_swing_path`` (weight ``swing_path_weight``) at every running swing node whose lift-off
+        ``liftoff`` (n + 1, n_feet, 2) [m] is known (finite), with the reference :func:`swing_path` from it to the
+        schedule's ``touchdown`` (n + 1, n_feet, 2) [m] at the node's phase (both in the OCP's foot order)."""
+        cfg = self.config
+        known = swinging & np.isfinite(liftoff).all(axis=2)
+        path = swing_path(np.nan_to_num(liftoff), np.nan_to_num(touchdown), phase, cfg.swing_path_timing)
+        weight = cfg.swing_path_weight
+        for k, j in zip(*np.nonzero(known[:self.n_nodes]), strict=True):
+            item = self._swing_path_terms[k][j]
+            item.active = True
+            if item.weight != weight:
+                item.weight = weight
+            item.cost.residual.reference[:2] = path[k, j]
+
     def _clearance(self, crossings, swinging: np.ndarray, phase: np.ndarray, touchdown: np.ndarray,
                    columns: list[int]) -> np.ndarray:
         """Write the clearance terms of ``crossings`` and return the swing height references (n + 1, n_feet)
@@ -912,9 +954,11 @@ class WalkingOCP:
                 for row, node in enumerate(nodes.tolist()):
                     if node >= n_running:
                         continue
-                    if self._swing_path_terms is not None:
+                    if self._swing_path_terms is not None and cfg.obstacle_swing_path_weight > 0:
                         tracking = self._swing_path_terms[node][j]
                         tracking.active = True
+                        if tracking.weight != cfg.obstacle_swing_path_weight:
+                            tracking.weight = cfg.obstacle_swing_path_weight
                         tracking.cost.residual.reference[:2] = path[node, j]
                     if terms is None:
                         continue

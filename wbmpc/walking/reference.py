@@ -10,7 +10,8 @@ A plan whose steps pass over obstacles (``PlannedStep.crossing``, :mod:`sequence
 the OCP its crossing swings on the grid (:class:`CrossingSchedule`): which obstacle each swinging foot
 passes over and the swing's lift-off at each node; the foot's path from there to the schedule's touchdown
 (:func:`wbmpc.walking.ocp.swing_path`, straight or smoothly timed) is where the OCP raises the swing apex and turns on its
-clearance terms.
+clearance terms. Every swing's lift-off point on the grid (:func:`swing_liftoffs`) gives the OCP the path
+its ``{foot}_swing_path`` terms track (``WalkingOCPConfig.swing_path_weight``).
 """
 
 from __future__ import annotations
@@ -37,6 +38,8 @@ class OcpReference:
         crossings: the swings over obstacles on the grid, or None (the plan crosses none).
         com_path: the plan's CoM prediction at the nodes (n_nodes + 1, 3) [m], world (z at the planner's CoM
             height), when ``crossings`` is not None; else None.
+        swing_liftoff: where the swing running at each node lifted off (:func:`swing_liftoffs`), or None when the
+            stage is not asked for it.
     """
 
     schedule: ContactSchedule
@@ -45,6 +48,7 @@ class OcpReference:
     touchdown_depth: float
     crossings: "CrossingSchedule | None" = None
     com_path: np.ndarray | None = None
+    swing_liftoff: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -67,6 +71,30 @@ class CrossingSchedule:
     liftoff_xy: np.ndarray
     path_yaw: np.ndarray
     feet: tuple[str, ...]
+
+
+def swing_liftoffs(plan: Any, schedule: ContactSchedule, current_liftoff=None) -> np.ndarray:
+    """World (x, y) [m] of the foot frame where the swing running at each node of ``schedule`` (made from
+    ``plan``) lifts off: (n_nodes + 1, n_feet, 2), NaN where the foot is in contact.
+
+    A node's swing is the plan's step of that foot landing at the schedule's touchdown position; it lifts off
+    from the foot's previous foothold in the plan, or, for the foot's first step, from the plan's stance
+    position (the stance foot) or ``current_liftoff`` ((2,) [m]: where the foot swinging at the plan's start
+    lifted off; None: unknown, NaN at those nodes)."""
+    rows, n_feet = schedule.in_contact.shape
+    liftoff = np.full((rows, n_feet, 2), np.nan)
+    start = None if current_liftoff is None else np.asarray(current_liftoff, dtype=float)
+    for j, foot in enumerate(schedule.feet):
+        steps = [step for step in plan.steps if step.foot == foot]
+        previous = [np.asarray(plan.stance_position, dtype=float) if foot == plan.stance_foot else start]
+        previous += [np.asarray(step.position, dtype=float) for step in steps[:-1]]
+        for k in np.flatnonzero(~np.asarray(schedule.in_contact[:, j], dtype=bool)).tolist():
+            touchdown = schedule.touchdown_position[k, j]
+            i = next((i for i, step in enumerate(steps)
+                      if np.allclose(step.position, touchdown, rtol=0.0, atol=1e-9)), None)
+            if i is not None and previous[i] is not None:
+                liftoff[k, j] = previous[i]
+    return liftoff
 
 
 def crossing_schedule(plan: Any, schedule: ContactSchedule) -> CrossingSchedule | None:
@@ -132,9 +160,12 @@ class OcpReferenceStage:
         (:func:`~sequencer.schedule.plan_covers_grid`; waiting for a late touchdown only moves touchdowns later)."""
         return plan_covers_grid(plan, t, self.node_dt, self.n_nodes)
 
-    def sample(self, plan: Any, t: float, com_xy: np.ndarray, foot_in_contact: np.ndarray) -> OcpReference:
+    def sample(self, plan: Any, t: float, com_xy: np.ndarray, foot_in_contact: np.ndarray,
+               current_liftoff=None, liftoffs: bool = False) -> OcpReference:
         """The OCP reference of the update at ``t`` [s] from ``plan``; ``com_xy`` (2,) [m] is the
-        measured CoM, ``foot_in_contact`` (n_feet,) the measured contacts."""
+        measured CoM, ``foot_in_contact`` (n_feet,) the measured contacts. With ``liftoffs`` the reference
+        holds every swing's lift-off (:func:`swing_liftoffs`; ``current_liftoff`` (2,) [m] or None: where the
+        foot swinging at ``t`` lifted off)."""
         wait = 0.0
         sampled = plan
         if self.wait_for_contact:
@@ -153,4 +184,5 @@ class OcpReferenceStage:
         if crossings is not None:  # the plan's CoM at the nodes, for the OCP's CoM tracking over a crossing
             times = np.maximum(t + self.node_dt * np.arange(self.n_nodes + 1), plan.t0)
             com_path = plan.com_reference(times, com_xy)
-        return OcpReference(schedule, np.asarray(com_end, dtype=float), wait, depth, crossings, com_path)
+        liftoff = swing_liftoffs(sampled, schedule, current_liftoff) if liftoffs else None
+        return OcpReference(schedule, np.asarray(com_end, dtype=float), wait, depth, crossings, com_path, liftoff)
