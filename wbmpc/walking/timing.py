@@ -17,7 +17,9 @@ model in the tests). The terminal CoM reference c* (3,) can be added as three mo
 :func:`contact_timing_sensitivity` gives the derivatives of the solution by the three routes of
 :mod:`sensitivity` (Riccati sweep, re-solved finite differences, full KKT), and of the solver's
 feedback gains K (:mod:`sensitivity.ocp_gains`: the Gauss-Newton backward pass differentiated,
-against differences of re-solved gains).
+against differences of re-solved gains). The swing path terms (``WalkingOCPConfig.swing_path_weight``, a
+reference that also moves with s) are not part of this problem: it is updated without the swings' lift-off
+points, so they stay off whatever the preset's weight.
 """
 
 from __future__ import annotations
