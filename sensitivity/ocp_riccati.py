@@ -28,7 +28,8 @@ from numba import njit
 
 from sensitivity.ocp_parametric import LinearQuadratic
 from wbmpc.errors import ParameterError, SolverError
-from wbmpc.ocp.solvers.riccati import cholesky_in_place, riccati_backward
+from wbmpc.ocp.kernels.linalg import cholesky_in_place
+from wbmpc.ocp.solvers.riccati import riccati_backward
 
 
 @dataclass(frozen=True)
@@ -86,7 +87,7 @@ def factorise(lq: LinearQuadratic, regularization: float = 0.0) -> RiccatiFactor
 @njit(cache=True)
 def _cholesky_solve(A, B, X):
     """X = A⁻¹ B for A (n, n) positive definite (checked by the factorisation), B (n, m); the
-    Cholesky factor is the solver's (:func:`wbmpc.ocp.solvers.riccati.cholesky_in_place`, lower
+    Cholesky factor is the solver's (:func:`wbmpc.ocp.kernels.linalg.cholesky_in_place`, lower
     triangle only)."""
     n = A.shape[0]
     L = A.copy()

@@ -1,7 +1,8 @@
 """Small dense linear algebra for the numba kernels: 3x3 products written out (inside a compiled
 loop ``np.dot`` on 3x3 blocks calls BLAS and allocates its result, ~180 ns, where these take
 ~13 ns; they write into ``out``, which must not alias the inputs, and are inlined into their
-callers), the cross-product matrix, and a sum of quadratic forms over a horizon."""
+callers), the cross-product matrix, a sum of quadratic forms over a horizon, and the Cholesky
+factor and triangular inverse the Riccati pass and the KKT dynamics use."""
 
 from __future__ import annotations
 
@@ -80,3 +81,37 @@ def sum_quadratic_forms(a, M, b):
                 s += M[t, i, j] * b[t, j]
             total += ai * s
     return total
+
+
+@njit(cache=True)
+def cholesky_in_place(A):
+    """Lower Cholesky factor of A (n, n) written in its lower triangle; False if not PD."""
+    n = A.shape[0]
+    for j in range(n):
+        s = A[j, j]
+        for p in range(j):
+            s -= A[j, p] * A[j, p]
+        if not (s > 0.0):
+            return False
+        d = np.sqrt(s)
+        A[j, j] = d
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for p in range(j):
+                s -= A[i, p] * A[j, p]
+            A[i, j] = s / d
+    return True
+
+
+@njit(cache=True)
+def lower_triangular_inverse(L, Linv):
+    """Linv = L⁻¹ for a lower-triangular L (n, n) with a positive diagonal (lower triangle only)."""
+    n = L.shape[0]
+    Linv[:, :] = 0.0
+    for j in range(n):
+        Linv[j, j] = 1.0 / L[j, j]
+        for i in range(j + 1, n):
+            s = 0.0
+            for p in range(j, i):
+                s -= L[i, p] * Linv[p, j]
+            Linv[i, j] = s / L[i, i]

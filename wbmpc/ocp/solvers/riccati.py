@@ -11,39 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-
-@njit(cache=True)
-def cholesky_in_place(A):
-    """Lower Cholesky factor of A (n, n) written in its lower triangle; False if not PD."""
-    n = A.shape[0]
-    for j in range(n):
-        s = A[j, j]
-        for p in range(j):
-            s -= A[j, p] * A[j, p]
-        if not (s > 0.0):
-            return False
-        d = np.sqrt(s)
-        A[j, j] = d
-        for i in range(j + 1, n):
-            s = A[i, j]
-            for p in range(j):
-                s -= A[i, p] * A[j, p]
-            A[i, j] = s / d
-    return True
-
-
-@njit(cache=True)
-def _lower_triangular_inverse(L, Linv):
-    """Linv = L⁻¹ for a lower-triangular L (n, n) with a positive diagonal (lower triangle only)."""
-    n = L.shape[0]
-    Linv[:, :] = 0.0
-    for j in range(n):
-        Linv[j, j] = 1.0 / L[j, j]
-        for i in range(j + 1, n):
-            s = 0.0
-            for p in range(j, i):
-                s -= L[i, p] * Linv[p, j]
-            Linv[i, j] = s / L[i, i]
+from wbmpc.ocp.kernels.linalg import cholesky_in_place, lower_triangular_inverse
 
 
 @njit(cache=True)
@@ -114,7 +82,7 @@ def riccati_backward(Fx, Fu, Lx, Lu, Lxx, Lxu, Luu, fs, preg, is_feasible, Vx, V
         if not cholesky_in_place(L):
             return t
         # Quu⁻¹ = L⁻ᵀ L⁻¹, then [K | k] = Quu⁻¹ [Qxuᵀ | Qu] in one BLAS product
-        _lower_triangular_inverse(L, Linv)
+        lower_triangular_inverse(L, Linv)
         np.dot(Linv.T, Linv, QuuInv)
         rhs[:, :ndx] = Qxu.T
         rhs[:, ndx] = Qu[t]
