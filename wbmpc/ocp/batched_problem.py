@@ -295,6 +295,7 @@ class BatchedShootingProblem(ShootingProblem):
             data = self._kkt_datas.get(key)
             if data is None:
                 data = self._kkt_datas[key] = dam.createData()
+                data.kinematics_for_costs = False  # the costs read the compiled horizon kinematics
             return (None, None, None, None, None, (dam, data))
         entry = self._contact_sets.get(key)
         if entry is not None and not dam.nc:

@@ -22,7 +22,14 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.kernels.contact import contact3d_drift_derivative, contact3d_force_terms
+from wbmpc.ocp.kernels.contact import (
+    contact3d_calc,
+    contact3d_drift_derivative,
+    contact3d_force_terms,
+    contact6d_drift,
+    contact6d_drift_derivative,
+)
+from wbmpc.ocp.kernels.tree import KinematicTree, frame_acceleration_derivatives, frame_motion
 from wbmpc.ocp.state import StateMultibody
 
 _ZERO3 = np.zeros(3)
@@ -42,8 +49,14 @@ class ContactData:
         self.fext = pin.Force.Zero()
         self.fext_vector = np.zeros(6)
         self.dtau_dq = None  # (nv, nv) extra RNEA derivative of a world-aligned force, or None
-        self.fJf = np.zeros((6, nv))
-        self.velocity = pin.Motion.Zero()
+        self.fJf = np.zeros((6, nv))  # frame Jacobian, LOCAL
+        self.oRf = np.eye(3)  # frame placement (world)
+        self.opf = np.zeros(3)
+        self.velocity = np.zeros(6)  # frame velocity (linear, angular), LOCAL
+        self.acceleration = np.zeros(6)  # frame spatial acceleration, LOCAL
+        self.v_dq = np.zeros((6, nv))  # ∂velocity/∂q, ∂acceleration/∂q and ∂acceleration/∂v (LOCAL)
+        self.a_dq = np.zeros((6, nv))
+        self.a_dv = np.zeros((6, nv))
         self.position_error_local = np.zeros(3)
         self.rMf = pin.SE3.Identity()
 
@@ -60,10 +73,20 @@ class _ContactBase:
         self.frame_id = int(frame_id)
         self.joint_id = model.frames[frame_id].parentJoint
         self.joint_placement_frame = model.frames[frame_id].placement  # jMf
-        self.fXj = self.joint_placement_frame.inverse().toActionMatrix()
         self._jRf = self.joint_placement_frame.rotation.copy()
         self._jpf = self.joint_placement_frame.translation.copy()
         self.gains = (kp, kd)
+
+    def _frame_motion(self, data: ContactData, tree: KinematicTree) -> None:
+        """The frame's placement, LOCAL Jacobian, velocity and spatial acceleration from ``tree``."""
+        frame_motion(self.joint_id, self._jRf, self._jpf, tree.parents, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa,
+                     tree.J, data.oRf, data.opf, data.fJf, data.velocity, data.acceleration)
+
+    def _frame_derivatives(self, data: ContactData, tree: KinematicTree) -> None:
+        """∂velocity/∂q, ∂acceleration/∂q and ∂acceleration/∂v of the frame (LOCAL) from ``tree``
+        evaluated at the solved accelerations (and the placement :meth:`_frame_motion` stored)."""
+        frame_acceleration_derivatives(self.joint_id, data.oRf, data.opf, tree.parents, tree.idx_v, tree.ov, tree.oa,
+                                       tree.J, data.v_dq, data.a_dq, data.a_dv)
 
     def createData(self, nu: int) -> ContactData:
         return ContactData(self, nu)
@@ -85,39 +108,25 @@ class ContactModel3D(_ContactBase):
         super().__init__(state, frame_id, gains)
         self.reference = np.asarray(reference_world, dtype=float).reshape(3).copy()
 
-    def calc(self, data: ContactData, pdata: pin.Data) -> None:
-        """Fill Jc (3, nv) and a0 (3,) from Pinocchio data after computeAllTerms."""
-        model = self.state.pinocchio
-        fid = self.frame_id
-        oMf = pin.updateFramePlacement(model, pdata, fid)
-        data.Jc[:] = pin.getFrameJacobian(model, pdata, fid, pin.LOCAL_WORLD_ALIGNED)[:3]
-        a0 = pin.getFrameClassicalAcceleration(model, pdata, fid, pin.LOCAL_WORLD_ALIGNED).linear
-        kp, kd = self.gains
-        if kp != 0.0:
-            a0 += kp * (oMf.translation - self.reference)
-        if kd != 0.0:
-            a0 += kd * pin.getFrameVelocity(model, pdata, fid, pin.LOCAL_WORLD_ALIGNED).linear
-        data.a0[:] = a0
+    def calc(self, data: ContactData, tree: KinematicTree) -> None:
+        """Fill Jc (3, nv) and a0 (3,) from the tree kinematics at (q, v, a = 0)."""
+        self._frame_motion(data, tree)
+        contact3d_calc(data.fJf, data.oRf, data.opf, data.velocity, data.acceleration, self.reference, *self.gains,
+                       data.Jc, data.a0)
 
-    def calcDiff(self, data: ContactData, pdata: pin.Data) -> None:
-        """Fill da0_dx (3, ndx). Needs computeRNEADerivatives (kinematic derivatives) first."""
-        model = self.state.pinocchio
-        fid = self.frame_id
-        v_dq, a_dq, a_dv, _ = pin.getJointAccelerationDerivatives(model, pdata, self.joint_id, pin.LOCAL)
-        fJf = data.fJf
-        velocity = pin.getFrameVelocity(model, pdata, fid, pin.LOCAL)
-        oMf = pdata.oMf[fid]
-        oRf = oMf.rotation
+    def calcDiff(self, data: ContactData, tree: KinematicTree) -> None:
+        """Fill da0_dx (3, ndx) from the tree kinematics at the solved accelerations (after :meth:`calc`)."""
+        self._frame_derivatives(data, tree)
         kp, kd = self.gains
         if kp != 0.0:
-            data.position_error_local[:] = oRf.T @ (oMf.translation - self.reference)
+            data.position_error_local[:] = data.oRf.T @ (data.opf - self.reference)
         # The rotation term of ∂(oRf a0_local)/∂q multiplies a0_local evaluated at the solved
         # accelerations, J a + drift + Baumgarte = 0 for an enforced contact (Crocoddyl evaluates
         # it numerically, ~1e-15): it vanishes.
-        contact3d_drift_derivative(self.fXj, v_dq, a_dq, a_dv, fJf, velocity.linear, velocity.angular,
-                                   data.position_error_local, _ZERO3, oRf, kp, kd, data.da0_dx)
+        contact3d_drift_derivative(data.v_dq, data.a_dq, data.a_dv, data.fJf, data.velocity[:3], data.velocity[3:],
+                                   data.position_error_local, _ZERO3, data.oRf, kp, kd, data.da0_dx)
 
-    def update_force(self, data: ContactData, pdata: pin.Data, force: np.ndarray) -> None:
+    def update_force(self, data: ContactData, force: np.ndarray) -> None:
         """Store the contact force (3,) [N, world axes] (from calc)."""
         data.force[:] = force
 
@@ -135,16 +144,15 @@ class ContactModel3D(_ContactBase):
         """Placement of the reference point (identity rotation), for the Baumgarte position term."""
         return pin.SE3(np.eye(3), self.reference)
 
-    def force_derivative_terms(self, data: ContactData, pdata: pin.Data) -> None:
+    def force_derivative_terms(self, data: ContactData) -> None:
         """Frame Jacobian (LOCAL), external force on the parent joint and its RNEA derivative term.
 
-        Called by the dynamics' calcDiff before the RNEA derivatives (and before :meth:`calcDiff`).
+        Called by the dynamics' calcDiff before the RNEA derivatives (and before :meth:`calcDiff`), after
+        :meth:`calc` at the same configuration (its frame Jacobian and placement).
         """
-        data.fJf[:] = pin.getFrameJacobian(self.state.pinocchio, pdata, self.frame_id, pin.LOCAL)
         if data.dtau_dq is None:
             data.dtau_dq = np.zeros((self.state.nv, self.state.nv))
-        contact3d_force_terms(data.fJf, pdata.oMf[self.frame_id].rotation, data.force, self._jRf, self._jpf,
-                              data.fext_vector, data.dtau_dq)
+        contact3d_force_terms(data.fJf, data.oRf, data.force, self._jRf, self._jpf, data.fext_vector, data.dtau_dq)
         data.fext = pin.Force(data.fext_vector)
 
 
@@ -164,46 +172,36 @@ class ContactModel6D(_ContactBase):
         super().__init__(state, frame_id, gains)
         self.reference = pin.SE3(reference_placement)
 
-    def calc(self, data: ContactData, pdata: pin.Data, corners: "SoleCorners | None" = None) -> None:
-        """Jc and a0 at the state of ``pdata``; with ``corners`` the drift is that of the sole as
-        four corner point contacts, a0 + δ (:class:`SoleCorners`)."""
-        model = self.state.pinocchio
-        fid = self.frame_id
-        oMf = pin.updateFramePlacement(model, pdata, fid)
-        data.fJf[:] = pin.getFrameJacobian(model, pdata, fid, pin.LOCAL)
-        a0 = pin.getFrameAcceleration(model, pdata, fid, pin.LOCAL).vector
+    def calc(self, data: ContactData, tree: KinematicTree, corners: "SoleCorners | None" = None) -> None:
+        """Jc (6, nv) and a0 (6,) from the tree kinematics at (q, v, a = 0); with ``corners`` the drift is
+        that of the sole as four corner point contacts, a0 + δ (:class:`SoleCorners`)."""
+        self._frame_motion(data, tree)
         kp, kd = self.gains
-        if kp != 0.0:
-            data.rMf = self.reference.actInv(oMf)
-            a0 += kp * pin.log6(data.rMf).vector
-        if kd != 0.0 or corners is not None:
-            data.velocity = pin.getFrameVelocity(model, pdata, fid, pin.LOCAL)
-            a0 += kd * data.velocity.vector
-        if corners is not None:
-            a0 += corners.drift(data.velocity.vector)
         data.Jc[:] = data.fJf
-        data.a0[:] = a0
-
-    def calcDiff(self, data: ContactData, pdata: pin.Data, corners: "SoleCorners | None" = None) -> None:
-        """da0_dx after :meth:`calc` (with the same ``corners``) and the RNEA derivatives."""
-        model = self.state.pinocchio
-        nv = self.state.nv
-        v_dq, a_dq, a_dv, _ = pin.getJointAccelerationDerivatives(model, pdata, self.joint_id, pin.LOCAL)
-        fXj = self.fXj
-        np.matmul(fXj, a_dq, out=data.da0_dx[:, :nv])
-        np.matmul(fXj, a_dv, out=data.da0_dx[:, nv:])
-        kp, kd = self.gains
+        if corners is None:
+            contact6d_drift(data.velocity, data.acceleration, kd, _ZERO3, _ZERO3, False, data.a0)
+        else:
+            contact6d_drift(data.velocity, data.acceleration, kd, corners.spread_diagonal, corners.inverse_arms, True,
+                            data.a0)
         if kp != 0.0:
-            data.da0_dx[:, :nv] += kp * pin.Jlog6(data.rMf) @ data.fJf
-        if kd != 0.0:
-            data.da0_dx[:, :nv] += kd * fXj @ v_dq
-            data.da0_dx[:, nv:] += kd * data.fJf
-        if corners is not None:  # δ(v_frame), v_frame = fXj v_joint: ∂/∂q = fXj ∂v_joint/∂q, ∂/∂v = fJf
-            d_drift = corners.drift_jacobian(data.velocity.vector)
-            data.da0_dx[:, :nv] += d_drift @ (fXj @ v_dq)
-            data.da0_dx[:, nv:] += d_drift @ data.fJf
+            data.rMf = self.reference.actInv(pin.SE3(data.oRf, data.opf))
+            data.a0 += kp * pin.log6(data.rMf).vector
 
-    def update_force(self, data: ContactData, pdata: pin.Data, force: np.ndarray) -> None:
+    def calcDiff(self, data: ContactData, tree: KinematicTree, corners: "SoleCorners | None" = None) -> None:
+        """da0_dx (6, ndx) from the tree kinematics at the solved accelerations, after :meth:`calc` (with the
+        same ``corners``)."""
+        self._frame_derivatives(data, tree)
+        kp, kd = self.gains
+        if corners is None:
+            contact6d_drift_derivative(data.v_dq, data.a_dq, data.a_dv, data.fJf, data.velocity, kd, _ZERO3, _ZERO3,
+                                       False, data.da0_dx)
+        else:
+            contact6d_drift_derivative(data.v_dq, data.a_dq, data.a_dv, data.fJf, data.velocity, kd,
+                                       corners.spread_diagonal, corners.inverse_arms, True, data.da0_dx)
+        if kp != 0.0:
+            data.da0_dx[:, :self.state.nv] += kp * pin.Jlog6(data.rMf) @ data.fJf
+
+    def update_force(self, data: ContactData, force: np.ndarray) -> None:
         """Store the contact wrench (6,) = (force [N], torque [N·m]) in the LOCAL sole frame."""
         data.force[:] = force
 
@@ -219,7 +217,7 @@ class ContactModel6D(_ContactBase):
     def reference_placement(self) -> pin.SE3:
         return pin.SE3(self.reference)
 
-    def force_derivative_terms(self, data: ContactData, pdata: pin.Data) -> None:
+    def force_derivative_terms(self, data: ContactData) -> None:
         """External force on the parent joint (a LOCAL wrench adds no RNEA derivative term)."""
         data.fext = self.joint_placement_frame.act(pin.Force(data.force))
         data.dtau_dq = None
@@ -242,7 +240,8 @@ class SoleCorners:
     the part of the corners' classical accelerations (ω × v_ci) that a spatial 6D drift lacks
     (zero for a sole at rest). Pinocchio's ``constraintDynamics`` takes the corners
     (:meth:`constraint_models`, one μ for every row: 4 μ), the KKT backend the scaled 6D contact
-    with δ (:meth:`drift`, :meth:`drift_jacobian`): same results to ~1e-13 (tests).
+    with δ (:func:`~wbmpc.ocp.kernels.contact.contact6d_drift` and its derivative, from
+    ``spread_diagonal`` and ``inverse_arms``): same results to ~1e-13 (tests).
 
     Args:
         lever_arms: (3,) [m], > 0, the third the hypotenuse of the first two.
@@ -264,22 +263,9 @@ class SoleCorners:
         for i, c in enumerate(self.offsets):
             self.force_map[:3, 3 * i:3 * i + 3] = np.eye(3)
             self.force_map[3:, 3 * i:3 * i + 3] = pin.skew(c)
-        self._spread = np.diag([a * a, b * b, 0.0])  # Σ c_i c_iᵀ / 4
-        self._inverse_arms = 1.0 / (r * r)  # diag(1/b², 1/a², 1/(a² + b²))
-
-    def drift(self, velocity: np.ndarray) -> np.ndarray:
-        """δ (6,) [m/s², rad/s²] of the sole's LOCAL velocity (v, ω) (6,) [m/s, rad/s]."""
-        v, w = velocity[:3], velocity[3:]
-        return np.concatenate([np.cross(w, v), self._inverse_arms * np.cross(self._spread @ w, w)])
-
-    def drift_jacobian(self, velocity: np.ndarray) -> np.ndarray:
-        """∂δ/∂(v, ω) (6, 6) at the sole's LOCAL velocity (6,)."""
-        v, w = velocity[:3], velocity[3:]
-        jacobian = np.zeros((6, 6))
-        jacobian[:3, :3] = pin.skew(w)
-        jacobian[:3, 3:] = -pin.skew(v)
-        jacobian[3:, 3:] = self._inverse_arms[:, None] * (pin.skew(self._spread @ w) - pin.skew(w) @ self._spread)
-        return jacobian
+        #: diag(a², b², 0) = Σ c_i c_iᵀ / 4 and diag(1/b², 1/a², 1/(a² + b²)), as (3,) arrays
+        self.spread_diagonal = np.array([a * a, b * b, 0.0])
+        self.inverse_arms = 1.0 / (r * r)
 
     def constraint_models(self, contact: "ContactModel6D") -> list[pin.RigidConstraintModel]:
         """Pinocchio's four CONTACT_3D LOCAL constraints of ``contact``'s corners, with its Kd

@@ -55,13 +55,10 @@ from wbmpc.errors import ParameterError
 from wbmpc.ocp.actuation import ActuationFloatingBase
 from wbmpc.ocp.contacts import ContactModel6D, SoleCorners
 from wbmpc.ocp.costs import CostModelSum
+from wbmpc.ocp.kernels.kkt import KKTBuffers, damped_kkt_derivatives, damped_kkt_dynamics
+from wbmpc.ocp.kernels.tree import KinematicTree, tree_support
 from wbmpc.ocp.residuals.base import DataCollector
 from wbmpc.ocp.state import StateMultibody
-
-
-def _symmetric_from_upper(M: np.ndarray) -> np.ndarray:
-    """CRBA fills the upper triangle of M only (the lower one may hold stale values)."""
-    return np.triu(M) + np.triu(M, 1).T
 
 
 class DifferentialActionModelContactFwdDynamics:
@@ -125,6 +122,11 @@ class DifferentialActionModelContactFwdDynamics:
                                      "corner contacts over-constrain a sole), got 0; or use backend='kkt'")
         self.damping_lever_arms = {name: c.lever_arms.copy() for name, c in self._sole_corners.items()}
         self.backend = backend
+        if backend == "kkt" and contacts:
+            reason = tree_support(state.pinocchio)
+            if reason is not None:
+                raise ParameterError(f"backend='kkt' with contacts needs the compiled tree kinematics: {reason}; "
+                                     "use backend='pinocchio'")
         self.state = state
         self.actuation = actuation
         self.nu = actuation.nu
@@ -229,9 +231,15 @@ class DifferentialActionModelContactFwdDynamics:
             self._calc_constraint_dynamics(data, q, v, u)
             return
         pdata = data.select_pinocchio(None)
-        pin.computeAllTerms(model, pdata, q, v)
+        if data.kinematics_for_costs:
+            pin.computeAllTerms(model, pdata, q, v)
+        else:  # M (upper triangle) and b only, the same numbers
+            pin.crba(model, pdata, q, pin.Convention.WORLD)
+            pin.nonLinearEffects(model, pdata, q, v)
         self.actuation.calc(data.tau, u)
         nc = self.nc
+        if nc:
+            data.tree.evaluate(q, v, data.zero_acceleration)  # the contacts' drift: zero joint accelerations
         if data.active_contacts is not self.active_contacts:
             data.active_contacts = self.active_contacts
             data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
@@ -240,45 +248,37 @@ class DifferentialActionModelContactFwdDynamics:
         if len(self.active_contacts) == 1:  # one stance foot: its buffers are the stacked ones
             name = self.active_contacts[0]
             cdata = data.contacts[name]
-            self._contact_calc(name, cdata, pdata)
+            self._contact_calc(name, cdata, data.tree)
             data.Jc, data.a0 = cdata.Jc, cdata.a0
         else:
             row = 0
             for name in self.active_contacts:
                 contact = self.contacts[name]
                 cdata = data.contacts[name]
-                self._contact_calc(name, cdata, pdata)
+                self._contact_calc(name, cdata, data.tree)
                 data.Jc[row:row + contact.nc] = cdata.Jc
                 data.a0[row:row + contact.nc] = cdata.a0
                 row += contact.nc
-        S = self.row_scales
-        if nc and S is None:
-            data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc, data.a0, self.contact_damping)
-            forces = pdata.lambda_c
-        elif nc:  # the scaled constraint S Jc a + S a0 = −μ λ̃, λ = S λ̃ (module docstring)
-            data.Jc_scaled = data.Jc_scaled_all[:nc]
-            np.multiply(S[:, None], data.Jc, out=data.Jc_scaled)
-            data.xout[:] = pin.forwardDynamics(model, pdata, data.tau, data.Jc_scaled, S * data.a0,
-                                               self.contact_damping)
-            forces = S * pdata.lambda_c
-        else:
-            # no contact (flight): keep M⁻¹ of this point, RNEA derivatives overwrite data.M
-            data.Minv = np.linalg.inv(_symmetric_from_upper(pdata.M))
-            data.xout[:] = data.Minv @ (data.tau - pdata.nle)
-            forces = np.zeros(0)
+        kkt = data.kkt_buffers(nc)
+        forces = data.force_all[:nc]
+        if not damped_kkt_dynamics(pdata.M, pdata.nle, data.tau, data.Jc, data.a0,
+                                   data.ones[:nc] if self.row_scales is None else self.row_scales,
+                                   self.contact_damping, data.xout, forces, *kkt.dynamics_buffers()):
+            data.xout[:] = np.nan  # M or the contacts' Delassus matrix is not positive definite: the rollout fails
         row = 0
         for name in self.active_contacts:
             contact = self.contacts[name]
-            contact.update_force(data.contacts[name], pdata, forces[row:row + contact.nc])
+            contact.update_force(data.contacts[name], forces[row:row + contact.nc])
             row += contact.nc
 
-    def _contact_calc(self, name: str, cdata, pdata) -> None:
-        """KKT path: the contact's Jc and a0 (a sole of four corner contacts: their drift)."""
+    def _contact_calc(self, name: str, cdata, tree) -> None:
+        """KKT path: the contact's Jc and a0 from the tree kinematics (a sole of four corner contacts:
+        their drift)."""
         corners = self._drift_corners.get(name)
         if corners is None:
-            self.contacts[name].calc(cdata, pdata)
+            self.contacts[name].calc(cdata, tree)
         else:
-            self.contacts[name].calc(cdata, pdata, corners)
+            self.contacts[name].calc(cdata, tree, corners)
 
     def _calc_constraint_dynamics(self, data, q, v, u) -> None:
         """Pinocchio backend of calc: constraintDynamics with the active RigidConstraintModels."""
@@ -339,7 +339,7 @@ class DifferentialActionModelContactFwdDynamics:
             return
         model = self.state.pinocchio
         pdata = data.pinocchio
-        nq, nv = self.state.nq, self.state.nv
+        nq = self.state.nq
         q, v = x[:nq], x[nq:]
         nc = self.nc
         for joint in data.fext_joints:
@@ -348,53 +348,40 @@ class DifferentialActionModelContactFwdDynamics:
         for name in self.active_contacts:
             contact = self.contacts[name]
             cdata = data.contacts[name]
-            contact.force_derivative_terms(cdata, pdata)
+            contact.force_derivative_terms(cdata)
             data.fext[contact.joint_id] = cdata.fext
             data.fext_joints.append(contact.joint_id)
         pin.computeRNEADerivatives(model, pdata, q, v, data.xout, data.fext)
-        S = self.row_scales
-        if nc:  # the inverse of the damped KKT matrix forwardDynamics factorised (of S Jc if scaled)
-            Kinv = pin.getKKTContactDynamicMatrixInverse(model, pdata, data.Jc if S is None else data.Jc_scaled)
-        else:
-            Kinv = data.Minv
+        if nc:
+            data.tree.evaluate(q, v, data.xout)  # the contacts' drift derivatives at the solved accelerations
         row = 0
         da0_dx = data.da0_dx_all[:nc]
+        dtau_dq = pdata.dtau_dq
         for name in self.active_contacts:
             contact = self.contacts[name]
             cdata = data.contacts[name]
             corners = self._drift_corners.get(name)
             if corners is None:
-                contact.calcDiff(cdata, pdata)
+                contact.calcDiff(cdata, data.tree)
             else:
-                contact.calcDiff(cdata, pdata, corners)
+                contact.calcDiff(cdata, data.tree, corners)
             da0_dx[row:row + contact.nc] = cdata.da0_dx
             row += contact.nc
-        # [∂a/∂x; −∂λ/∂x] = −Kinv [∂τ/∂x (RNEA with contact forces); ∂a0/∂x]
-        D = data.D[: nv + nc]
-        D[:nv, :nv] = pdata.dtau_dq
+            if cdata.dtau_dq is not None:  # a world-aligned point force's rotation term
+                if dtau_dq is pdata.dtau_dq:
+                    dtau_dq = np.add(pdata.dtau_dq, cdata.dtau_dq, out=data.dtau_dq)
+                else:
+                    dtau_dq += cdata.dtau_dq
+        df_dx, df_du = data.df_dx_all[:nc], data.df_du_all[:nc]
+        damped_kkt_derivatives(dtau_dq, pdata.dtau_dv, da0_dx, data.ones[:nc] if self.row_scales is None else
+                               self.row_scales, data.Fx, data.Fu, df_dx, df_du, *data.kkt_buffers(nc).derivative_buffers())
+        row = 0
         for name in self.active_contacts:
-            extra = data.contacts[name].dtau_dq
-            if extra is not None:
-                D[:nv, :nv] += extra
-        D[:nv, nv:] = pdata.dtau_dv
-        D[nv:] = da0_dx if S is None else S[:, None] * da0_dx
-        KD = Kinv @ D
-        np.negative(KD[:nv], out=data.Fx)
-        a_dtau = Kinv[:nv, :nv]
-        if nc:
-            df_dx = KD[nv:]
-            df_du = -Kinv[nv:, 6:nv]
-            if S is not None:  # λ = S λ̃
-                df_dx = S[:, None] * df_dx
-                df_du = S[:, None] * df_du
-            row = 0
-            for name in self.active_contacts:
-                contact = self.contacts[name]
-                cdata = data.contacts[name]
-                cdata.df_dx[:] = df_dx[row:row + contact.nc]
-                cdata.df_du[:] = df_du[row:row + contact.nc]
-                row += contact.nc
-        data.Fu[:] = a_dtau[:, 6:]
+            contact = self.contacts[name]
+            cdata = data.contacts[name]
+            cdata.df_dx[:] = df_dx[row:row + contact.nc]
+            cdata.df_du[:] = df_du[row:row + contact.nc]
+            row += contact.nc
 
     def contact_force_jacobians(self, data) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Derivatives of each active contact's force (world-aligned for point contacts, as
@@ -439,10 +426,20 @@ class DifferentialActionDataContactFwdDynamics:
         self.da0_dx_all = np.zeros((nc_max, ndx))
         self.Jc = self.Jc_all[:0]
         self.a0 = self.a0_all[:0]
-        self.Jc_scaled_all = np.zeros((nc_max, nv))
-        self.Jc_scaled = self.Jc_scaled_all[:0]  # S Jc of a row-scaled damping (kkt backend)
-        self.D = np.zeros((nv + nc_max, ndx))
-        self.Minv = np.zeros((nv, nv))
+        self.force_all = np.zeros(nc_max)  # stacked contact forces (kkt backend)
+        self.df_dx_all = np.zeros((nc_max, ndx))
+        self.df_du_all = np.zeros((nc_max, nu))
+        self.dtau_dq = np.zeros((nv, nv))  # RNEA derivative with the point forces' rotation terms
+        self.ones = np.ones(nc_max)  # the row scales of uniform damping
+        self._kkt_buffers: dict[int, KKTBuffers] = {}  # contact rows -> the KKT kernels' buffers
+        # the compiled tree kinematics the contacts of the kkt backend read (None: the pinocchio backend)
+        self.tree = KinematicTree(state.pinocchio) if model.backend == "kkt" and nc_max else None
+        self.zero_acceleration = np.zeros(nv)
+        #: the "kkt" backend's calc leaves Pinocchio's kinematics, CoM and Jacobians for the costs
+        #: (``computeAllTerms``); False: only what the dynamics need (M, b), for a caller that evaluates
+        #: the costs from its own kinematics (the batched problem)
+        self.kinematics_for_costs = True
+        self._ndx = ndx
         self.active_contacts = None
         self.fext_joints: list[int] = []
         self.fext = pin.StdVec_Force()
@@ -453,6 +450,14 @@ class DifferentialActionDataContactFwdDynamics:
         self.cost = 0.0
         c = self.costs
         self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu = c.Lx, c.Lu, c.Lxx, c.Lxu, c.Luu
+
+    def kkt_buffers(self, nc: int) -> KKTBuffers:
+        """The buffers of the KKT kernels for ``nc`` contact rows (made on first use; the last
+        dynamics at that size leave M⁻¹, A and Y there for the derivatives)."""
+        buffers = self._kkt_buffers.get(nc)
+        if buffers is None:
+            buffers = self._kkt_buffers[nc] = KKTBuffers(self.xout.size, nc, self._ndx)
+        return buffers
 
     def select_pinocchio(self, model):
         """Pinocchio data of the current evaluation, made current for the costs.
