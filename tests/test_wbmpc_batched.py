@@ -430,7 +430,7 @@ def test_h1_soles_with_the_obstacle_clearance_are_batched_and_match_the_node_pip
     config = dataclasses.replace(load_walking_preset("h1").ocp, contact_damping_moments=moments,
                                  dynamics_backend=backend, evaluation="auto", obstacle_swing_path_timing="smooth",
                                  obstacle_swing_path_weight=1e4, obstacle_clearance_gating="path",
-                                 obstacle_com_weight=0.0)  # (the "profile" clearance is evaluated node by node)
+                                 obstacle_com_weight=0.0)  # (the "profile" clearance and the CoM path: below)
     n_nodes = 12
     schedule, crossings = crossing_schedule(n_nodes)
     ocp = _batched_walking_ocp(h1, config, n_nodes)
@@ -548,3 +548,40 @@ def test_h1_box_profile_clearance_batched_jacobian_matches_finite_differences():
         error = np.max(np.abs(jacobian[:, :batched.ndx] - expected))
         assert error <= 1e-6 * np.max(np.abs(expected)), (k, error)
         assert not jacobian[:, batched.ndx:].any()
+
+
+@needs_h1_extra
+def test_h1_preset_with_a_crossing_is_batched_and_matches_the_node_pipeline():
+    """The H1 preset's OCP as it is (KKT backend, "profile" clearance of the sole points, the smooth crossing path's
+    tracking, ``com_path`` tracking the plan's CoM) over swings that cross a box: batched (the box profile's and the
+    CoM's batched evaluations) and equal to the node-wise pipeline, values, derivatives and a rollout, with a toe on
+    the profile's slope, a heel at a corner of its transition, and nodes where the box is cleared (h = ground)."""
+    n_nodes = 20
+    h1, ocp, schedule = _h1_crossing_ocp(n_nodes, com_weight=load_walking_preset("h1").ocp.obstacle_com_weight)
+    nodes, batched = _twin_problems(ocp)
+    xs, us = _small_random_trajectory(h1, n_nodes, ocp.nu, seed=5, q_scale=0.02, v_scale=0.1)
+    costs = [model.differential.costs.costs for model in batched.running_models]
+    right, left = (np.flatnonzero(~np.asarray(schedule.in_contact)[:n_nodes, j]) for j in (1, 0))
+    for k, name, yaw, along, across in ((right[1], "right_clearance_sole0", 0.2, 0.02, -0.05),
+                                        (right[3], "right_clearance_sole1", -0.3, 0.01, 0.02),
+                                        (left[2], "left_clearance_sole0", 0.0, 0.035, -0.05)):
+        residual = costs[k][name].cost.residual
+        _box_beside(residual, _sole_point(h1, residual, xs[k]), yaw, along, across)
+        height, gradient = residual.profile(_sole_point(h1, residual, xs[k])[:2])
+        assert 0.0 < height < 0.15 and np.linalg.norm(gradient) > 1.0
+    for k in (right[5], left[4]):
+        costs[k]["right_clearance_sole1" if k == right[5] else "left_clearance_sole1"].cost.residual.clear()
+    assert all(node["com_path"].active for node in costs)
+    for name in ("right_clearance_sole0", "left_clearance_sole1", "right_swing_path"):
+        assert any(node[name].active for node in costs), name
+    cost = nodes.calc(xs, us)
+    assert batched.calc(xs, us) == pytest.approx(cost, rel=1e-13)
+    _assert_same(nodes, batched, names=("xnext",))
+    cost = nodes.calc_and_diff(xs, us)
+    assert batched.calcDiff(xs, us) == pytest.approx(cost, rel=1e-13)
+    _assert_same(nodes, batched)
+    assert batched.term_costs() == pytest.approx(nodes.term_costs(), rel=1e-12, abs=1e-14)
+    np.testing.assert_allclose(batched.node_costs(), [d.cost for d in nodes.running_datas], rtol=1e-12, atol=1e-15)
+    terms = batched.term_costs()
+    assert terms["com_path"] > 0 and terms["right_clearance_sole0"] > 0 and terms["left_clearance_sole0"] > 0
+    _assert_same_half_step_rollout(nodes, batched, xs, us)

@@ -80,7 +80,8 @@ def frame_rows_many(positions, axes, references, mask, r):
 @njit(cache=True)
 def frame_jacobian_rows_many(jacobians, axes, mask, values):
     """Their Jacobian rows values[k] = jacobians[k, axes, :] (row-major; jacobians (N, 3, nv), the
-    world-aligned linear rows) for the nodes with mask[k]."""
+    world-aligned linear rows of a frame's Jacobian, or the centre of mass's) for the nodes with
+    mask[k]."""
     nv = jacobians.shape[2]
     for k in range(mask.size):
         if mask[k]:
