@@ -430,7 +430,7 @@ def test_h1_soles_with_the_obstacle_clearance_are_batched_and_match_the_node_pip
     config = dataclasses.replace(load_walking_preset("h1").ocp, contact_damping_moments=moments,
                                  dynamics_backend=backend, evaluation="auto", obstacle_swing_path_timing="smooth",
                                  obstacle_swing_path_weight=1e4, obstacle_clearance_gating="path",
-                                 obstacle_com_weight=0.0)  # (the "profile" clearance is evaluated node by node)
+                                 obstacle_com_weight=0.0)  # (the "profile" clearance and the CoM path: below)
     n_nodes = 12
     schedule, crossings = crossing_schedule(n_nodes)
     ocp = _batched_walking_ocp(h1, config, n_nodes)
@@ -459,4 +459,129 @@ def test_h1_soles_with_the_obstacle_clearance_are_batched_and_match_the_node_pip
                  "left_wrench_cone"):
         assert any(model.differential.costs.costs[name].active for model in nodes.running_models), name
     assert batched.term_costs()["right_clearance_sole0"] > 0  # the random states put the toe below the clearance
+    _assert_same_half_step_rollout(nodes, batched, xs, us)
+
+
+def _h1_crossing_ocp(n_nodes: int, com_weight: float) -> tuple:
+    """The H1 preset's OCP (KKT backend, "profile" clearance of the sole points, the smooth crossing path's
+    tracking), batched, with ``obstacle_com_weight`` = com_weight, updated over crossing_schedule's swings over a
+    10 cm box with a CoM path: (robot, ocp, schedule)."""
+    from wbmpc_fixtures import crossing_schedule
+
+    h1 = load_robot("h1")
+    config = dataclasses.replace(load_walking_preset("h1").ocp, evaluation="batched", obstacle_com_weight=com_weight)
+    assert config.obstacle_clearance_gating == "profile"
+    ocp = _batched_walking_ocp(h1, config, n_nodes)
+    schedule, crossings = crossing_schedule(n_nodes)
+    com_path = np.column_stack([np.linspace(0.0, 0.3, n_nodes + 1), np.full(n_nodes + 1, 0.01),
+                                np.full(n_nodes + 1, 0.97)])
+    ocp.update(standing_state(h1), schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings, com_path=com_path)
+    return h1, ocp, schedule
+
+
+def _sole_point(robot, residual, x: np.ndarray) -> np.ndarray:
+    """World position (3,) [m] of a ResidualFramePointAboveBox's point at the state x."""
+    model = robot.pinocchio_model
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, x[:model.nq])
+    placement = data.oMf[residual.frame_id]
+    return placement.translation + placement.rotation @ residual.point_local
+
+
+def _box_beside(residual, point: np.ndarray, yaw: float, along: float, across: float) -> None:
+    """Set residual's box (5 x 10 cm half extents, 15 cm top) so that ``point`` (3,) [m] is ``along`` and
+    ``across`` [m] beyond its grown footprint's edges (its axis at ``yaw`` [rad]): negative inside,
+    0 < along < transition on the profile's slope."""
+    axis = np.array([np.cos(yaw), np.sin(yaw)])
+    normal = np.array([-axis[1], axis[0]])
+    half = np.array([0.05, 0.1]) + residual.margin
+    centre = point[:2] - (half[0] + along) * axis - (half[1] + across) * normal
+    residual.set_box(centre, axis, 0.05, 0.1, 0.15)
+
+
+def _term_rows(batched: BatchedShootingProblem, name: str, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """(r (nr,), [Rx Ru] (nr, ndx + nu)) of the running term ``name`` at node k after the batched problem's
+    last evaluation (the Jacobian from its pattern's nonzeros, after a calcDiff)."""
+    j = batched.term_index(name)
+    r = batched._r[k, batched._term_rows[j]].copy()
+    rows, cols = batched._terms[j].jacobian_pattern()
+    jacobian = np.zeros((r.size, batched.ndx + batched.nu))
+    jacobian[rows, cols] = batched._values[k, batched._term_values[j]]
+    return r, jacobian
+
+
+@needs_h1_extra
+def test_h1_box_profile_clearance_batched_jacobian_matches_finite_differences():
+    """The batched rows of the "profile" clearance (ResidualFramePointAboveBox) at swing nodes whose box puts the
+    toe on the profile's slope (one edge, then a corner: both windows falling) and inside the grown footprint:
+    their Jacobian against central differences of the batched rows, through the frame rotation and ∇h."""
+    from wbmpc.ocp.numdiff import tangent_jacobian
+
+    n_nodes = 12
+    h1, ocp, schedule = _h1_crossing_ocp(n_nodes, com_weight=0.0)
+    batched = ocp.problem
+    swing = np.flatnonzero(~np.asarray(schedule.in_contact)[:n_nodes, 1])
+    name = "right_clearance_sole0"
+    xs, us = _small_random_trajectory(h1, n_nodes, ocp.nu, seed=8, q_scale=0.05, v_scale=0.1)
+    cases = [(swing[0], 0.3, 0.02, -0.05), (swing[1], -0.4, 0.03, 0.015), (swing[2], 0.0, -0.01, -0.05)]
+    for k, yaw, along, across in cases:
+        residual = batched.running_models[k].differential.costs.costs[name].cost.residual
+        _box_beside(residual, _sole_point(h1, residual, xs[k]), yaw, along, across)
+    batched.calcDiff(xs, us)
+    for k, _, along, _ in cases:
+        residual = batched.running_models[k].differential.costs.costs[name].cost.residual
+        r, jacobian = _term_rows(batched, name, k)
+        height, gradient = residual.profile(_sole_point(h1, residual, xs[k])[:2])
+        assert r[0] == pytest.approx(_sole_point(h1, residual, xs[k])[2] - height, abs=1e-14)
+        if along > 0:  # on the slope
+            assert 0.0 < height < 0.15 and np.linalg.norm(gradient) > 1.0
+        else:
+            assert height == 0.15 and not gradient.any()
+
+        def r_of_x(x, k=k):
+            trial = xs.copy()
+            trial[k] = x
+            batched.calc(trial, us)
+            return batched._r[k, batched._term_rows[batched.term_index(name)]].copy()
+
+        expected = tangent_jacobian(batched.state, r_of_x, xs[k])
+        error = np.max(np.abs(jacobian[:, :batched.ndx] - expected))
+        assert error <= 1e-6 * np.max(np.abs(expected)), (k, error)
+        assert not jacobian[:, batched.ndx:].any()
+
+
+@needs_h1_extra
+def test_h1_preset_with_a_crossing_is_batched_and_matches_the_node_pipeline():
+    """The H1 preset's OCP as it is (KKT backend, "profile" clearance of the sole points, the smooth crossing path's
+    tracking, ``com_path`` tracking the plan's CoM) over swings that cross a box: batched (the box profile's and the
+    CoM's batched evaluations) and equal to the node-wise pipeline, values, derivatives and a rollout, with a toe on
+    the profile's slope, a heel at a corner of its transition, and nodes where the box is cleared (h = ground)."""
+    n_nodes = 20
+    h1, ocp, schedule = _h1_crossing_ocp(n_nodes, com_weight=load_walking_preset("h1").ocp.obstacle_com_weight)
+    nodes, batched = _twin_problems(ocp)
+    xs, us = _small_random_trajectory(h1, n_nodes, ocp.nu, seed=5, q_scale=0.02, v_scale=0.1)
+    costs = [model.differential.costs.costs for model in batched.running_models]
+    right, left = (np.flatnonzero(~np.asarray(schedule.in_contact)[:n_nodes, j]) for j in (1, 0))
+    for k, name, yaw, along, across in ((right[1], "right_clearance_sole0", 0.2, 0.02, -0.05),
+                                        (right[3], "right_clearance_sole1", -0.3, 0.01, 0.02),
+                                        (left[2], "left_clearance_sole0", 0.0, 0.035, -0.05)):
+        residual = costs[k][name].cost.residual
+        _box_beside(residual, _sole_point(h1, residual, xs[k]), yaw, along, across)
+        height, gradient = residual.profile(_sole_point(h1, residual, xs[k])[:2])
+        assert 0.0 < height < 0.15 and np.linalg.norm(gradient) > 1.0
+    for k in (right[5], left[4]):
+        costs[k]["right_clearance_sole1" if k == right[5] else "left_clearance_sole1"].cost.residual.clear()
+    assert all(node["com_path"].active for node in costs)
+    for name in ("right_clearance_sole0", "left_clearance_sole1", "right_swing_path"):
+        assert any(node[name].active for node in costs), name
+    cost = nodes.calc(xs, us)
+    assert batched.calc(xs, us) == pytest.approx(cost, rel=1e-13)
+    _assert_same(nodes, batched, names=("xnext",))
+    cost = nodes.calc_and_diff(xs, us)
+    assert batched.calcDiff(xs, us) == pytest.approx(cost, rel=1e-13)
+    _assert_same(nodes, batched)
+    assert batched.term_costs() == pytest.approx(nodes.term_costs(), rel=1e-12, abs=1e-14)
+    np.testing.assert_allclose(batched.node_costs(), [d.cost for d in nodes.running_datas], rtol=1e-12, atol=1e-15)
+    terms = batched.term_costs()
+    assert terms["com_path"] > 0 and terms["right_clearance_sole0"] > 0 and terms["left_clearance_sole0"] > 0
     _assert_same_half_step_rollout(nodes, batched, xs, us)

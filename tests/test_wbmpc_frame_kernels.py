@@ -1,10 +1,11 @@
-"""Compiled frame kinematics against Pinocchio on Bolt and G1."""
+"""Compiled frame kinematics (and the centre of mass) against Pinocchio on Bolt, G1 and H1."""
 
 from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from robot_extras import needs_h1_extra
 
 from robots import load_robot
 from wbmpc.errors import ParameterError
@@ -39,6 +40,47 @@ def test_positions_and_jacobians_match_pinocchio(robot_name, rows):
             np.testing.assert_allclose(rotations[t, s], data.oMf[frame_id].rotation, rtol=0, atol=1e-14)
             expected = pin.getFrameJacobian(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED)[:rows]
             np.testing.assert_allclose(jacobians[t, s], expected, rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("robot_name", ["g1", pytest.param("h1", marks=needs_h1_extra)])
+def test_center_of_mass_and_its_jacobian_match_pinocchio(robot_name):
+    """The centre of mass and its Jacobian (3, nv) against Pinocchio's centerOfMass / jacobianCenterOfMass at
+    random configurations, computed only where asked (with the frames' kinematics in the same pass, or alone, or
+    without the Jacobian)."""
+    robot = load_robot(robot_name)
+    model = robot.pinocchio_model
+    frame_ids = [model.getFrameId(name) for name in robot.foot_frames.values()]
+    kinematics = FrameKinematics(model, frame_ids)
+    assert kinematics.total_mass == pytest.approx(sum(inertia.mass for inertia in model.inertias))
+    rng = np.random.default_rng(1)
+    T = 20
+    qs = np.array([pin.integrate(model, np.asarray(robot.q_reference, dtype=float), rng.standard_normal(model.nv))
+                   for _ in range(T)])
+    needed = rng.random((T, len(frame_ids))) < 0.5
+    com_needed = rng.random(T) < 0.7
+    positions = np.full((T, len(frame_ids), 3), np.nan)
+    com = np.full((T, 3), np.nan)
+    com_jacobians = np.full((T, 3, model.nv), np.nan)
+    kinematics.evaluate(qs, needed, positions, np.zeros((T, len(frame_ids), 6, model.nv)),
+                        com_needed=com_needed, com=com, com_jacobians=com_jacobians)
+    alone = np.full((T, 3), np.nan)  # no frame needed, no Jacobian
+    FrameKinematics(model, []).evaluate(qs, np.zeros((T, 0), dtype=bool), np.zeros((T, 0, 3)),
+                                        com_needed=com_needed, com=alone)
+    data = model.createData()
+    for t, q in enumerate(qs):
+        if not com_needed[t]:
+            assert np.isnan(com[t]).all() and np.isnan(com_jacobians[t]).all() and np.isnan(alone[t]).all()
+            continue
+        expected = pin.centerOfMass(model, data, q)
+        np.testing.assert_allclose(com[t], expected, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(alone[t], expected, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(com_jacobians[t], pin.jacobianCenterOfMass(model, data, q), rtol=0, atol=1e-13)
+        pin.framesForwardKinematics(model, data, q)
+        for s, frame_id in enumerate(frame_ids):
+            if needed[t, s]:
+                np.testing.assert_allclose(positions[t, s], data.oMf[frame_id].translation, rtol=0, atol=1e-14)
+    with pytest.raises(ParameterError, match="com=None .*com_needed"):
+        kinematics.evaluate(qs, needed, positions, com_needed=com_needed)
 
 
 def test_positions_only():

@@ -17,8 +17,9 @@ reads the same node models (contacts, cost terms, weights, references) and evalu
 - one Python call per cost term: each residual declares its batched evaluation
   (:class:`~wbmpc.ocp.residuals.base.BatchedResidual`: its rows and Jacobian nonzeros at every
   active node, by the compiled rows its node-wise ``calc`` uses), reading the frame kinematics of
-  the active frame terms (positions, rotations, Jacobians) computed for all nodes in one compiled
-  pass (:mod:`wbmpc.ocp.kernels.frames`), and the kept contact forces;
+  the active frame terms (positions, rotations, Jacobians) and, for the centre-of-mass terms, the
+  centre of mass and its Jacobian, computed for all nodes in one compiled pass
+  (:mod:`wbmpc.ocp.kernels.frames`), and the kept contact forces;
 - one compiled pass over the nodes running what the node-wise models run per node: the Euler
   transition Jacobians, the cost value, the Gauss-Newton derivatives of the cost rows
   (:mod:`wbmpc.ocp.kernels.costs`) and their dt scaling.
@@ -169,7 +170,11 @@ class BatchedShootingProblem(ShootingProblem):
         # (n_frames, n_terms): the terms reading each frame's kinematics
         self._frame_terms = np.array([[frame_id in residual.batch_frames for residual in self._terms]
                                       for frame_id in frame_ids], dtype=np.bool_).reshape(len(frame_ids), n_terms)
-        self._kinematics = FrameKinematics(self._pin_model, frame_ids) if frame_ids else None
+        # the centre of mass (and its Jacobian) where a term reading it is active
+        self._com_terms = np.array([residual.batch_com for residual in self._terms], dtype=np.bool_)
+        self._com = bool(self._com_terms.any())
+        self._com_needed = np.zeros(N, dtype=np.bool_)
+        self._kinematics = FrameKinematics(self._pin_model, frame_ids) if frame_ids or self._com else None
         n_frames = max(len(frame_ids), 1)
         # the contact forces and their derivatives of every node, kept when a term reads them
         self._keep_forces = any(getattr(residual, "uses_contact_forces", False) for residual in self._terms)
@@ -184,6 +189,8 @@ class BatchedShootingProblem(ShootingProblem):
                                     frame_position=np.zeros((N, n_frames, 3)),
                                     frame_jacobian=np.zeros((N, n_frames, 6 if self._rotations else 3, nv)),
                                     frame_rotation=np.zeros((N, n_frames, 3, 3) if self._rotations else (N, 0, 3, 3)),
+                                    com=np.zeros((N, 3 if self._com else 0)),
+                                    com_jacobian=np.zeros((N, 3 if self._com else 0, nv)),
                                     contact_force=np.zeros(nf), contact_force_jacobian=np.zeros(nfj),
                                     contact_row={name: np.full(N, -1, dtype=np.int64) for name in contact_names},
                                     contact_sets=[()] * N)
@@ -479,18 +486,23 @@ class BatchedShootingProblem(ShootingProblem):
 
     def _frame_kinematics(self, xs: np.ndarray, jacobians: bool) -> None:
         """Positions, rotations (and LOCAL_WORLD_ALIGNED Jacobians) of the frames of the active
-        frame terms."""
+        frame terms, the centre of mass (and its Jacobian) where a centre-of-mass term is active."""
         if self._kinematics is not None:
             h = self._horizon
+            com = self._com
             self._kinematics.evaluate(xs[:self.T, :self.state.nq], self._frame_needed, h.frame_position,
                                       h.frame_jacobian if jacobians else None,
-                                      h.frame_rotation if self._rotations else None)
+                                      h.frame_rotation if self._rotations else None,
+                                      self._com_needed if com else None, h.com if com else None,
+                                      h.com_jacobian if com and jacobians else None)
 
     def _residuals(self, xs: np.ndarray, us: np.ndarray, jacobians: bool) -> None:
         """Every term's residual rows (and Jacobian nonzeros) at the nodes where it is active."""
         N = self.T
         if self._activity_stale:
             term_activity(self._term_scale, self._frame_terms, self._term_active, self._frame_needed)
+            if self._com:
+                np.any(self._term_active[:, self._com_terms], axis=1, out=self._com_needed)
             self._activity_stale = False
         h = self._horizon
         h.xs, h.us = xs[:N], us

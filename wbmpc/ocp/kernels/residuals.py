@@ -80,7 +80,8 @@ def frame_rows_many(positions, axes, references, mask, r):
 @njit(cache=True)
 def frame_jacobian_rows_many(jacobians, axes, mask, values):
     """Their Jacobian rows values[k] = jacobians[k, axes, :] (row-major; jacobians (N, 3, nv), the
-    world-aligned linear rows) for the nodes with mask[k]."""
+    world-aligned linear rows of a frame's Jacobian, or the centre of mass's) for the nodes with
+    mask[k]."""
     nv = jacobians.shape[2]
     for k in range(mask.size):
         if mask[k]:
@@ -123,6 +124,89 @@ def point_height_jacobian_many(jacobians, rotations, point, mask, values):
     for k in range(mask.size):
         if mask[k]:
             point_height_jacobian_row(jacobians[k], rotations[k], point, values[k])
+
+
+@njit(cache=True, inline="always")
+def _smoothstep(s):
+    """(q(s), dq/ds) of the quintic smoothstep q(s) = 10 s³ − 15 s⁴ + 6 s⁵ on [0, 1], clamped outside."""
+    s = min(max(s, 0.0), 1.0)
+    return s * s * s * (10.0 + s * (-15.0 + 6.0 * s)), 30.0 * s * s * (1.0 - s) * (1.0 - s)
+
+
+@njit(cache=True, inline="always")
+def _box_window(u, half, transition):
+    """(S(u), dS/du) of a box's profile along one axis: 1 within ``half`` [m] of the centre, falling to 0 over
+    ``transition`` [m] beyond by the smoothstep, 0 farther (u [m] along the axis from the centre)."""
+    distance = abs(u) - half
+    if distance <= 0.0:
+        return 1.0, 0.0
+    if distance >= transition:
+        return 0.0, 0.0
+    value, slope = _smoothstep((transition - distance) / transition)
+    return value, -slope / transition * (1.0 if u > 0.0 else -1.0)
+
+
+@njit(cache=True)
+def box_profile(box, transition, ground, x, y):
+    """(h, ∂h/∂x, ∂h/∂y) of a box's smoothed height profile at the world point (x, y) [m]:
+    h = ground + height S_1(u_1) S_2(u_2), u_i = a_i · ((x, y) − c)
+    (:mod:`wbmpc.ocp.residuals.frame_point_above_box`). box (7,): footprint centre c (2,) [m], world
+    unit axis a_1 along its depth (2,) (a_2 = a_1 turned by +90°), half extents grown by the margin
+    (e_1, e_2) [m], height of the top above the ground [m]; transition [m] (> 0), ground world z [m]."""
+    dx, dy = x - box[0], y - box[1]
+    a_x, a_y = box[2], box[3]
+    s1, d1 = _box_window(a_x * dx + a_y * dy, box[4], transition)
+    s2, d2 = _box_window(-a_y * dx + a_x * dy, box[5], transition)
+    height = box[6]
+    return (ground + height * s1 * s2, height * (d1 * s2 * a_x - s1 * d2 * a_y),
+            height * (d1 * s2 * a_y + s1 * d2 * a_x))
+
+
+@njit(cache=True)
+def point_above_box_row(position, R, point, box, transition, ground):
+    """Residual [m] of a point fixed on a frame above a box's profile: z_p − h(x_p, y_p), the point
+    p = position + R point (the frame's world position (3,), rotation R (3, 3), the point (3,) in
+    the frame), h of :func:`box_profile`."""
+    x = position[0] + R[0, 0] * point[0] + R[0, 1] * point[1] + R[0, 2] * point[2]
+    y = position[1] + R[1, 0] * point[0] + R[1, 1] * point[1] + R[1, 2] * point[2]
+    z = position[2] + R[2, 0] * point[0] + R[2, 1] * point[1] + R[2, 2] * point[2]
+    return z - box_profile(box, transition, ground, x, y)[0]
+
+
+@njit(cache=True)
+def point_above_box_jacobian_row(position, jacobian, R, point, box, transition, ground, out):
+    """Its Jacobian row out (nv,) from the frame's LOCAL_WORLD_ALIGNED Jacobian (6, nv) (linear,
+    angular rows): with w = R point, the point's velocity Jacobian J_p = J_v − [w]× J_ω and
+    out = J_p[2] − ∇h · J_p[:2]."""
+    w_x = R[0, 0] * point[0] + R[0, 1] * point[1] + R[0, 2] * point[2]
+    w_y = R[1, 0] * point[0] + R[1, 1] * point[1] + R[1, 2] * point[2]
+    w_z = R[2, 0] * point[0] + R[2, 1] * point[1] + R[2, 2] * point[2]
+    _, g_x, g_y = box_profile(box, transition, ground, position[0] + w_x, position[1] + w_y)
+    for c in range(out.size):
+        o_x, o_y, o_z = jacobian[3, c], jacobian[4, c], jacobian[5, c]
+        p_x = jacobian[0, c] - (w_y * o_z - w_z * o_y)
+        p_y = jacobian[1, c] - (w_z * o_x - w_x * o_z)
+        p_z = jacobian[2, c] - (w_x * o_y - w_y * o_x)
+        out[c] = p_z - g_x * p_x - g_y * p_y
+
+
+@njit(cache=True)
+def point_above_box_rows_many(positions, rotations, point, boxes, transition, ground, mask, r):
+    """:func:`point_above_box_row` r[k, 0] at the nodes with mask[k]; positions (N, 3), rotations
+    (N, 3, 3), boxes (N, 7) (each node's box, :func:`box_profile`)."""
+    for k in range(mask.size):
+        if mask[k]:
+            r[k, 0] = point_above_box_row(positions[k], rotations[k], point, boxes[k], transition, ground)
+
+
+@njit(cache=True)
+def point_above_box_jacobian_many(positions, jacobians, rotations, point, boxes, transition, ground, mask, values):
+    """:func:`point_above_box_jacobian_row` into values[k] (nv,) at the nodes with mask[k];
+    jacobians (N, 6, nv)."""
+    for k in range(mask.size):
+        if mask[k]:
+            point_above_box_jacobian_row(positions[k], jacobians[k], rotations[k], point, boxes[k], transition,
+                                         ground, values[k])
 
 
 @njit(cache=True, inline="always")

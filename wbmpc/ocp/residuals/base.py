@@ -42,6 +42,11 @@ class HorizonData:
             rows 3..5) and frame_rotation (N, n_frames, 3, 3) (world), computed for the nodes where
             a term needing the frame is active (Jacobians in calcDiff only); the angular rows and
             rotations only when a term declares ``batch_frame_rotations`` (else 3 rows, no rotations).
+        com: (N, 3) the centre of mass [m, world] and com_jacobian (N, 3, nv) its Jacobian
+            (∂c/∂q in the tangent space, Pinocchio's ``Jcom``), computed by the compiled horizon
+            kinematics (:mod:`wbmpc.ocp.kernels.frames`) at the nodes where a term declaring
+            ``batch_com`` is active (the Jacobian in calcDiff only); (N, 0) and (N, 0, nv) when no
+            term does.
         contact_force: (N, nc_max) the stacked contact forces of each node's contact set, in the
             order of the set (as the node's dynamics computes them: 3D point contacts [N] in
             world-aligned axes, 6D contacts (force [N], torque [N·m]) in the LOCAL contact frame);
@@ -58,6 +63,8 @@ class HorizonData:
     frame_position: np.ndarray
     frame_jacobian: np.ndarray
     frame_rotation: np.ndarray
+    com: np.ndarray
+    com_jacobian: np.ndarray
     contact_force: np.ndarray
     contact_force_jacobian: np.ndarray
     contact_row: dict
@@ -87,6 +94,8 @@ class BatchedResidual:
     - ``batch_frames``: frame ids whose kinematics it reads from the horizon (default none);
     - ``batch_frame_rotations``: True if it reads their rotations and the angular Jacobian rows
       (then every frame's are computed; default False: positions and linear rows only);
+    - ``batch_com``: True if it reads the centre of mass and its Jacobian from the horizon
+      (default False);
     - ``batch_signature()``: what must be equal at every node for one batched term.
 
     Both evaluations call the same compiled rows (:mod:`wbmpc.ocp.kernels.residuals`).
@@ -94,6 +103,7 @@ class BatchedResidual:
 
     batch_frames: tuple = ()
     batch_frame_rotations: bool = False
+    batch_com: bool = False
 
     @property
     def reference(self) -> np.ndarray:

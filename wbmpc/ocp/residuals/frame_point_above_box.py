@@ -17,6 +17,10 @@ violation.
 
 Jacobian: with J_p = J_v − [w]× J_ω the point's world velocity Jacobian (J: the frame's LOCAL_WORLD_ALIGNED
 Jacobian, w = oRf p), Rx = [J_p[2] − ∇h · J_p[:2], 0], ∇h = height (S_1' S_2 a_1 + S_1 S_2' a_2).
+
+Both evaluations (node-wise ``calc``/``calcDiff``, the batched one) and :meth:`ResidualFramePointAboveBox.profile`
+compute h, ∇h and the rows with the same compiled kernels (:func:`~wbmpc.ocp.kernels.residuals.box_profile`,
+``point_above_box_row``, ``point_above_box_jacobian_row``).
 """
 
 from __future__ import annotations
@@ -25,28 +29,22 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError, check_finite
-from wbmpc.ocp.residuals.base import DataCollector, ResidualData
+from wbmpc.ocp.kernels.residuals import (
+    box_profile,
+    point_above_box_jacobian_many,
+    point_above_box_jacobian_row,
+    point_above_box_row,
+    point_above_box_rows_many,
+)
+from wbmpc.ocp.residuals.base import BatchedResidual, DataCollector, HorizonData, ResidualData
 from wbmpc.ocp.state import StateMultibody
 
-
-def _smoothstep(s: float) -> tuple[float, float]:
-    """q(s) = 10 s³ − 15 s⁴ + 6 s⁵ on [0, 1] (clamped outside) and dq/ds."""
-    s = min(max(s, 0.0), 1.0)
-    return s * s * s * (10.0 + s * (-15.0 + 6.0 * s)), 30.0 * s * s * (1.0 - s) * (1.0 - s)
+#: the box's parameters in :attr:`ResidualFramePointAboveBox.reference`: footprint centre (2,) [m], unit axis along
+#: its depth (2,), half extents grown by the margin (2,) [m], top above the ground [m]
+BOX_SIZE = 7
 
 
-def _window(u: float, half: float, transition: float) -> tuple[float, float]:
-    """S(u) and dS/du of the module docstring (``half`` = e, the grown half extent [m])."""
-    distance = abs(u) - half
-    if distance <= 0.0:
-        return 1.0, 0.0
-    if distance >= transition:
-        return 0.0, 0.0
-    value, slope = _smoothstep((transition - distance) / transition)
-    return value, -slope / transition * (1.0 if u > 0.0 else -1.0)
-
-
-class ResidualFramePointAboveBox:
+class ResidualFramePointAboveBox(BatchedResidual):
     """r(x) = z_p − h(x_p, y_p) for the point p on a frame and a box's profile h (see the module docstring).
 
     Args:
@@ -59,8 +57,12 @@ class ResidualFramePointAboveBox:
         ground: world z of the ground the box stands on [m].
 
     The box is set by :meth:`set_box` (mutable, per node); until then, and after :meth:`clear`, there is none
-    (h = ground).
+    (h = ground). Its parameters are the residual's ``reference`` (:data:`BOX_SIZE`,): centre c (2,) [m, world],
+    axis a_1 (2,), grown half extents (e_1, e_2) [m], height [m], written in place by :meth:`set_box` and
+    :meth:`clear`, so that a batched problem that bound them (``bind_reference``) reads every node's box.
     """
+
+    batch_frame_rotations = True
 
     def __init__(self, state: StateMultibody, frame_id: int, point_local, nu: int, margin: float,
                  transition: float, ground: float = 0.0):
@@ -74,49 +76,69 @@ class ResidualFramePointAboveBox:
             raise ParameterError(f"transition={transition!r} m must be finite and > 0")
         self.state = state
         self.frame_id = int(frame_id)
+        self.batch_frames = (self.frame_id,)
         self.point_local = point
         self.margin, self.transition, self.ground = float(margin), float(transition), float(ground)
         self.nr = 1
         self.nu = nu
+        self._reference = np.zeros(BOX_SIZE)
         self.clear()
 
     def set_box(self, center, axis, half_depth: float, half_width: float, height: float) -> None:
         """The box: footprint centre (2,) [m], world unit axis along its depth (2,), half extents along and
         across it [m], top above the ground [m]."""
-        self._center = np.asarray(center, dtype=float).reshape(2)
-        along = np.asarray(axis, dtype=float).reshape(2)
-        self._axes = np.array([along, [-along[1], along[0]]])
-        self._half = (float(half_depth) + self.margin, float(half_width) + self.margin)
-        self._height = float(height)
+        box = self._reference
+        box[0:2] = center
+        box[2:4] = axis
+        box[4] = float(half_depth) + self.margin
+        box[5] = float(half_width) + self.margin
+        box[6] = height
 
     def clear(self) -> None:
         """No box: h = ground everywhere."""
-        self._center, self._axes = np.zeros(2), np.eye(2)
-        self._half, self._height = (0.0, 0.0), 0.0
+        self._reference[:] = (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0)
 
     def profile(self, xy) -> tuple[float, np.ndarray]:
         """h(x, y) [m] and its gradient (2,) at the world point ``xy`` (2,) [m]."""
-        u = self._axes @ (np.asarray(xy, dtype=float) - self._center)
-        s1, d1 = _window(float(u[0]), self._half[0], self.transition)
-        s2, d2 = _window(float(u[1]), self._half[1], self.transition)
-        return self.ground + self._height * s1 * s2, self._height * (d1 * s2 * self._axes[0] + s1 * d2 * self._axes[1])
+        x, y = np.asarray(xy, dtype=float).reshape(2)
+        value, g_x, g_y = box_profile(self._reference, self.transition, self.ground, x, y)
+        return value, np.array([g_x, g_y])
 
     def _point(self, shared: DataCollector) -> np.ndarray:
         placement = pin.updateFramePlacement(self.state.pinocchio, shared.pinocchio, self.frame_id)
         return placement.translation + placement.rotation @ self.point_local
 
     def calc(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
-        point = self._point(shared)
-        data.r[0] = point[2] - self.profile(point[:2])[0]
+        placement = pin.updateFramePlacement(self.state.pinocchio, shared.pinocchio, self.frame_id)
+        data.r[0] = point_above_box_row(placement.translation, placement.rotation, self.point_local, self._reference,
+                                        self.transition, self.ground)
 
     def calcDiff(self, data: ResidualData, x: np.ndarray, u: np.ndarray | None, shared: DataCollector) -> None:
-        pdata = shared.pinocchio
-        point = self._point(shared)
-        _, gradient = self.profile(point[:2])
-        jacobian = pin.getFrameJacobian(self.state.pinocchio, pdata, self.frame_id, pin.LOCAL_WORLD_ALIGNED)
-        w = pdata.oMf[self.frame_id].rotation @ self.point_local
-        linear = jacobian[:3] - pin.skew(w) @ jacobian[3:]  # the point's velocity: v + ω × w
-        data.Rx[0, : self.state.nv] = linear[2] - gradient @ linear[:2]
+        model, pdata = self.state.pinocchio, shared.pinocchio
+        placement = pin.updateFramePlacement(model, pdata, self.frame_id)
+        jacobian = pin.getFrameJacobian(model, pdata, self.frame_id, pin.LOCAL_WORLD_ALIGNED)
+        point_above_box_jacobian_row(placement.translation, jacobian, placement.rotation, self.point_local,
+                                     self._reference, self.transition, self.ground, data.Rx[0, : self.state.nv])
 
     def createData(self) -> ResidualData:
         return ResidualData(self.nr, self.state.ndx, self.nu)
+
+    def jacobian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        nv = self.state.nv
+        return np.zeros(nv, dtype=np.int64), np.arange(nv, dtype=np.int64)
+
+    def batch_calc(self, horizon: HorizonData, mask: np.ndarray, references: np.ndarray, r: np.ndarray) -> None:
+        slot = horizon.frame_slot[self.frame_id]
+        point_above_box_rows_many(horizon.frame_position[:, slot], horizon.frame_rotation[:, slot], self.point_local,
+                                  references, self.transition, self.ground, mask, r)
+
+    def batch_calc_diff(self, horizon: HorizonData, mask: np.ndarray, references: np.ndarray,
+                        values: np.ndarray) -> None:
+        slot = horizon.frame_slot[self.frame_id]
+        point_above_box_jacobian_many(horizon.frame_position[:, slot], horizon.frame_jacobian[:, slot],
+                                      horizon.frame_rotation[:, slot], self.point_local, references, self.transition,
+                                      self.ground, mask, values)
+
+    def batch_signature(self) -> tuple:
+        # what the batched evaluation reads from the first node's residual (the margin is in each node's box)
+        return (type(self), self.nr, self.batch_frames, tuple(self.point_local), self.transition, self.ground)
