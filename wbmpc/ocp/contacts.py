@@ -22,43 +22,20 @@ import numpy as np
 import pinocchio as pin
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.kernels.contact import (
-    contact3d_calc,
-    contact3d_drift_derivative,
-    contact3d_force_terms,
-    contact6d_drift,
-    contact6d_drift_derivative,
-)
-from wbmpc.ocp.kernels.tree import KinematicTree, frame_acceleration_derivatives, frame_motion
+from wbmpc.ocp.kernels.contact import contact_set_calc, contact_set_derivatives
+from wbmpc.ocp.kernels.tree import KinematicTree
 from wbmpc.ocp.state import StateMultibody
-
-_ZERO3 = np.zeros(3)
 
 
 class ContactData:
-    """Buffers of one contact: Jc (nc, nv), a0 (nc,), da0_dx (nc, ndx), force (nc,), df_dx, df_du."""
+    """What a contact's node data holds for the costs: its force (nc,) (world-aligned [N] for a point
+    contact, the LOCAL wrench [N, N·m] for a 6D one) and the derivatives df_dx (nc, ndx), df_du (nc, nu)."""
 
     def __init__(self, model, nu: int):
-        nv, ndx, nc = model.state.nv, model.state.ndx, model.nc
-        self.Jc = np.zeros((nc, nv))
-        self.a0 = np.zeros(nc)
-        self.da0_dx = np.zeros((nc, ndx))
+        ndx, nc = model.state.ndx, model.nc
         self.force = np.zeros(nc)
         self.df_dx = np.zeros((nc, ndx))
         self.df_du = np.zeros((nc, nu))
-        self.fext = pin.Force.Zero()
-        self.fext_vector = np.zeros(6)
-        self.dtau_dq = None  # (nv, nv) extra RNEA derivative of a world-aligned force, or None
-        self.fJf = np.zeros((6, nv))  # frame Jacobian, LOCAL
-        self.oRf = np.eye(3)  # frame placement (world)
-        self.opf = np.zeros(3)
-        self.velocity = np.zeros(6)  # frame velocity (linear, angular), LOCAL
-        self.acceleration = np.zeros(6)  # frame spatial acceleration, LOCAL
-        self.v_dq = np.zeros((6, nv))  # ∂velocity/∂q, ∂acceleration/∂q and ∂acceleration/∂v (LOCAL)
-        self.a_dq = np.zeros((6, nv))
-        self.a_dv = np.zeros((6, nv))
-        self.position_error_local = np.zeros(3)
-        self.rMf = pin.SE3.Identity()
 
 
 class _ContactBase:
@@ -76,17 +53,6 @@ class _ContactBase:
         self._jRf = self.joint_placement_frame.rotation.copy()
         self._jpf = self.joint_placement_frame.translation.copy()
         self.gains = (kp, kd)
-
-    def _frame_motion(self, data: ContactData, tree: KinematicTree) -> None:
-        """The frame's placement, LOCAL Jacobian, velocity and spatial acceleration from ``tree``."""
-        frame_motion(self.joint_id, self._jRf, self._jpf, tree.parents, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa,
-                     tree.J, data.oRf, data.opf, data.fJf, data.velocity, data.acceleration)
-
-    def _frame_derivatives(self, data: ContactData, tree: KinematicTree) -> None:
-        """∂velocity/∂q, ∂acceleration/∂q and ∂acceleration/∂v of the frame (LOCAL) from ``tree``
-        evaluated at the solved accelerations (and the placement :meth:`_frame_motion` stored)."""
-        frame_acceleration_derivatives(self.joint_id, data.oRf, data.opf, tree.parents, tree.idx_v, tree.ov, tree.oa,
-                                       tree.J, data.v_dq, data.a_dq, data.a_dv)
 
     def createData(self, nu: int) -> ContactData:
         return ContactData(self, nu)
@@ -108,28 +74,6 @@ class ContactModel3D(_ContactBase):
         super().__init__(state, frame_id, gains)
         self.reference = np.asarray(reference_world, dtype=float).reshape(3).copy()
 
-    def calc(self, data: ContactData, tree: KinematicTree) -> None:
-        """Fill Jc (3, nv) and a0 (3,) from the tree kinematics at (q, v, a = 0)."""
-        self._frame_motion(data, tree)
-        contact3d_calc(data.fJf, data.oRf, data.opf, data.velocity, data.acceleration, self.reference, *self.gains,
-                       data.Jc, data.a0)
-
-    def calcDiff(self, data: ContactData, tree: KinematicTree) -> None:
-        """Fill da0_dx (3, ndx) from the tree kinematics at the solved accelerations (after :meth:`calc`)."""
-        self._frame_derivatives(data, tree)
-        kp, kd = self.gains
-        if kp != 0.0:
-            data.position_error_local[:] = data.oRf.T @ (data.opf - self.reference)
-        # The rotation term of ∂(oRf a0_local)/∂q multiplies a0_local evaluated at the solved
-        # accelerations, J a + drift + Baumgarte = 0 for an enforced contact (Crocoddyl evaluates
-        # it numerically, ~1e-15): it vanishes.
-        contact3d_drift_derivative(data.v_dq, data.a_dq, data.a_dv, data.fJf, data.velocity[:3], data.velocity[3:],
-                                   data.position_error_local, _ZERO3, data.oRf, kp, kd, data.da0_dx)
-
-    def update_force(self, data: ContactData, force: np.ndarray) -> None:
-        """Store the contact force (3,) [N, world axes] (from calc)."""
-        data.force[:] = force
-
     def rigid_constraint_model(self) -> pin.RigidConstraintModel:
         """The same constraint as a Pinocchio RigidConstraintModel (CONTACT_3D, LOCAL_WORLD_ALIGNED,
         same Baumgarte gains, reference point on the universe)."""
@@ -143,17 +87,6 @@ class ContactModel3D(_ContactBase):
     def reference_placement(self) -> pin.SE3:
         """Placement of the reference point (identity rotation), for the Baumgarte position term."""
         return pin.SE3(np.eye(3), self.reference)
-
-    def force_derivative_terms(self, data: ContactData) -> None:
-        """Frame Jacobian (LOCAL), external force on the parent joint and its RNEA derivative term.
-
-        Called by the dynamics' calcDiff before the RNEA derivatives (and before :meth:`calcDiff`), after
-        :meth:`calc` at the same configuration (its frame Jacobian and placement).
-        """
-        if data.dtau_dq is None:
-            data.dtau_dq = np.zeros((self.state.nv, self.state.nv))
-        contact3d_force_terms(data.fJf, data.oRf, data.force, self._jRf, self._jpf, data.fext_vector, data.dtau_dq)
-        data.fext = pin.Force(data.fext_vector)
 
 
 class ContactModel6D(_ContactBase):
@@ -172,39 +105,6 @@ class ContactModel6D(_ContactBase):
         super().__init__(state, frame_id, gains)
         self.reference = pin.SE3(reference_placement)
 
-    def calc(self, data: ContactData, tree: KinematicTree, corners: "SoleCorners | None" = None) -> None:
-        """Jc (6, nv) and a0 (6,) from the tree kinematics at (q, v, a = 0); with ``corners`` the drift is
-        that of the sole as four corner point contacts, a0 + δ (:class:`SoleCorners`)."""
-        self._frame_motion(data, tree)
-        kp, kd = self.gains
-        data.Jc[:] = data.fJf
-        if corners is None:
-            contact6d_drift(data.velocity, data.acceleration, kd, _ZERO3, _ZERO3, False, data.a0)
-        else:
-            contact6d_drift(data.velocity, data.acceleration, kd, corners.spread_diagonal, corners.inverse_arms, True,
-                            data.a0)
-        if kp != 0.0:
-            data.rMf = self.reference.actInv(pin.SE3(data.oRf, data.opf))
-            data.a0 += kp * pin.log6(data.rMf).vector
-
-    def calcDiff(self, data: ContactData, tree: KinematicTree, corners: "SoleCorners | None" = None) -> None:
-        """da0_dx (6, ndx) from the tree kinematics at the solved accelerations, after :meth:`calc` (with the
-        same ``corners``)."""
-        self._frame_derivatives(data, tree)
-        kp, kd = self.gains
-        if corners is None:
-            contact6d_drift_derivative(data.v_dq, data.a_dq, data.a_dv, data.fJf, data.velocity, kd, _ZERO3, _ZERO3,
-                                       False, data.da0_dx)
-        else:
-            contact6d_drift_derivative(data.v_dq, data.a_dq, data.a_dv, data.fJf, data.velocity, kd,
-                                       corners.spread_diagonal, corners.inverse_arms, True, data.da0_dx)
-        if kp != 0.0:
-            data.da0_dx[:, :self.state.nv] += kp * pin.Jlog6(data.rMf) @ data.fJf
-
-    def update_force(self, data: ContactData, force: np.ndarray) -> None:
-        """Store the contact wrench (6,) = (force [N], torque [N·m]) in the LOCAL sole frame."""
-        data.force[:] = force
-
     def rigid_constraint_model(self) -> pin.RigidConstraintModel:
         """The same constraint as a Pinocchio RigidConstraintModel (CONTACT_6D, LOCAL, same
         Baumgarte gains, reference placement on the universe)."""
@@ -216,11 +116,6 @@ class ContactModel6D(_ContactBase):
 
     def reference_placement(self) -> pin.SE3:
         return pin.SE3(self.reference)
-
-    def force_derivative_terms(self, data: ContactData) -> None:
-        """External force on the parent joint (a LOCAL wrench adds no RNEA derivative term)."""
-        data.fext = self.joint_placement_frame.act(pin.Force(data.force))
-        data.dtau_dq = None
 
 
 class SoleCorners:
@@ -300,3 +195,95 @@ def sole_lever_arms(sole_size) -> np.ndarray:
     if not (np.isfinite(length) and np.isfinite(width) and length > 0 and width > 0):
         raise ParameterError(f"sole_size={tuple(sole_size)} must be (length > 0, width > 0) [m]")
     return np.array([0.5 * width, 0.5 * length, 0.5 * np.hypot(length, width)])
+
+
+class ContactSet:
+    """The active contacts of a node as arrays for the compiled kernels of the KKT backend
+    (:func:`~wbmpc.ocp.kernels.contact.contact_set_calc`, :func:`~wbmpc.ocp.kernels.contact.contact_set_derivatives`):
+    per contact, in the node's (alphabetical) order, its kind (3 or 6 rows), parent joint, frame placement
+    in it, Baumgarte gains, point reference (3D), sole-corner drift (6D, the "corners" damping) and first
+    stacked row.
+
+    Args:
+        contacts: (name, contact model) of the active contacts, in order.
+        corners: name -> :class:`SoleCorners` of the soles whose drift is the corners' (else absent).
+    """
+
+    def __init__(self, contacts: list, corners: dict):
+        k = len(contacts)
+        self.names = [name for name, _ in contacts]
+        self.models = [contact for _, contact in contacts]
+        self.kinds = np.array([contact.nc for contact in self.models], dtype=np.int64)
+        self.rows = np.concatenate([[0], np.cumsum(self.kinds)]).astype(np.int64)
+        self.nc = int(self.rows[-1])
+        self.joints = np.array([contact.joint_id for contact in self.models], dtype=np.int64)
+        self.joint_ids = [int(j) for j in self.joints]  # as Python ints (Pinocchio's vectors index by them)
+        self.frame_rotations = np.array([contact._jRf for contact in self.models]).reshape(k, 3, 3)
+        self.frame_translations = np.array([contact._jpf for contact in self.models]).reshape(k, 3)
+        self.kp = np.array([contact.gains[0] for contact in self.models])
+        self.kd = np.array([contact.gains[1] for contact in self.models])
+        self.references = np.zeros((k, 3))  # the point contacts' Kp references, refreshed per evaluation
+        self.corners = np.array([name in corners for name in self.names], dtype=np.bool_)
+        self.spreads = np.array([corners[name].spread_diagonal if name in corners else np.zeros(3)
+                                 for name in self.names]).reshape(k, 3)
+        self.inverse_arms = np.array([corners[name].inverse_arms if name in corners else np.zeros(3)
+                                      for name in self.names]).reshape(k, 3)
+        #: the point contacts with Kp > 0 (their reference is read at every evaluation) and the 6D ones
+        #: (their Kp term, Kp log6(ref⁻¹ oMf), is added outside the kernels)
+        self._moving_points = [c for c, contact in enumerate(self.models) if contact.nc == 3 and contact.gains[0] != 0.0]
+        self._positioned_soles = [c for c, contact in enumerate(self.models)
+                                  if contact.nc == 6 and contact.gains[0] != 0.0]
+
+    def calc(self, tree: KinematicTree, work: "ContactSetWork", q, v, a, Jc, a0) -> None:
+        """The stacked Jc (nc, nv) and a0 (nc,) at (q, v, a) (a = 0: the drift); ``work`` keeps the
+        contacts' frame kinematics for :meth:`derivatives`."""
+        for c in self._moving_points:
+            self.references[c] = self.models[c].reference
+        k = self.kinds.size
+        contact_set_calc(q, v, a, tree.parents, tree.placement_rotation, tree.placement_translation, tree.axes,
+                         tree.idx_q, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, self.kinds, self.joints,
+                         self.frame_rotations, self.frame_translations, self.kp, self.kd, self.references, self.corners,
+                         self.spreads, self.inverse_arms, work.oRf[:k], work.opf[:k], work.fJf[:k], work.velocity[:k],
+                         work.acceleration[:k], Jc, a0)
+        for c in self._positioned_soles:
+            rows = slice(self.rows[c], self.rows[c + 1])
+            work.rMf[c] = self.models[c].reference.actInv(pin.SE3(work.oRf[c], work.opf[c]))
+            a0[rows] += self.kp[c] * pin.log6(work.rMf[c]).vector
+
+    def derivatives(self, tree: KinematicTree, work: "ContactSetWork", q, v, a, forces, da0_dx) -> bool:
+        """After :meth:`calc` at (q, v, 0) and the solve: da0_dx (nc, ndx) at fixed a, the contacts'
+        spatial forces on their joints (``work.fext`` (k, 6)) and the point forces' RNEA rotation term
+        (``work.dtau_dq_extra`` (nv, nv)); returns True when that term is there (a point contact)."""
+        k = self.kinds.size
+        extra = contact_set_derivatives(
+            q, v, a, tree.parents, tree.placement_rotation, tree.placement_translation, tree.axes, tree.idx_q,
+            tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, self.kinds, self.joints, self.frame_rotations,
+            self.frame_translations, self.kp, self.kd, self.references, self.corners, self.spreads, self.inverse_arms,
+            work.oRf[:k], work.opf[:k], work.fJf[:k], work.velocity[:k], forces, work.v_dq[:k], work.a_dq[:k],
+            work.a_dv[:k], da0_dx, work.fext[:k], work.dtau_dq_extra)
+        nv = tree.nv
+        for c in self._positioned_soles:
+            rows = slice(self.rows[c], self.rows[c + 1])
+            da0_dx[rows, :nv] += self.kp[c] * pin.Jlog6(work.rMf[c]) @ work.fJf[c]
+        return extra
+
+
+class ContactSetWork:
+    """Per-node buffers of :class:`ContactSet` for at most ``n_contacts`` contacts of ``nv`` velocities:
+    each contact's frame placement oRf (3, 3), opf (3,), LOCAL Jacobian fJf (6, nv), velocity and
+    acceleration (6,), their derivatives v_dq, a_dq, a_dv (6, nv), its spatial force on its joint
+    fext (6,), and the point forces' RNEA rotation term dtau_dq_extra (nv, nv)."""
+
+    def __init__(self, n_contacts: int, nv: int):
+        k = n_contacts
+        self.oRf = np.zeros((k, 3, 3))
+        self.opf = np.zeros((k, 3))
+        self.fJf = np.zeros((k, 6, nv))
+        self.velocity = np.zeros((k, 6))
+        self.acceleration = np.zeros((k, 6))
+        self.v_dq = np.zeros((k, 6, nv))
+        self.a_dq = np.zeros((k, 6, nv))
+        self.a_dv = np.zeros((k, 6, nv))
+        self.fext = np.zeros((k, 6))
+        self.dtau_dq_extra = np.zeros((nv, nv))
+        self.rMf = [pin.SE3.Identity() for _ in range(k)]

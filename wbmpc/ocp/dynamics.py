@@ -53,7 +53,7 @@ import pinocchio as pin
 
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.actuation import ActuationFloatingBase
-from wbmpc.ocp.contacts import ContactModel6D, SoleCorners
+from wbmpc.ocp.contacts import ContactModel6D, ContactSet, ContactSetWork, SoleCorners
 from wbmpc.ocp.costs import CostModelSum
 from wbmpc.ocp.kernels.kkt import KKTBuffers, damped_kkt_derivatives, damped_kkt_dynamics
 from wbmpc.ocp.kernels.tree import KinematicTree, tree_support
@@ -184,6 +184,9 @@ class DifferentialActionModelContactFwdDynamics:
             for (_, raw_rows, force_map), (_, rows) in zip(self._constraint_rows, self._active_rows):
                 self.force_map[rows, raw_rows] = np.eye(rows.stop - rows.start) if force_map is None else force_map
         self._moving_references = [name for name in self.active_contacts if self.contacts[name].gains[0] != 0.0]
+        #: the active contacts as arrays for the compiled KKT path (:class:`~wbmpc.ocp.contacts.ContactSet`)
+        self.contact_set = ContactSet([(name, self.contacts[name]) for name in self.active_contacts],
+                                      self._drift_corners) if self.backend == "kkt" else None
         scaled = [name for name in self.active_contacts if name in self._damping_row_scales]
         #: stacked row scales S (nc,) of the active contacts, None when all are 1 (uniform damping)
         self.row_scales = None if not scaled else np.concatenate(
@@ -238,47 +241,18 @@ class DifferentialActionModelContactFwdDynamics:
             pin.nonLinearEffects(model, pdata, q, v)
         self.actuation.calc(data.tau, u)
         nc = self.nc
-        if nc:
-            data.tree.evaluate(q, v, data.zero_acceleration)  # the contacts' drift: zero joint accelerations
         if data.active_contacts is not self.active_contacts:
             data.active_contacts = self.active_contacts
             data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
-            data.Jc = data.Jc_all[:nc]
-            data.a0 = data.a0_all[:nc]
-        if len(self.active_contacts) == 1:  # one stance foot: its buffers are the stacked ones
-            name = self.active_contacts[0]
-            cdata = data.contacts[name]
-            self._contact_calc(name, cdata, data.tree)
-            data.Jc, data.a0 = cdata.Jc, cdata.a0
-        else:
-            row = 0
-            for name in self.active_contacts:
-                contact = self.contacts[name]
-                cdata = data.contacts[name]
-                self._contact_calc(name, cdata, data.tree)
-                data.Jc[row:row + contact.nc] = cdata.Jc
-                data.a0[row:row + contact.nc] = cdata.a0
-                row += contact.nc
-        kkt = data.kkt_buffers(nc)
-        forces = data.force_all[:nc]
-        if not damped_kkt_dynamics(pdata.M, pdata.nle, data.tau, data.Jc, data.a0,
+        Jc, a0, forces = data.Jc_all[:nc], data.a0_all[:nc], data.force_all[:nc]
+        if nc:  # the contacts' Jacobians and drifts (zero joint accelerations), compiled
+            self.contact_set.calc(data.tree, data.contact_work, q, v, data.zero_acceleration, Jc, a0)
+        if not damped_kkt_dynamics(pdata.M, pdata.nle, data.tau, Jc, a0,
                                    data.ones[:nc] if self.row_scales is None else self.row_scales,
-                                   self.contact_damping, data.xout, forces, *kkt.dynamics_buffers()):
+                                   self.contact_damping, data.xout, forces, *data.kkt_buffers(nc).dynamics_buffers()):
             data.xout[:] = np.nan  # M or the contacts' Delassus matrix is not positive definite: the rollout fails
-        row = 0
-        for name in self.active_contacts:
-            contact = self.contacts[name]
-            contact.update_force(data.contacts[name], forces[row:row + contact.nc])
-            row += contact.nc
-
-    def _contact_calc(self, name: str, cdata, tree) -> None:
-        """KKT path: the contact's Jc and a0 from the tree kinematics (a sole of four corner contacts:
-        their drift)."""
-        corners = self._drift_corners.get(name)
-        if corners is None:
-            self.contacts[name].calc(cdata, tree)
-        else:
-            self.contacts[name].calc(cdata, tree, corners)
+        for name, rows in self._active_rows:
+            data.contacts[name].force[:] = forces[rows]
 
     def _calc_constraint_dynamics(self, data, q, v, u) -> None:
         """Pinocchio backend of calc: constraintDynamics with the active RigidConstraintModels."""
@@ -342,46 +316,27 @@ class DifferentialActionModelContactFwdDynamics:
         nq = self.state.nq
         q, v = x[:nq], x[nq:]
         nc = self.nc
+        dtau_dq = pdata.dtau_dq
+        da0_dx = data.da0_dx_all[:nc]
         for joint in data.fext_joints:
             data.fext[joint] = pin.Force.Zero()
         data.fext_joints = []
-        for name in self.active_contacts:
-            contact = self.contacts[name]
-            cdata = data.contacts[name]
-            contact.force_derivative_terms(cdata)
-            data.fext[contact.joint_id] = cdata.fext
-            data.fext_joints.append(contact.joint_id)
+        if nc:  # drift derivatives, the contact forces on their joints, the point forces' rotation term
+            work = data.contact_work
+            extra = self.contact_set.derivatives(data.tree, work, q, v, data.xout, data.force_all[:nc], da0_dx)
+            for c, joint in enumerate(self.contact_set.joint_ids):
+                data.fext[joint] = pin.Force(work.fext[c])
+                data.fext_joints.append(joint)
         pin.computeRNEADerivatives(model, pdata, q, v, data.xout, data.fext)
-        if nc:
-            data.tree.evaluate(q, v, data.xout)  # the contacts' drift derivatives at the solved accelerations
-        row = 0
-        da0_dx = data.da0_dx_all[:nc]
-        dtau_dq = pdata.dtau_dq
-        for name in self.active_contacts:
-            contact = self.contacts[name]
-            cdata = data.contacts[name]
-            corners = self._drift_corners.get(name)
-            if corners is None:
-                contact.calcDiff(cdata, data.tree)
-            else:
-                contact.calcDiff(cdata, data.tree, corners)
-            da0_dx[row:row + contact.nc] = cdata.da0_dx
-            row += contact.nc
-            if cdata.dtau_dq is not None:  # a world-aligned point force's rotation term
-                if dtau_dq is pdata.dtau_dq:
-                    dtau_dq = np.add(pdata.dtau_dq, cdata.dtau_dq, out=data.dtau_dq)
-                else:
-                    dtau_dq += cdata.dtau_dq
+        if nc and extra:
+            dtau_dq = np.add(pdata.dtau_dq, work.dtau_dq_extra, out=data.dtau_dq)
         df_dx, df_du = data.df_dx_all[:nc], data.df_du_all[:nc]
         damped_kkt_derivatives(dtau_dq, pdata.dtau_dv, da0_dx, data.ones[:nc] if self.row_scales is None else
                                self.row_scales, data.Fx, data.Fu, df_dx, df_du, *data.kkt_buffers(nc).derivative_buffers())
-        row = 0
-        for name in self.active_contacts:
-            contact = self.contacts[name]
+        for name, rows in self._active_rows:
             cdata = data.contacts[name]
-            cdata.df_dx[:] = df_dx[row:row + contact.nc]
-            cdata.df_du[:] = df_du[row:row + contact.nc]
-            row += contact.nc
+            cdata.df_dx[:] = df_dx[rows]
+            cdata.df_du[:] = df_du[rows]
 
     def contact_force_jacobians(self, data) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Derivatives of each active contact's force (world-aligned for point contacts, as
@@ -424,16 +379,16 @@ class DifferentialActionDataContactFwdDynamics:
         self.Jc_all = np.zeros((nc_max, nv))
         self.a0_all = np.zeros(nc_max)
         self.da0_dx_all = np.zeros((nc_max, ndx))
-        self.Jc = self.Jc_all[:0]
-        self.a0 = self.a0_all[:0]
         self.force_all = np.zeros(nc_max)  # stacked contact forces (kkt backend)
         self.df_dx_all = np.zeros((nc_max, ndx))
         self.df_du_all = np.zeros((nc_max, nu))
         self.dtau_dq = np.zeros((nv, nv))  # RNEA derivative with the point forces' rotation terms
         self.ones = np.ones(nc_max)  # the row scales of uniform damping
         self._kkt_buffers: dict[int, KKTBuffers] = {}  # contact rows -> the KKT kernels' buffers
-        # the compiled tree kinematics the contacts of the kkt backend read (None: the pinocchio backend)
+        # the compiled tree kinematics the contacts of the kkt backend read, and their buffers (None: the
+        # pinocchio backend)
         self.tree = KinematicTree(state.pinocchio) if model.backend == "kkt" and nc_max else None
+        self.contact_work = ContactSetWork(len(model.contacts), nv) if self.tree is not None else None
         self.zero_acceleration = np.zeros(nv)
         #: the "kkt" backend's calc leaves Pinocchio's kinematics, CoM and Jacobians for the costs
         #: (``computeAllTerms``); False: only what the dynamics need (M, b), for a caller that evaluates

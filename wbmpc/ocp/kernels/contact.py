@@ -9,6 +9,7 @@ import numpy as np
 from numba import njit
 
 from wbmpc.ocp.kernels.linalg import skew3
+from wbmpc.ocp.kernels.tree import frame_acceleration_derivatives, frame_motion, tree_motion
 
 
 @njit(cache=True)
@@ -114,3 +115,86 @@ def contact3d_force_terms(fJf, oRf, force_world, jRf, jpf, fext, dtau_dq):
     fext[4] = jpf[2] * linear[0] - jpf[0] * linear[2]
     fext[5] = jpf[0] * linear[1] - jpf[1] * linear[0]
     dtau_dq[:, :] = -np.dot(np.ascontiguousarray(fJf[:3].T), np.dot(skew3(f_local), fJf[3:]))
+
+
+@njit(cache=True)
+def contact_set_calc(q, v, a, parents, placement_rotation, placement_translation, axes, idx_q, idx_v, R, p, ov, oa, J,
+                     kinds, joints, frame_rotations, frame_translations, kp, kd, references, corners, spreads,
+                     inverse_arms, oRf, opf, fJf, velocity, acceleration, Jc, a0):
+    """The stacked Jacobian Jc (nc, nv) and drift a0 (nc,) of a node's active contacts, in one call.
+
+    The tree kinematics at (q, v, a) (a = 0: the drift; :func:`~wbmpc.ocp.kernels.tree.tree_motion`,
+    the tree arrays parents ... J of :class:`~wbmpc.ocp.kernels.tree.KinematicTree`), then for each
+    contact c (kinds[c] = 3: a LOCAL_WORLD_ALIGNED point contact, :func:`contact3d_calc`; 6: a LOCAL 6D
+    contact, :func:`contact6d_drift`, without its Kp term) on joint joints[c] with the frame placement
+    (frame_rotations[c], frame_translations[c]), Baumgarte gains kp[c], kd[c], the point reference
+    references[c] (3D), the sole-corner drift flag corners[c] with spreads[c], inverse_arms[c] (6D);
+    rows stacked in the contacts' order. The per-contact frame kinematics stay in oRf (k, 3, 3),
+    opf (k, 3), fJf (k, 6, nv), velocity, acceleration (k, 6) (LOCAL) for the derivatives."""
+    tree_motion(q, v, a, parents, placement_rotation, placement_translation, axes, idx_q, idx_v, R, p, ov, oa, J)
+    row = 0
+    for c in range(kinds.size):
+        frame_motion(joints[c], frame_rotations[c], frame_translations[c], parents, idx_v, R, p, ov, oa, J, oRf[c],
+                     opf[c], fJf[c], velocity[c], acceleration[c])
+        if kinds[c] == 3:
+            contact3d_calc(fJf[c], oRf[c], opf[c], velocity[c], acceleration[c], references[c], kp[c], kd[c],
+                           Jc[row:row + 3], a0[row:row + 3])
+            row += 3
+        else:
+            Jc[row:row + 6] = fJf[c]
+            contact6d_drift(velocity[c], acceleration[c], kd[c], spreads[c], inverse_arms[c], corners[c],
+                            a0[row:row + 6])
+            row += 6
+
+
+@njit(cache=True)
+def contact_set_derivatives(q, v, a, parents, placement_rotation, placement_translation, axes, idx_q, idx_v, R, p, ov,
+                            oa, J, kinds, joints, frame_rotations, frame_translations, kp, kd, references, corners,
+                            spreads, inverse_arms, oRf, opf, fJf, velocity, forces, v_dq, a_dq, a_dv, da0_dx, fext,
+                            dtau_dq_extra):
+    """After :func:`contact_set_calc` at (q, v, 0) and the KKT solve (accelerations a, stacked contact
+    forces ``forces`` (nc,)): the stacked drift derivatives da0_dx (nc, ndx) at fixed a (the tree at
+    (q, v, a); 6D contacts without their Kp term), the spatial force each contact puts on its joint
+    fext (k, 6) (the frame force moved by jMf: for RNEA with external forces) and the rotation term of
+    the point contacts' world-aligned forces in the RNEA derivative, summed into dtau_dq_extra (nv, nv);
+    returns True when there is one (a point contact). Scratch v_dq, a_dq, a_dv (k, 6, nv)."""
+    tree_motion(q, v, a, parents, placement_rotation, placement_translation, axes, idx_q, idx_v, R, p, ov, oa, J)
+    nv = v.size
+    extra = False
+    term = np.empty((nv, nv))
+    position_error = np.zeros(3)
+    zero = np.zeros(3)
+    row = 0
+    for c in range(kinds.size):
+        frame_acceleration_derivatives(joints[c], oRf[c], opf[c], parents, idx_v, ov, oa, J, v_dq[c], a_dq[c],
+                                       a_dv[c])
+        jRf, jpf = frame_rotations[c], frame_translations[c]
+        if kinds[c] == 3:
+            if kp[c] != 0.0:
+                for b in range(3):
+                    position_error[b] = (oRf[c, 0, b] * (opf[c, 0] - references[c, 0])
+                                         + oRf[c, 1, b] * (opf[c, 1] - references[c, 1])
+                                         + oRf[c, 2, b] * (opf[c, 2] - references[c, 2]))
+            # the rotation term of ∂(oRf a0_local)/∂q multiplies a0_local at the solved accelerations,
+            # J a + drift + Baumgarte = 0 for an enforced contact (Crocoddyl evaluates it numerically): 0
+            contact3d_drift_derivative(v_dq[c], a_dq[c], a_dv[c], fJf[c], velocity[c, :3], velocity[c, 3:],
+                                       position_error, zero, oRf[c], kp[c], kd[c], da0_dx[row:row + 3])
+            contact3d_force_terms(fJf[c], oRf[c], forces[row:row + 3], jRf, jpf, fext[c], term)
+            if extra:
+                dtau_dq_extra += term
+            else:
+                dtau_dq_extra[:, :] = term
+                extra = True
+            row += 3
+        else:
+            contact6d_drift_derivative(v_dq[c], a_dq[c], a_dv[c], fJf[c], velocity[c], kd[c], spreads[c],
+                                       inverse_arms[c], corners[c], da0_dx[row:row + 6])
+            f = forces[row:row + 6]  # jMf · (force, torque): (jRf f, jRf τ + jpf × jRf f)
+            for b in range(3):
+                fext[c, b] = jRf[b, 0] * f[0] + jRf[b, 1] * f[1] + jRf[b, 2] * f[2]
+                fext[c, 3 + b] = jRf[b, 0] * f[3] + jRf[b, 1] * f[4] + jRf[b, 2] * f[5]
+            fext[c, 3] += jpf[1] * fext[c, 2] - jpf[2] * fext[c, 1]
+            fext[c, 4] += jpf[2] * fext[c, 0] - jpf[0] * fext[c, 2]
+            fext[c, 5] += jpf[0] * fext[c, 1] - jpf[1] * fext[c, 0]
+            row += 6
+    return extra
