@@ -87,6 +87,8 @@ class DcmFootstepPlanner:
         self._swing_decision: tuple | None = None  # (stance foot, t_start, crossing?) of the current stance's step
         self._landing: tuple | None = None  # (foot, settled crossing?) of the last plan's first step
         self._resume: tuple | None = None  # (stance foot, t_start, resume?) of the current stance
+        # (stance foot, t_start, t, world foothold (2,), touchdown) of the last plan's first step (swing_commit_time)
+        self._swing_target: tuple | None = None
 
     # ------------------------------------------------------------------ model
     @property
@@ -203,13 +205,34 @@ class DcmFootstepPlanner:
             t, stance.foot, stance.position, dcm, stance.t_start, self.clamp_elapsed,
             stance_yaw=stance.yaw, yaw_rate=command.yaw_rate, velocity=(command.v_x, command.v_y),
             corrections=self.corrections, obstacles=obstacles, liftoff=stance.swing_liftoff, first_crossing=kept,
-            first_resume=self._resume[2],
+            first_resume=self._resume[2], first_lateral=self._committed_lateral(t, stance, key, swinging),
         )
+        if self.params.swing_commit_time > 0.0:
+            first = plan.steps[0]
+            self._swing_target = (*key, t, first.position.copy(), first.touchdown_time) if swinging else None
         if len(obstacles) > 0 and kept is None:
             self._swing_decision = (*key, plan.steps[0].crossing is not None)
         first = plan.steps[0]
         self._landing = (first.foot, first.crossing is not None and first.settle_dcm is not None)
         return plan
+
+    def _committed_lateral(self, t: float, stance: StanceState, key: tuple, swinging: bool) -> tuple | None:
+        """The lateral window (low, high) [m] of the swing's foothold across the stance's heading, from the stance
+        foothold, in the last ``swing_commit_time`` of the swing: within ``swing_commit_rate`` times the time since
+        the previous plan of where that plan put it (None: not committed: off, not swinging, a new stance, or
+        earlier in the swing)."""
+        commit = self.params.swing_commit_time
+        target = self._swing_target
+        if commit <= 0.0 or not swinging or target is None or target[:2] != key:
+            return None
+        _, _, t_previous, foothold, touchdown = target
+        if touchdown - t > commit:
+            return None
+        c, s = math.cos(stance.yaw), math.sin(stance.yaw)
+        dx, dy = foothold[0] - stance.position[0], foothold[1] - stance.position[1]
+        lateral = c * dy - s * dx
+        reach = self.params.swing_commit_rate * max(t - t_previous, 0.0)
+        return lateral - reach, lateral + reach
 
     def stance_start_dcm(self, stance: StanceState, command: VelocityCommand) -> np.ndarray:
         """The DCM (world (x, y) [m]) the nominal gait of ``command`` has when a stance on

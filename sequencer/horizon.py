@@ -50,6 +50,8 @@ EXACT_ONLY_OPTIONS = (("obstacle_double_support", "s (a quasi-static crossing)")
                       ("obstacle_trailing_double_support", "s"),
                       ("obstacle_crossing_cop", "m (the crossing's centre of pressure)"),
                       ("obstacle_approach_distance", "m (the even approach)"))
+#: options of the 'exact' backend only, with or without obstacles
+EXACT_ONLY_STEP_OPTIONS = (("swing_commit_time", "s (the committed swing foothold)"),)
 _ACTIVE_NAMES = tuple(tuple(CONSTRAINT_NAMES[i] for i in range(6) if (bits >> i) & 1) for bits in range(64))
 
 
@@ -385,6 +387,7 @@ class FootstepSequencer:
         liftoff=None,
         first_crossing: bool | None = None,
         first_resume: bool = False,
+        first_lateral: tuple[float, float] | None = None,
     ) -> FootstepPlan:
         """Run Algorithm 1 from the measured state.
 
@@ -411,6 +414,9 @@ class FootstepSequencer:
             first_resume: the current stance began with the touchdown of a settled crossing swing (quasi-static
                 crossing, ``params.obstacle_double_support`` > 0): its next step, unless it crosses too, is the
                 settled step that resumes the walk (``PlannedStep.settle_dcm``).
+            first_lateral: (low, high) [m]: the first step's lateral component (across the stance's heading, from
+                the stance foothold) also within this window, intersected with its width bounds (the nearest bound
+                when they do not meet; ``swing_commit_time``); None: its width bounds only. The 'exact' backend.
 
         Returns:
             FootstepPlan whose last step lands at or after t + horizon.
@@ -440,6 +446,15 @@ class FootstepSequencer:
         gait, per_stance = self._gait_tables(velocity, corrections)
         params = self.params
         constraints = None
+        if first_lateral is not None:
+            first_lateral = (float(first_lateral[0]), float(first_lateral[1]))
+            if not (math.isfinite(first_lateral[0]) and math.isfinite(first_lateral[1])
+                    and first_lateral[0] <= first_lateral[1]):
+                raise ParameterError(f"first_lateral={first_lateral} m must be a finite (low, high) with low <= high")
+        for name, unit in EXACT_ONLY_STEP_OPTIONS:
+            if getattr(params, name) > 0.0 and self.backend_name != "exact":
+                raise ParameterError(f"{name}={getattr(params, name)} {unit} is planned by the 'exact' backend only, "
+                                     f"not {self.backend_name!r}")
         if len(obstacles):
             constraints = FootholdConstraints(obstacles, params.foothold_geometry(), self._omega)
             for name, unit in EXACT_ONLY_OPTIONS:
@@ -464,7 +479,7 @@ class FootstepSequencer:
         if self.backend_name == "exact":
             steps, stance_cop = self._plan_exact(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate,
                                      gait.step_length, per_stance, constraints, liftoff, first_crossing,
-                                     t - t_stance_start, first_resume)
+                                     t - t_stance_start, first_resume, first_lateral)
         else:
             stance_cop = None
             steps = self._plan_backend(t, stance_foot, p0, dcm, t - elapsed, elapsed, stance_yaw, yaw_rate, gait,
@@ -480,9 +495,11 @@ class FootstepSequencer:
     def _plan_exact(self, t, stance, p0, dcm, stance_start, elapsed, yaw, yaw_rate, l_nom, per_stance,
                     constraints: FootholdConstraints | None = None, liftoff=None,
                     first_crossing: bool | None = None, elapsed_true: float | None = None,
-                    first_resume: bool = False) -> tuple[list[PlannedStep], np.ndarray | None]:
+                    first_resume: bool = False, first_lateral: tuple[float, float] | None = None
+                    ) -> tuple[list[PlannedStep], np.ndarray | None]:
         """The steps of the 'exact' backend and the centre of pressure's offset from the current stance foothold
-        (world (x, y) [m], None: the foothold) its swing is planned with."""
+        (world (x, y) [m], None: the foothold) its swing is planned with (``first_lateral``: the first step's lateral
+        window, :meth:`plan`)."""
         params = self.params
         omega = self._omega
         elapsed_true = elapsed if elapsed_true is None else elapsed_true
@@ -501,9 +518,10 @@ class FootstepSequencer:
         for _ in range(self._max_steps):
             lift = liftoff if not steps else (vectors[-2][:2] if len(steps) >= 2 else p0_first)
             cross_kept = None if steps else first_crossing
+            window = None if steps else first_lateral
             px, py, gamma, bx, by, bits, cop = self._exact_step(
                 p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom, constraints, lift, cross_kept,
-                approach=self._approach(p0x, p0y, yaw, stance, per_stance, l_nom, constraints))
+                approach=self._approach(p0x, p0y, yaw, stance, per_stance, l_nom, constraints), lateral_window=window)
             settle, start_qp, own_halt = None, stance_start, 0.0
             if halt > 0.0 or halt_trailing > 0.0:  # settled crossing swings (obstacle_double_support,
                 # obstacle_trailing_double_support)
@@ -543,12 +561,13 @@ class FootstepSequencer:
                     q_elapsed = min(elapsed_true - shift, params.t_max) if measured else 0.0
                     t_min = constraints.geometry.step_duration_min if crosses else 0.0
                     step = self._exact_step(p0x, p0y, *qz, q_elapsed, yaw, rotate, stance, per_stance, l_nom,
-                                            constraints, lift, True if crosses else cross_kept, duration_min=t_min)
+                                            constraints, lift, True if crosses else cross_kept, duration_min=t_min,
+                                            lateral_window=window)
                     if crosses and crossing_of(constraints.obstacles, lift, step[:2], yaw,
                                                constraints.geometry) is None:  # short of it: where the gait crosses
                         step = self._exact_step(p0x, p0y, *qz, q_elapsed, yaw, rotate, stance, per_stance, l_nom,
                                                 constraints, lift, True, duration_min=t_min,
-                                                length_min=c * (tx - p0x) + s * (ty - p0y))
+                                                length_min=c * (tx - p0x) + s * (ty - p0y), lateral_window=window)
                     px, py, gamma, bx, by, bits, cop = step
                 # quasi-static: the walk resumes after the trailing crossing (the step after the lead crosses too);
                 # a trailing settle alone: after the settled trailing crossing
@@ -602,7 +621,8 @@ class FootstepSequencer:
 
     def _exact_step(self, p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom,
                     constraints: FootholdConstraints | None, lift, cross, duration_min: float = 0.0,
-                    length_min: float | None = None, approach: tuple[float, float] | None = None) -> tuple:
+                    length_min: float | None = None, approach: tuple[float, float] | None = None,
+                    lateral_window: tuple[float, float] | None = None) -> tuple:
         """(p_x, p_y, γ, b_x, b_y, active bits, δ) of one step QP (closed form) from the stance foothold (p0x, p0y)
         and the DCM (zx, zy) ``elapsed`` [s] into the stance (world frame [m]), in the heading frame of ``yaw``
         [rad] (``rotate``: else the world frame is the heading frame), with its foothold outside the obstacles
@@ -610,7 +630,8 @@ class FootstepSequencer:
         kept, or None), its duration at least ``duration_min``
         [s], its length along the heading at least ``length_min`` [m] (None: ``l_min``) and, with ``approach``
         (ℓ_nom, b_x,nom) [m] (:meth:`_approach`), that nominal length and DCM offset along the heading in its QP
-        instead of the gait's (the before/beyond choice keeps the gait's)."""
+        instead of the gait's (the before/beyond choice keeps the gait's); with ``lateral_window`` (low, high) [m] its
+        lateral component within that window too (the nearest width bound when they do not meet)."""
         params = self.params
         omega = self._omega
         a1, a2, a3 = params.alpha1, params.alpha2, params.alpha3
@@ -619,6 +640,11 @@ class FootstepSequencer:
             l_min, l_max = length_min, max(l_max, length_min)
         gamma_nom, g_hi = self._gamma_nom, self._gamma_hi
         w_nom, (bnx, bny), (w_lo, w_hi) = per_stance[stance]
+        if lateral_window is not None:  # the committed swing foothold (swing_commit_time)
+            low, high = max(w_lo, lateral_window[0]), min(w_hi, lateral_window[1])
+            if low > high:
+                low = high = w_hi if lateral_window[0] > w_hi else w_lo
+            w_lo, w_hi = low, high
         l_gait, bnx_gait = l_nom, bnx
         if approach is not None:
             l_nom, bnx = approach

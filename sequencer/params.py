@@ -134,6 +134,14 @@ class SequencerParams:
             the nominal lateral offset and width ("The lateral aim" in :mod:`sequencer.footholds`); 0: b_y,nom (a
             crossing longer than t_nom then spreads the feet: the H1's lateral DCM bounded its crossing to 0.6 s, too
             short for the DCM to carry it).
+        swing_commit_time: [s] >= 0: in the last this long of a swing (before the touchdown the previous plan
+            planned) its foothold moves across the heading by at most ``swing_commit_rate`` times the time since the
+            previous plan from where that plan put it (the 'exact' backend only); 0: off, Algorithm 1 re-plans the
+            swing's foothold freely up to its touchdown (the paper's). A discrete change of the plan late in a swing
+            (the last step before an obstacle switching to its lateral aim: 6-8 cm in one replan 0.14 s before the
+            H1's touchdown) is more than the whole body can follow.
+        swing_commit_rate: [m/s] >= 0, the lateral speed of the committed foothold (0 with swing_commit_time > 0:
+            held where the plan put it when the commitment began).
         sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m],
             >= 0 (0: a point foot); sole_half_width: its half width [m], >= 0. The footholds keep the whole
             sole rectangle outside the grown footprints.
@@ -177,6 +185,8 @@ class SequencerParams:
     obstacle_lateral_aim_duration: float = 0.0
     obstacle_crossing_cop: float = 0.0
     obstacle_crossing_offset: float = 0.0
+    swing_commit_time: float = 0.0
+    swing_commit_rate: float = 0.0
     sole_front: float = 0.0
     sole_rear: float = 0.0
     sole_half_width: float = 0.0
@@ -259,6 +269,10 @@ class SequencerParams:
         if not (0.0 <= self.obstacle_crossing_offset < 0.3):
             raise ParameterError(f"obstacle_crossing_offset={self.obstacle_crossing_offset} m must be in [0, 0.3) m "
                                  f"(0: the lead crossing aims at the nominal DCM offset)")
+        if not (0.0 <= self.swing_commit_time <= self.t_max):
+            raise ParameterError(f"swing_commit_time={self.swing_commit_time} s must be in [0 (off), t_max={self.t_max} s]")
+        if not (0.0 <= self.swing_commit_rate <= 10.0):
+            raise ParameterError(f"swing_commit_rate={self.swing_commit_rate} m/s must be in [0, 10] m/s")
         lateral = self.obstacle_lateral_aim_duration
         if not (lateral == 0.0 or self.t_nom <= lateral <= crossing_max):
             raise ParameterError(f"obstacle_lateral_aim_duration={lateral} s must be 0 (off) or in [t_nom={self.t_nom} s, "

@@ -340,3 +340,54 @@ def test_a_stance_not_begun_is_planned_from_its_start_and_the_nominal_dcm():
     first = heading.T @ (early.steps[0].position - stance.position)
     np.testing.assert_allclose(first, (gait.step_length, gait.step_width("left")), atol=1e-6)
     assert early.steps[0].touchdown_time == pytest.approx(1.0 + params.t_nom, abs=1e-6)
+
+
+# ---------------------------------------------------------------------------- the committed swing foothold
+@pytest.mark.parametrize("yaw", [0.0, 0.6])
+def test_a_committed_swing_foothold_moves_across_the_heading_at_its_rate_near_touchdown(yaw):
+    """``swing_commit_time``: in the last T_c of a swing the foothold's lateral component (across the stance's heading)
+    moves at most ``swing_commit_rate`` times the time since the previous plan; earlier in the swing, with another
+    stance or with T_c = 0 it follows the measured DCM as Algorithm 1 does (the DCM pushed 6 cm sideways per replan)."""
+    params = dataclasses.replace(SequencerParams.bolt_walking(), t_nom=0.3, t_min=0.1, t_max=0.6, w_left_min=-0.8,
+                                 w_right_max=0.8)
+    committed = dataclasses.replace(params, swing_commit_time=0.15, swing_commit_rate=0.1)
+    stance = StanceState("left", [0.2, 0.1], yaw, 1.0)
+    across = rotation(yaw) @ np.array([0.0, 1.0])
+
+    def lateral(plan):
+        return float(across @ (plan.steps[0].position - stance.position))
+
+    command = VelocityCommand(0.2, 0.0)
+    start = DcmFootstepPlanner(params).stance_start_dcm(stance, command)
+
+    def dcm_at(t, k):  # the nominal gait's DCM, pushed sideways by 6 cm per replan
+        nominal = stance.position + (start - stance.position) * math.exp(params.omega * (t - stance.t_start))
+        return nominal - 0.06 * k * across
+
+    def plans(p, times):
+        planner = DcmFootstepPlanner(p)
+        return [planner.plan(t, stance, ReducedState([0, 0, 0.3], [0, 0, 0], dcm_at(t, k)), command)
+                for k, t in enumerate(times)]
+
+    times = [1.10, 1.18, 1.20, 1.22, 1.24]
+    free, held = plans(params, times), plans(committed, times)
+    touchdown = held[0].steps[0].touchdown_time
+    assert touchdown - times[1] < 0.15 < touchdown - times[0]  # the commitment begins at the second replan
+    assert lateral(held[0]) == lateral(free[0])  # before it, the same plan
+    for k in range(1, len(times)):
+        assert abs(lateral(free[k]) - lateral(free[k - 1])) > 0.005  # Algorithm 1 moves it (0.6-3 cm per replan)
+        reach = 0.1 * (times[k] - times[k - 1])
+        assert abs(lateral(held[k]) - lateral(held[k - 1])) <= reach + 1e-12, k
+    measured = ReducedState([0, 0, 0.3], [0, 0, 0], dcm_at(times[-1], 4))  # a planner new to the stance: nothing
+    assert lateral(DcmFootstepPlanner(committed).plan(times[-1], stance, measured, command)) == \
+        lateral(free[-1])  # to commit to
+
+
+def test_the_committed_swing_foothold_is_checked_and_needs_the_exact_backend():
+    with pytest.raises(ParameterError, match=r"swing_commit_time=-0.1 s must be in \[0 \(off\), t_max="):
+        dataclasses.replace(SequencerParams.bolt_walking(), swing_commit_time=-0.1)
+    with pytest.raises(ParameterError, match=r"swing_commit_rate=-1.0 m/s must be in \[0, 10\] m/s"):
+        dataclasses.replace(SequencerParams.bolt_walking(), swing_commit_rate=-1.0)
+    params = dataclasses.replace(SequencerParams.bolt_walking(), swing_commit_time=0.1)
+    with pytest.raises(ParameterError, match="swing_commit_time=0.1 s .* 'exact' backend only, not 'osqp'"):
+        DcmFootstepPlanner(params, backend="osqp").plan(0.5, TABLE_I_STANCE, TABLE_I_MEASURED, VelocityCommand(0.3, 0))

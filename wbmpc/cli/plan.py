@@ -73,6 +73,8 @@ _HELP = {
     "obstacle_approach_distance": "even steps to the last foothold before an obstacle within this distance [m] "
                                   "(0: greedy)",
     "sole_half_width": "sole half width [m]",
+    "swing_commit_time": "the swing's foothold committed in its last this long [s] (0: re-planned to touchdown)",
+    "swing_commit_rate": "lateral speed of the committed swing foothold [m/s]",
 }
 
 
