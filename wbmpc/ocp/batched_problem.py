@@ -62,9 +62,10 @@ from wbmpc.ocp.kernels.costs import (
     scale_cost_derivatives,
 )
 from wbmpc.ocp.kernels.feedback import rollout_node_start
-from wbmpc.ocp.kernels.frames import FrameKinematics, frame_kinematics_support
+from wbmpc.ocp.kernels.frames import FrameKinematics
 from wbmpc.ocp.kernels.integration import euler_transition_jacobians, free_flyer_euler_step
 from wbmpc.ocp.kernels.lie import free_flyer_dintegrate
+from wbmpc.ocp.kernels.tree import tree_support
 from wbmpc.ocp.problem import RolloutError, ShootingProblem
 from wbmpc.ocp.residuals.base import BatchedResidual, HorizonData
 
@@ -82,7 +83,7 @@ def batched_evaluation_support(problem: ShootingProblem) -> str | None:
     state = problem.state
     if not state._compiled_difference:
         return "the robot is not a free-flyer root followed by 1-dof joints"
-    reason = frame_kinematics_support(state.pinocchio)
+    reason = tree_support(state.pinocchio)
     if reason is not None:
         return reason
     signatures = None

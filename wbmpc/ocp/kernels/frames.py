@@ -32,19 +32,7 @@ from numba import njit
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.kernels.lie import quaternion_matrix
 from wbmpc.ocp.kernels.linalg import mat3_mul, mat3_vec
-
-_AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "JointModelRZ": (0.0, 0.0, 1.0)}
-
-
-def frame_kinematics_support(model: pin.Model) -> str | None:
-    """None if :class:`FrameKinematics` handles ``model``, else the reason."""
-    if model.njoints < 2 or model.joints[1].shortname() != "JointModelFreeFlyer" or model.parents[1] != 0:
-        return "the root joint is not a free flyer"
-    for i in range(2, model.njoints):
-        name = model.joints[i].shortname()
-        if name not in _AXES and name != "JointModelRevoluteUnaligned":
-            return f"joint {model.names[i]!r} is a {name} (revolute joints only)"
-    return None
+from wbmpc.ocp.kernels.tree import KinematicTree, axis_rotation
 
 
 class FrameKinematics:
@@ -59,20 +47,10 @@ class FrameKinematics:
     """
 
     def __init__(self, model: pin.Model, frame_ids):
-        reason = frame_kinematics_support(model)
-        if reason is not None:
-            raise ParameterError(f"model {model.name!r} is not supported by the compiled frame kinematics: {reason}")
+        tree = KinematicTree(model)  # the tree's arrays (raises for an unsupported model)
         n = model.njoints
-        self.parents = np.array([model.parents[i] for i in range(n)], dtype=np.int64)
-        self.placement_rotation = np.array([model.jointPlacements[i].rotation for i in range(n)])
-        self.placement_translation = np.array([model.jointPlacements[i].translation for i in range(n)])
-        self.axes = np.zeros((n, 3))
-        for i in range(2, n):
-            joint = model.joints[i]
-            name = joint.shortname()
-            self.axes[i] = _AXES[name] if name in _AXES else np.asarray(joint.extract().axis, dtype=float)
-        self.idx_q = np.array([model.idx_qs[i] for i in range(n)], dtype=np.int64)
-        self.idx_v = np.array([model.idx_vs[i] for i in range(n)], dtype=np.int64)
+        self.parents, self.axes, self.idx_q, self.idx_v = tree.parents, tree.axes, tree.idx_q, tree.idx_v
+        self.placement_rotation, self.placement_translation = tree.placement_rotation, tree.placement_translation
         self.frame_ids = [int(f) for f in frame_ids]
         frames = [model.frames[f] for f in self.frame_ids]
         self.frame_joint = np.array([f.parentJoint for f in frames], dtype=np.int64)
@@ -116,23 +94,6 @@ class FrameKinematics:
 
 
 @njit(cache=True)
-def _axis_rotation(axis, angle, out):
-    """Rotation by ``angle`` [rad] about the unit ``axis`` (Rodrigues)."""
-    c, s = np.cos(angle), np.sin(angle)
-    x, y, z = axis[0], axis[1], axis[2]
-    t = 1.0 - c
-    out[0, 0] = c + t * x * x
-    out[0, 1] = t * x * y - s * z
-    out[0, 2] = t * x * z + s * y
-    out[1, 0] = t * x * y + s * z
-    out[1, 1] = c + t * y * y
-    out[1, 2] = t * y * z - s * x
-    out[2, 0] = t * x * z - s * y
-    out[2, 1] = t * y * z + s * x
-    out[2, 2] = c + t * z * z
-
-
-@njit(cache=True)
 def frame_kinematics(qs, needed, parents, placement_rotation, placement_translation, axes, idx_q, idx_v, frame_joint,
                      frame_rotation, frame_translation, support, positions, jacobians, with_jacobians, rotations,
                      with_rotations, mass, lever, total_mass, com_needed, com, com_jacobians, with_com,
@@ -170,7 +131,7 @@ def frame_kinematics(qs, needed, parents, placement_rotation, placement_translat
                 for a in range(3):
                     p[i, a] = p[parent, a] + offset[a] + Rp[a, 0] * q[0] + Rp[a, 1] * q[1] + Rp[a, 2] * q[2]
             else:
-                _axis_rotation(axes[i], q[idx_q[i]], local)
+                axis_rotation(axes[i], q[idx_q[i]], local)
                 mat3_mul(Rp, local, R[i])
                 for a in range(3):
                     p[i, a] = p[parent, a] + offset[a]

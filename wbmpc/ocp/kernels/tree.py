@@ -120,7 +120,7 @@ def _act_inverse(R, p, m, out):
 
 
 @njit(cache=True)
-def _axis_rotation(axis, angle, out):
+def axis_rotation(axis, angle, out):
     """Rotation by ``angle`` [rad] about the unit ``axis`` (Rodrigues)."""
     c, s = np.cos(angle), np.sin(angle)
     x, y, z = axis[0], axis[1], axis[2]
@@ -182,7 +182,7 @@ def tree_motion(q, v, a, parents, placement_rotation, placement_translation, axe
                 ov[i, b] = ov_b
                 oa[i, b] = oa_b
         else:
-            _axis_rotation(axes[i], q[idx_q[i]], local)
+            axis_rotation(axes[i], q[idx_q[i]], local)
             mat3_mul(Rp, local, R[i])
             for b in range(3):
                 p[i, b] = p[parent, b] + offset[b]
