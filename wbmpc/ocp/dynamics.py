@@ -41,9 +41,13 @@ Two interchangeable backends compute it (they agree to ~1e-13, see the tests):
 - ``"pinocchio"`` (default): Pinocchio's ``constraintDynamics`` and
   ``computeConstraintDynamicsDerivatives`` with ``RigidConstraintModel`` s carrying the same
   Baumgarte gains: two binding calls per node, the fast path.
-- ``"kkt"``: Crocoddyl's formulas written out (``forwardDynamics``, KKT inverse, RNEA
-  derivatives with the contact forces as external forces, contact drift derivatives); also
-  the path for nodes without contacts.
+- ``"kkt"``: Crocoddyl's formulas written out, compiled: the contacts' Jacobians, drifts and
+  drift derivatives from one pass over the kinematic tree (:class:`~wbmpc.ocp.contacts.ContactSet`,
+  :mod:`wbmpc.ocp.kernels.tree`), the damped KKT solve and its derivatives without forming the
+  KKT inverse (:mod:`wbmpc.ocp.kernels.kkt`); Pinocchio gives M and b (``computeAllTerms``, or
+  ``crba`` and ``nonLinearEffects`` where the costs read other kinematics) and the RNEA
+  derivatives with the contact forces as external forces. Also the path for nodes without
+  contacts. Models: a free flyer followed by revolute joints.
 """
 
 from __future__ import annotations
