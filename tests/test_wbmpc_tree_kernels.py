@@ -9,7 +9,7 @@ from robots import load_robot
 from tests.robot_extras import needs_h1_extra
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.kernels.kkt import KKTBuffers, damped_kkt_derivatives, damped_kkt_dynamics
-from wbmpc.ocp.kernels.tree import KinematicTree, frame_acceleration_derivatives, frame_motion
+from wbmpc.ocp.kernels.tree import KinematicTree, frame_acceleration_derivatives, frame_motion, tree_accelerations
 
 ROBOTS = ["bolt", "g1", pytest.param("h1", marks=needs_h1_extra)]
 
@@ -21,7 +21,8 @@ def _random_state(model, rng):
 
 @pytest.mark.parametrize("robot_name", ROBOTS)
 def test_tree_motion_and_the_feet_kinematics_equal_pinocchios(robot_name):
-    """Joint placements, world velocities and accelerations, the world Jacobian; each foot frame's LOCAL
+    """Joint placements, world velocities and accelerations (also updated alone from a, as the contacts'
+    derivatives do), the world Jacobian; each foot frame's LOCAL
     Jacobian, velocity, spatial acceleration and their derivatives (getJointAccelerationDerivatives moved to
     the frame) at random (q, v, a): ~1e-15 (1e-12 allowed)."""
     robot = load_robot(robot_name)
@@ -34,7 +35,12 @@ def test_tree_motion_and_the_feet_kinematics_equal_pinocchios(robot_name):
         pin.computeRNEADerivatives(model, data, q, v, a)
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
+        tree.evaluate(q, v, np.zeros(model.nv))
+        drift = tree.oa.copy()
+        tree_accelerations(v, a, tree.parents, tree.idx_v, tree.ov, tree.J, tree.oa)  # a alone, on calc's tree
+        updated = tree.oa.copy()
         tree.evaluate(q, v, a)
+        assert np.array_equal(updated, tree.oa) and not np.allclose(drift, tree.oa)
         assert tree.J == pytest.approx(data.J, abs=1e-12)
         for i in range(1, model.njoints):
             assert tree.R[i] == pytest.approx(data.oMi[i].rotation, abs=1e-12)

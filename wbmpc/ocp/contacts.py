@@ -215,7 +215,6 @@ class ContactSet:
         self.models = [contact for _, contact in contacts]
         self.kinds = np.array([contact.nc for contact in self.models], dtype=np.int64)
         self.rows = np.concatenate([[0], np.cumsum(self.kinds)]).astype(np.int64)
-        self.nc = int(self.rows[-1])
         self.joints = np.array([contact.joint_id for contact in self.models], dtype=np.int64)
         self.joint_ids = [int(j) for j in self.joints]  # as Python ints (Pinocchio's vectors index by them)
         self.frame_rotations = np.array([contact._jRf for contact in self.models]).reshape(k, 3, 3)
@@ -250,14 +249,14 @@ class ContactSet:
             work.rMf[c] = self.models[c].reference.actInv(pin.SE3(work.oRf[c], work.opf[c]))
             a0[rows] += self.kp[c] * pin.log6(work.rMf[c]).vector
 
-    def derivatives(self, tree: KinematicTree, work: "ContactSetWork", q, v, a, forces, da0_dx) -> bool:
-        """After :meth:`calc` at (q, v, 0) and the solve: da0_dx (nc, ndx) at fixed a, the contacts'
-        spatial forces on their joints (``work.fext`` (k, 6)) and the point forces' RNEA rotation term
-        (``work.dtau_dq_extra`` (nv, nv)); returns True when that term is there (a point contact)."""
+    def derivatives(self, tree: KinematicTree, work: "ContactSetWork", v, a, forces, da0_dx) -> bool:
+        """After :meth:`calc` at (q, v, 0) (``tree`` and ``work`` as calc left them) and the solve: da0_dx
+        (nc, ndx) at fixed a, the contacts' spatial forces on their joints (``work.fext`` (k, 6)) and the point
+        forces' RNEA rotation term (``work.dtau_dq_extra`` (nv, nv)); returns True when that term is there (a
+        point contact). The tree's accelerations are updated to a."""
         k = self.kinds.size
         extra = contact_set_derivatives(
-            q, v, a, tree.parents, tree.placement_rotation, tree.placement_translation, tree.axes, tree.idx_q,
-            tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, self.kinds, self.joints, self.frame_rotations,
+            v, a, tree.parents, tree.idx_v, tree.ov, tree.oa, tree.J, self.kinds, self.joints, self.frame_rotations,
             self.frame_translations, self.kp, self.kd, self.references, self.corners, self.spreads, self.inverse_arms,
             work.oRf[:k], work.opf[:k], work.fJf[:k], work.velocity[:k], forces, work.v_dq[:k], work.a_dq[:k],
             work.a_dv[:k], da0_dx, work.fext[:k], work.dtau_dq_extra)

@@ -192,9 +192,10 @@ class DifferentialActionModelContactFwdDynamics:
         self.contact_set = ContactSet([(name, self.contacts[name]) for name in self.active_contacts],
                                       self._drift_corners) if self.backend == "kkt" else None
         scaled = [name for name in self.active_contacts if name in self._damping_row_scales]
-        #: stacked row scales S (nc,) of the active contacts, None when all are 1 (uniform damping)
-        self.row_scales = None if not scaled else np.concatenate(
-            [self._damping_row_scales.get(name, np.ones(self.contacts[name].nc)) for name in self.active_contacts])
+        #: stacked row scales S (nc,) of the active contacts (ones: uniform damping)
+        self.row_scales = np.concatenate(
+            [self._damping_row_scales.get(name, np.ones(self.contacts[name].nc)) for name in self.active_contacts]) \
+            if scaled else np.ones(self.nc)
 
     def update_moving_references(self) -> None:
         """Move the Baumgarte position reference of every active contact with Kp > 0 to the
@@ -251,9 +252,8 @@ class DifferentialActionModelContactFwdDynamics:
         Jc, a0, forces = data.Jc_all[:nc], data.a0_all[:nc], data.force_all[:nc]
         if nc:  # the contacts' Jacobians and drifts (zero joint accelerations), compiled
             self.contact_set.calc(data.tree, data.contact_work, q, v, data.zero_acceleration, Jc, a0)
-        if not damped_kkt_dynamics(pdata.M, pdata.nle, data.tau, Jc, a0,
-                                   data.ones[:nc] if self.row_scales is None else self.row_scales,
-                                   self.contact_damping, data.xout, forces, *data.kkt_buffers(nc).dynamics_buffers()):
+        if not damped_kkt_dynamics(pdata.M, pdata.nle, data.tau, Jc, a0, self.row_scales, self.contact_damping,
+                                   data.xout, forces, *data.kkt_buffers(nc).dynamics_buffers()):
             data.xout[:] = np.nan  # M or the contacts' Delassus matrix is not positive definite: the rollout fails
         for name, rows in self._active_rows:
             data.contacts[name].force[:] = forces[rows]
@@ -327,7 +327,7 @@ class DifferentialActionModelContactFwdDynamics:
         data.fext_joints = []
         if nc:  # drift derivatives, the contact forces on their joints, the point forces' rotation term
             work = data.contact_work
-            extra = self.contact_set.derivatives(data.tree, work, q, v, data.xout, data.force_all[:nc], da0_dx)
+            extra = self.contact_set.derivatives(data.tree, work, v, data.xout, data.force_all[:nc], da0_dx)
             for c, joint in enumerate(self.contact_set.joint_ids):
                 data.fext[joint] = pin.Force(work.fext[c])
                 data.fext_joints.append(joint)
@@ -335,8 +335,8 @@ class DifferentialActionModelContactFwdDynamics:
         if nc and extra:
             dtau_dq = np.add(pdata.dtau_dq, work.dtau_dq_extra, out=data.dtau_dq)
         df_dx, df_du = data.df_dx_all[:nc], data.df_du_all[:nc]
-        damped_kkt_derivatives(dtau_dq, pdata.dtau_dv, da0_dx, data.ones[:nc] if self.row_scales is None else
-                               self.row_scales, data.Fx, data.Fu, df_dx, df_du, *data.kkt_buffers(nc).derivative_buffers())
+        damped_kkt_derivatives(dtau_dq, pdata.dtau_dv, da0_dx, self.row_scales, data.Fx, data.Fu, df_dx, df_du,
+                               *data.kkt_buffers(nc).derivative_buffers())
         for name, rows in self._active_rows:
             cdata = data.contacts[name]
             cdata.df_dx[:] = df_dx[rows]
@@ -387,7 +387,6 @@ class DifferentialActionDataContactFwdDynamics:
         self.df_dx_all = np.zeros((nc_max, ndx))
         self.df_du_all = np.zeros((nc_max, nu))
         self.dtau_dq = np.zeros((nv, nv))  # RNEA derivative with the point forces' rotation terms
-        self.ones = np.ones(nc_max)  # the row scales of uniform damping
         self._kkt_buffers: dict[int, KKTBuffers] = {}  # contact rows -> the KKT kernels' buffers
         # the compiled tree kinematics the contacts of the kkt backend read, and their buffers (None: the
         # pinocchio backend)

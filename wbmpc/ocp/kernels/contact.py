@@ -9,7 +9,7 @@ import numpy as np
 from numba import njit
 
 from wbmpc.ocp.kernels.linalg import skew3
-from wbmpc.ocp.kernels.tree import frame_acceleration_derivatives, frame_motion, tree_motion
+from wbmpc.ocp.kernels.tree import frame_acceleration_derivatives, frame_motion, tree_accelerations, tree_motion
 
 
 @njit(cache=True)
@@ -148,17 +148,17 @@ def contact_set_calc(q, v, a, parents, placement_rotation, placement_translation
 
 
 @njit(cache=True)
-def contact_set_derivatives(q, v, a, parents, placement_rotation, placement_translation, axes, idx_q, idx_v, R, p, ov,
-                            oa, J, kinds, joints, frame_rotations, frame_translations, kp, kd, references, corners,
-                            spreads, inverse_arms, oRf, opf, fJf, velocity, forces, v_dq, a_dq, a_dv, da0_dx, fext,
-                            dtau_dq_extra):
+def contact_set_derivatives(v, a, parents, idx_v, ov, oa, J, kinds, joints, frame_rotations, frame_translations, kp,
+                            kd, references, corners, spreads, inverse_arms, oRf, opf, fJf, velocity, forces, v_dq, a_dq,
+                            a_dv, da0_dx, fext, dtau_dq_extra):
     """After :func:`contact_set_calc` at (q, v, 0) and the KKT solve (accelerations a, stacked contact
-    forces ``forces`` (nc,)): the stacked drift derivatives da0_dx (nc, ndx) at fixed a (the tree at
-    (q, v, a); 6D contacts without their Kp term), the spatial force each contact puts on its joint
-    fext (k, 6) (the frame force moved by jMf: for RNEA with external forces) and the rotation term of
+    forces ``forces`` (nc,)): the stacked drift derivatives da0_dx (nc, ndx) at fixed a (the tree's
+    accelerations updated to a, :func:`~wbmpc.ocp.kernels.tree.tree_accelerations`: its placements,
+    Jacobian columns and velocities are calc's; 6D contacts without their Kp term), the spatial force each
+    contact puts on its joint fext (k, 6) (the frame force moved by jMf: for RNEA with external forces) and the rotation term of
     the point contacts' world-aligned forces in the RNEA derivative, summed into dtau_dq_extra (nv, nv);
     returns True when there is one (a point contact). Scratch v_dq, a_dq, a_dv (k, 6, nv)."""
-    tree_motion(q, v, a, parents, placement_rotation, placement_translation, axes, idx_q, idx_v, R, p, ov, oa, J)
+    tree_accelerations(v, a, parents, idx_v, ov, J, oa)
     nv = v.size
     extra = False
     term = np.empty((nv, nv))

@@ -37,7 +37,6 @@ class KKTBuffers:
     leave for the derivatives (M⁻¹ (nv, nv), A = J̃ M⁻¹ (nc, nv), Y (nc, nc), J̃ (nc, nv)) and scratch."""
 
     def __init__(self, nv: int, nc: int, ndx: int):
-        self.nc = nc
         self.Minv = np.zeros((nv, nv))
         self.factor = np.zeros((nv, nv))  # Cholesky factor of M
         self.factor_inverse = np.zeros((nv, nv))

@@ -143,12 +143,10 @@ def tree_motion(q, v, a, parents, placement_rotation, placement_translation, axe
     R[0] = np.eye(3)
     p[0, :] = 0.0
     ov[0, :] = 0.0
-    oa[0, :] = 0.0
     local = np.empty((3, 3))
     Rp = np.empty((3, 3))
     offset = np.empty(3)
     S = np.empty(6)
-    cross = np.empty(6)
     for i in range(1, n_joints):
         parent = parents[i]
         mat3_mul(R[parent], placement_rotation[i], Rp)
@@ -175,12 +173,9 @@ def tree_motion(q, v, a, parents, placement_rotation, placement_translation, axe
                     J[b, col + k] = S[b]
             for b in range(6):
                 ov_b = 0.0
-                oa_b = 0.0
                 for k in range(6):
                     ov_b += J[b, col + k] * v[col + k]
-                    oa_b += J[b, col + k] * a[col + k]
                 ov[i, b] = ov_b
-                oa[i, b] = oa_b
         else:
             axis_rotation(axes[i], q[idx_q[i]], local)
             mat3_mul(Rp, local, R[i])
@@ -193,7 +188,30 @@ def tree_motion(q, v, a, parents, placement_rotation, placement_translation, axe
             for b in range(6):
                 J[b, col] = S[b]
                 ov[i, b] = ov[parent, b] + S[b] * v[col]
+    tree_accelerations(v, a, parents, idx_v, ov, J, oa)
+
+
+@njit(cache=True)
+def tree_accelerations(v, a, parents, idx_v, ov, J, oa):
+    """Every joint's world spatial acceleration oa (n, 6) at the accelerations a (nv,), from the velocities
+    v (nv,), world velocities ov and Jacobian columns J that :func:`tree_motion` left at the same (q, v)
+    (the module's recursion for oa alone: the placements, J and ov do not depend on a)."""
+    oa[0, :] = 0.0
+    S = np.empty(6)
+    cross = np.empty(6)
+    for i in range(1, parents.size):
+        col = idx_v[i]
+        if i == 1:  # free flyer: X_1 a_b
+            for b in range(6):
+                oa_b = 0.0
+                for k in range(6):
+                    oa_b += J[b, col + k] * a[col + k]
+                oa[i, b] = oa_b
+        else:
+            for b in range(6):
+                S[b] = J[b, col]
             _cross_motion(ov[i], S, cross)
+            parent = parents[i]
             for b in range(6):
                 oa[i, b] = oa[parent, b] + S[b] * a[col] + cross[b] * v[col]
 
