@@ -24,8 +24,9 @@ Per running node k (time t0 + k dt), with the feet in contact given by the sched
   stance forces towards m g / n_stance) and ``{foot}_friction_cone`` (point feet);
 - optional ``{foot}_swing_path`` (``swing_path_weight`` > 0): the swing foot's (x, y) along its path from
   lift-off to the planned foothold (:func:`swing_path`) at every swing node: without it the horizontal
-  motion between lift-off and the last node's foothold term is free (the H1 pulled its foot back 3-11 cm
-  at lift-off and swung it through at up to 3.5 m/s; docs/ocp.md "The swing path of every step").
+  motion between lift-off and the last node's foothold term is free (the H1's crossing foot went 12 cm
+  back while rising, docs/ocp.md "The lead swing traced"; a crossing swing's own path term is
+  ``obstacle_swing_path_weight``). Off in every preset: not measured on walking steps.
 
 - optional obstacle clearance (``obstacle_clearance_weight`` > 0): ``{foot}_clearance_sole{i}`` keeps
   the swing sole's points ``obstacle_sole_points`` (toe and heel) and ``{foot}_clearance_shank`` the
