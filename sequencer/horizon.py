@@ -49,7 +49,8 @@ from wbmpc.errors import ParameterError
 EXACT_ONLY_OPTIONS = (("obstacle_double_support", "s (a quasi-static crossing)"),
                       ("obstacle_trailing_double_support", "s"),
                       ("obstacle_crossing_cop", "m (the crossing's centre of pressure)"),
-                      ("obstacle_approach_distance", "m (the even approach)"))
+                      ("obstacle_approach_distance", "m (the even approach)"),
+                      ("obstacle_width_min", "m (the narrower steps of a negotiation)"))
 #: options of the 'exact' backend only, with or without obstacles
 EXACT_ONLY_STEP_OPTIONS = (("swing_commit_time", "s (the committed swing foothold)"),)
 _ACTIVE_NAMES = tuple(tuple(CONSTRAINT_NAMES[i] for i in range(6) if (bits >> i) & 1) for bits in range(64))
@@ -462,6 +463,9 @@ class FootstepSequencer:
                 if value > 0.0 and self.backend_name != "exact":
                     raise ParameterError(f"{name}={value} {unit} is planned by the 'exact' backend only, "
                                          f"not {self.backend_name!r}")
+            if params.obstacle_width_min > 0.0:  # the inner width bound of a negotiation's steps
+                per_stance = {foot: (w_nom, b_nom, params.width_bounds(foot, negotiating=True))
+                              for foot, (w_nom, b_nom, _) in per_stance.items()}
             if liftoff is not None:
                 liftoff = np.asarray(liftoff, dtype=float)
                 if liftoff.shape != (2,) or not np.all(np.isfinite(liftoff)):

@@ -134,6 +134,15 @@ class SequencerParams:
             the nominal lateral offset and width ("The lateral aim" in :mod:`sequencer.footholds`); 0: b_y,nom (a
             crossing longer than t_nom then spreads the feet: the H1's lateral DCM bounded its crossing to 0.6 s, too
             short for the DCM to carry it).
+        obstacle_width_min: [m], 0 (off) or in [2 sole_half_width, the walk's inner width bound min(w_right_min,
+            -w_left_max)]: while obstacles are handed to the planner (a negotiation) every step's inner width bound
+            (its feet's least distance across the heading) is this instead of the walk's, so that the last step
+            before a crossing can land under its DCM across the heading. A crossing's long single support
+            multiplies the lateral DCM offset it lifts off with by exp(ω T) (6.7 for the H1's 0.6 s): with the
+            walk's 0.30 m bound the H1's last step before the box could not reach the lateral aim
+            (``obstacle_lateral_aim_duration``), lifted off 10-11 cm from its DCM across the heading and the
+            lead crossing landed on its 0.6 m width bound with the lateral DCM still running (docs/ocp.md,
+            "The lateral DCM over a crossing"). The 'exact' backend only; 0: the walk's bounds.
         swing_commit_time: [s] >= 0: in the last this long of a swing (before the touchdown the previous plan
             planned) its foothold moves across the heading by at most ``swing_commit_rate`` times the time since the
             previous plan from where that plan put it (the 'exact' backend only); 0: off, Algorithm 1 re-plans the
@@ -185,6 +194,7 @@ class SequencerParams:
     obstacle_lateral_aim_duration: float = 0.0
     obstacle_crossing_cop: float = 0.0
     obstacle_crossing_offset: float = 0.0
+    obstacle_width_min: float = 0.0
     swing_commit_time: float = 0.0
     swing_commit_rate: float = 0.0
     sole_front: float = 0.0
@@ -277,6 +287,11 @@ class SequencerParams:
         if not (lateral == 0.0 or self.t_nom <= lateral <= crossing_max):
             raise ParameterError(f"obstacle_lateral_aim_duration={lateral} s must be 0 (off) or in [t_nom={self.t_nom} s, "
                                  f"max(t_max, obstacle_step_duration_max)={crossing_max} s]")
+        inner = min(self.w_right_min, -self.w_left_max)  # the walk's least width across the heading [m]
+        if not (self.obstacle_width_min == 0.0 or 2.0 * self.sole_half_width <= self.obstacle_width_min <= inner):
+            raise ParameterError(f"obstacle_width_min={self.obstacle_width_min} m must be 0 (off) or in "
+                                 f"[2 sole_half_width={2.0 * self.sole_half_width} m, "
+                                 f"min(w_right_min, -w_left_max)={inner} m]")
         self.check_velocity(self.v_x, self.v_y)
 
     # ------------------------------------------------------------------ derived values
@@ -294,11 +309,13 @@ class SequencerParams:
         """Nominal lateral step p_T,y - p_0,y [m] from ``stance_foot`` (negative from a left stance)."""
         return nominal_step_width(self.pelvis_width, self.v_y, self.t_nom, stance_foot)
 
-    def width_bounds(self, stance_foot: str) -> tuple[float, float]:
-        """(min, max) of p_T,y - p_0,y [m] while ``stance_foot`` is on the ground."""
+    def width_bounds(self, stance_foot: str, negotiating: bool = False) -> tuple[float, float]:
+        """(min, max) of p_T,y - p_0,y [m] while ``stance_foot`` is on the ground; ``negotiating`` (obstacles
+        handed to the planner): the inner bound is ``obstacle_width_min`` when that is set."""
+        narrow = self.obstacle_width_min if negotiating else 0.0
         if stance_sign(stance_foot) > 0:
-            return self.w_left_min, self.w_left_max
-        return self.w_right_min, self.w_right_max
+            return self.w_left_min, (-narrow if narrow else self.w_left_max)
+        return (narrow if narrow else self.w_right_min), self.w_right_max
 
     def b_nom(self, stance_foot: str) -> tuple[float, float]:
         """Nominal DCM offset (b_x, b_y) at touchdown [m], relative to the landing foot (the aim: minus

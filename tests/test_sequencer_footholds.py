@@ -446,6 +446,44 @@ def test_the_lead_crossing_aims_at_its_momentum_beyond_the_nominal_offset():
         dataclasses.replace(H1, obstacle_crossing_offset=0.3)
 
 
+def test_a_negotiation_narrows_the_inner_width_bound_so_the_last_step_reaches_its_lateral_aim():
+    """obstacle_width_min: with the DCM far across the heading from the left stance, the last step before the box is
+    held by the walk's 0.30 m inner width bound 2.4 cm off the lateral aim of a 0.7 s crossing (a lateral DCM offset of
+    5.8 cm at its touchdown against 3.4 cm aimed); with the bound at 0.22 m during the negotiation it lands on the aim,
+    nearer its DCM, and the lead crossing after it lands narrower. The steps before it, and every plan without
+    obstacles, are the walk's, bit for bit."""
+    box = Obstacle(np.array([1.0, 0.0]), 0.0, 0.2, 1.2, 0.1)  # near side 0.9 m
+    base = dataclasses.replace(H1, obstacle_offset_tolerance=0.1, obstacle_lateral_aim_duration=0.7,
+                               obstacle_margin=0.08)
+    stance = StanceState("left", np.array([0.45, 0.203]), 0.0, 0.0, swing_liftoff=np.array([0.33, -0.203]))
+    dcm = stance.position + np.array([0.08, -0.16])
+    measured = ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm)
+    plans, plain = {}, {}
+    for width in (0.0, 0.22):
+        planner = DcmFootstepPlanner(dataclasses.replace(base, obstacle_width_min=width))
+        plans[width] = planner.plan(0.1, stance, measured, COMMAND, obstacles=(box,))
+        plain[width] = planner.plan(0.1, stance, measured, COMMAND)
+    _assert_plans_equal(plain[0.22], plain[0.0])
+    lead = next(k for k, step in enumerate(plans[0.0].steps) if step.crossing is not None)
+    assert lead == next(k for k, step in enumerate(plans[0.22].steps) if step.crossing is not None)
+    last = lead - 1
+    np.testing.assert_array_equal(plans[0.22].positions[:last], plans[0.0].positions[:last])
+    aim = abs(base.b_nom("left")[1]) * np.exp(-base.omega * (0.7 - base.t_nom))
+    width = {w: plans[w].positions[last - 1, 1] - plans[w].positions[last, 1] for w in plans}
+    assert width[0.0] == pytest.approx(0.30) and 0.22 <= width[0.22] < 0.30 - 0.02, width
+    assert plans[0.0].steps[last].dcm_offset[1] > aim + 0.02, plans[0.0].steps[last].dcm_offset[1]
+    assert plans[0.22].steps[last].dcm_offset[1] == pytest.approx(aim, abs=1e-3)
+    lead_width = {w: plans[w].positions[lead, 1] - plans[w].positions[last, 1] for w in plans}
+    assert lead_width[0.22] < lead_width[0.0] - 0.05, lead_width
+    assert _sole_overlaps(plans[0.22], box, base.foothold_geometry()) == []
+    for value in (0.05, 0.35, -0.1, float("nan")):  # [2 x 0.04, 0.30] m
+        with pytest.raises(ParameterError, match="obstacle_width_min="):
+            dataclasses.replace(H1, obstacle_width_min=value)
+    with pytest.raises(ParameterError, match=r"obstacle_width_min=0.22 m .* 'exact' backend only"):
+        DcmFootstepPlanner(dataclasses.replace(base, obstacle_width_min=0.22), backend="osqp").plan(
+            0.1, stance, measured, COMMAND, obstacles=(box,))
+
+
 def test_trailing_settle_and_aim_duration_bad_input():
     for value in (0.05, 6.0, float("nan")):
         with pytest.raises(ParameterError, match="obstacle_trailing_double_support"):

@@ -72,6 +72,7 @@ _HELP = {
     "obstacle_crossing_offset": "DCM offset the lead crossing aims at beyond the nominal one [m] (0: the nominal)",
     "obstacle_approach_distance": "even steps to the last foothold before an obstacle within this distance [m] "
                                   "(0: greedy)",
+    "obstacle_width_min": "inner width bound of every step while obstacles are planned around [m] (0: the walk's)",
     "sole_half_width": "sole half width [m]",
     "swing_commit_time": "the swing's foothold committed in its last this long [s] (0: re-planned to touchdown)",
     "swing_commit_rate": "lateral speed of the committed swing foothold [m/s]",
