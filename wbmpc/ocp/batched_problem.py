@@ -480,9 +480,8 @@ class BatchedShootingProblem(ShootingProblem):
         forces into ``forces`` (nc_max,) unless None."""
         dam, data = kkt
         dam.calc_dynamics(data, x, u)
-        if forces is not None:
-            for name, rows in dam._active_rows:
-                forces[rows] = data.contacts[name].force
+        if forces is not None:  # the active contacts' rows, stacked in order
+            forces[:dam.nc] = data.force_all[:dam.nc]
         return data.xout
 
     def _frame_kinematics(self, xs: np.ndarray, jacobians: bool) -> None:
@@ -576,7 +575,10 @@ class BatchedShootingProblem(ShootingProblem):
             elif code == 2:
                 raise RolloutError(f"control not finite at node {t}")
             constraints, pdata, constraint_datas, settings, force_map, kkt = dynamics[t]
-            if constraints is None:
+            if kkt is not None:  # the node's own KKT dynamics (torques from us_try[t])
+                a = self._kkt_dynamics(kkt, x_try, us_try[t], None if forces is None else forces[t])
+                free_flyer_euler_step(x_try, a, dts[t], euler_dx[t], xnexts[t])
+            elif constraints is None:
                 self._node_dynamics_calc(t, x_try, us_try[t])
             else:
                 a = constraint_dynamics(model, pdata, x_try[:nq], x_try[nq:], tau, constraints, constraint_datas,

@@ -232,18 +232,26 @@ class ContactSet:
         self._moving_points = [c for c, contact in enumerate(self.models) if contact.nc == 3 and contact.gains[0] != 0.0]
         self._positioned_soles = [c for c, contact in enumerate(self.models)
                                   if contact.nc == 6 and contact.gains[0] != 0.0]
+        #: True when a 6D contact has Kp > 0: its Kp term is added between the contacts' calc and the
+        #: KKT solve, so the node cannot take the one-call :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_dynamics`
+        self.has_positioned_soles = bool(self._positioned_soles)
+        #: the contact arrays of the kernels (kinds ... inverse_arms), in their argument order
+        self.kernel_arguments = (self.kinds, self.joints, self.frame_rotations, self.frame_translations, self.kp,
+                                 self.kd, self.references, self.corners, self.spreads, self.inverse_arms)
+
+    def refresh_references(self) -> None:
+        """Read the current reference of every point contact with Kp > 0 (moved between evaluations)."""
+        for c in self._moving_points:
+            self.references[c] = self.models[c].reference
 
     def calc(self, tree: KinematicTree, work: "ContactSetWork", q, v, a, Jc, a0) -> None:
         """The stacked Jc (nc, nv) and a0 (nc,) at (q, v, a) (a = 0: the drift); ``work`` keeps the
         contacts' frame kinematics for :meth:`derivatives`."""
-        for c in self._moving_points:
-            self.references[c] = self.models[c].reference
+        self.refresh_references()
         k = self.kinds.size
         contact_set_calc(q, v, a, tree.parents, tree.placement_rotation, tree.placement_translation, tree.axes,
-                         tree.idx_q, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, self.kinds, self.joints,
-                         self.frame_rotations, self.frame_translations, self.kp, self.kd, self.references, self.corners,
-                         self.spreads, self.inverse_arms, work.oRf[:k], work.opf[:k], work.fJf[:k], work.velocity[:k],
-                         work.acceleration[:k], Jc, a0)
+                         tree.idx_q, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, *self.kernel_arguments,
+                         work.oRf[:k], work.opf[:k], work.fJf[:k], work.velocity[:k], work.acceleration[:k], Jc, a0)
         for c in self._positioned_soles:
             rows = slice(self.rows[c], self.rows[c + 1])
             work.rMf[c] = self.models[c].reference.actInv(pin.SE3(work.oRf[c], work.opf[c]))

@@ -59,6 +59,7 @@ from wbmpc.errors import ParameterError
 from wbmpc.ocp.actuation import ActuationFloatingBase
 from wbmpc.ocp.contacts import ContactModel6D, ContactSet, ContactSetWork, SoleCorners
 from wbmpc.ocp.costs import CostModelSum
+from wbmpc.ocp.kernels.contact_dynamics import contact_kkt_dynamics
 from wbmpc.ocp.kernels.kkt import KKTBuffers, damped_kkt_derivatives, damped_kkt_dynamics
 from wbmpc.ocp.kernels.tree import KinematicTree, tree_support
 from wbmpc.ocp.residuals.base import DataCollector
@@ -244,17 +245,26 @@ class DifferentialActionModelContactFwdDynamics:
         else:  # M (upper triangle) and b only, the same numbers
             pin.crba(model, pdata, q, pin.Convention.WORLD)
             pin.nonLinearEffects(model, pdata, q, v)
-        self.actuation.calc(data.tau, u)
         nc = self.nc
         if data.active_contacts is not self.active_contacts:
             data.active_contacts = self.active_contacts
             data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
-        Jc, a0, forces = data.Jc_all[:nc], data.a0_all[:nc], data.force_all[:nc]
-        if nc:  # the contacts' Jacobians and drifts (zero joint accelerations), compiled
-            self.contact_set.calc(data.tree, data.contact_work, q, v, data.zero_acceleration, Jc, a0)
-        if not damped_kkt_dynamics(pdata.M, pdata.nle, data.tau, Jc, a0, self.row_scales, self.contact_damping,
-                                   data.xout, forces, *data.kkt_buffers(nc).dynamics_buffers()):
+        contact_set = self.contact_set
+        if nc and not contact_set.has_positioned_soles:  # torques, contacts and KKT solve in one compiled call
+            contact_set.refresh_references()
+            solved = contact_kkt_dynamics(x, u, pdata.M, pdata.nle, self.contact_damping, self.row_scales,
+                                          *contact_set.kernel_arguments,
+                                          *data.contact_kkt_arguments(contact_set.kinds.size, nc))
+        else:
+            self.actuation.calc(data.tau, u)
+            Jc, a0 = data.Jc_all[:nc], data.a0_all[:nc]
+            if nc:  # the contacts' Jacobians and drifts (zero joint accelerations), compiled
+                contact_set.calc(data.tree, data.contact_work, q, v, data.zero_acceleration, Jc, a0)
+            solved = damped_kkt_dynamics(pdata.M, pdata.nle, data.tau, Jc, a0, self.row_scales, self.contact_damping,
+                                         data.xout, data.force_all[:nc], *data.kkt_buffers(nc).dynamics_buffers())
+        if not solved:
             data.xout[:] = np.nan  # M or the contacts' Delassus matrix is not positive definite: the rollout fails
+        forces = data.force_all
         for name, rows in self._active_rows:
             data.contacts[name].force[:] = forces[rows]
 
@@ -388,6 +398,7 @@ class DifferentialActionDataContactFwdDynamics:
         self.df_du_all = np.zeros((nc_max, nu))
         self.dtau_dq = np.zeros((nv, nv))  # RNEA derivative with the point forces' rotation terms
         self._kkt_buffers: dict[int, KKTBuffers] = {}  # contact rows -> the KKT kernels' buffers
+        self._contact_kkt_arguments: dict[tuple, tuple] = {}  # (contacts, rows) -> contact_kkt_arguments
         # the compiled tree kinematics the contacts of the kkt backend read, and their buffers (None: the
         # pinocchio backend)
         self.tree = KinematicTree(state.pinocchio) if model.backend == "kkt" and nc_max else None
@@ -408,6 +419,20 @@ class DifferentialActionDataContactFwdDynamics:
         self.cost = 0.0
         c = self.costs
         self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu = c.Lx, c.Lu, c.Lxx, c.Lxu, c.Luu
+
+    def contact_kkt_arguments(self, n_contacts: int, nc: int) -> tuple:
+        """The buffers :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_dynamics` takes after the
+        contact set's arrays, for ``n_contacts`` active contacts of ``nc`` stacked rows (tau ... a0, xout,
+        the forces, the KKT buffers), made once per size."""
+        arguments = self._contact_kkt_arguments.get((n_contacts, nc))
+        if arguments is None:
+            tree, work, k = self.tree, self.contact_work, n_contacts
+            arguments = self._contact_kkt_arguments[(n_contacts, nc)] = (
+                self.tau, self.zero_acceleration, tree.parents, tree.placement_rotation, tree.placement_translation,
+                tree.axes, tree.idx_q, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, work.oRf[:k], work.opf[:k],
+                work.fJf[:k], work.velocity[:k], work.acceleration[:k], self.Jc_all[:nc], self.a0_all[:nc], self.xout,
+                self.force_all[:nc], *self.kkt_buffers(nc).dynamics_buffers())
+        return arguments
 
     def kkt_buffers(self, nc: int) -> KKTBuffers:
         """The buffers of the KKT kernels for ``nc`` contact rows (made on first use; the last

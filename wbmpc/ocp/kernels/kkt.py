@@ -20,7 +20,8 @@ external forces) and D_c = ∂(Jc a + a0)/∂x at fixed a (nc, ndx) (the contact
 Crocoddyl's formulas ([∂a/∂x; −∂λ̃/∂x] = −K⁻¹ [D_τ; S D_c]) without forming K⁻¹. M⁻¹ comes from the
 Cholesky factor of M (CRBA fills its upper triangle), Y from that of A J̃ᵀ + μ I; with nc = 0
 (flight) a = a_free and ∂a/∂x = −M⁻¹ D_τ. The products go to BLAS (``np.dot`` into preallocated
-buffers). :class:`KKTBuffers` holds what the dynamics leave for the derivatives.
+buffers). :class:`KKTBuffers` holds what the dynamics leave for the derivatives. (numba caches these
+kernels with the linalg kernels they inline, by this file's stamp: edit this file with those.)
 """
 
 from __future__ import annotations

@@ -105,13 +105,19 @@ def cholesky_in_place(A):
 
 @njit(cache=True)
 def lower_triangular_inverse(L, Linv):
-    """Linv = L⁻¹ for a lower-triangular L (n, n) with a positive diagonal (lower triangle only)."""
+    """Linv = L⁻¹ for a lower-triangular L (n, n) with a positive diagonal (lower triangle only).
+
+    Linv[i, j] = (−Σ_{p=j}^{i−1} L[i, p] Linv[p, j]) / L[i, i], each sum taken in increasing p (the
+    textbook order, to the last bit), the products of one p applied to row i of Linv at once (row p
+    of Linv is contiguous: the compiler vectorises it).
+    """
     n = L.shape[0]
     Linv[:, :] = 0.0
-    for j in range(n):
-        Linv[j, j] = 1.0 / L[j, j]
-        for i in range(j + 1, n):
-            s = 0.0
-            for p in range(j, i):
-                s -= L[i, p] * Linv[p, j]
-            Linv[i, j] = s / L[i, i]
+    for i in range(n):
+        Linv[i, i] = 1.0 / L[i, i]
+        for p in range(i):
+            lip = L[i, p]
+            for j in range(p + 1):
+                Linv[i, j] -= lip * Linv[p, j]
+        for j in range(i):
+            Linv[i, j] = Linv[i, j] / L[i, i]

@@ -5,7 +5,8 @@ library sign. Per node the Q blocks come from two products with [Fx Fu] (Vxx' [F
 [Fx Fu]ᵀ of it: Qxx, Qxu and Quu at once, 13 % faster on the H1's ndx = 50, nu = 19 than five
 separate products); the Cholesky factor L of Quu is written out (nu is small) and inverted, so the
 gains come from one product [K | k] = L⁻ᵀ L⁻¹ [Qxuᵀ | Qu]; every product goes to BLAS through
-``np.dot`` into preallocated buffers.
+``np.dot`` into preallocated buffers. (numba caches a kernel with the kernels it inlines, L⁻¹ among
+them, by this file's stamp: a change to those invalidates nothing here unless this file changes too.)
 """
 
 from __future__ import annotations
