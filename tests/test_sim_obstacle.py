@@ -150,8 +150,10 @@ def test_success_needs_the_base_and_both_feet_beyond_the_far_edge_and_nothing_le
     crossed = synthetic_log([0.5, 1.0, 1.3, 1.5], [[0.5, 0.5], [1.0, 1.4], [1.25, 1.4], [1.4, 1.5]], no_contact)
     m = obstacle_metrics(crossed)
     assert m["success"] and m["crossed"] and not m["touched"] and m["crossing_time"] == pytest.approx(0.2)
+    assert m["feet_across"] == 2
     trailing = synthetic_log([0.5, 1.0, 1.3, 1.5], [[0.5, 0.5], [1.0, 1.4], [1.0, 1.4], [1.1, 1.5]], no_contact)
     assert not obstacle_metrics(trailing)["success"] and obstacle_metrics(trailing)["crossing_time"] is None
+    assert obstacle_metrics(trailing)["feet_across"] == 1  # astride: the right foot beyond the far edge (1.2 m)
     resting = np.zeros((4, 3), dtype=bool)
     resting[2:, 0] = True  # the left foot stands on the box at the end
     m = obstacle_metrics(synthetic_log([0.5, 1.0, 1.3, 1.5], [[0.5, 0.5], [1.0, 1.4], [1.25, 1.4], [1.4, 1.5]], resting))
@@ -240,6 +242,31 @@ def test_a_robot_without_perception_reports_nothing():
 
 
 @needs_h1_extra
+def test_the_obstacle_summary_counts_the_falls_by_the_feet_across_the_box(tmp_path):
+    """Session 19's 10 cm campaign (docs/data/) with ``feet_across`` added as the runs ended (0 where the trial never
+    crossed, 2 where it fell after crossing): the summary splits its 15 falls 8 / 0 / 7, the report says so; records
+    without the metric are not counted."""
+    from pathlib import Path
+
+    from sim.campaigns.report import format_summary, write_report
+
+    source = Path(__file__).resolve().parents[1] / "docs" / "data" / "h1-obstacles-s19-10cm"
+    (tmp_path / "campaign.json").write_text((source / "campaign.json").read_text())
+    records = [json.loads(line) for line in (source / "trials.jsonl").read_text().splitlines()]
+    for record in records:
+        record["metrics"]["feet_across"] = 0 if record["metrics"]["crossing_time"] is None else 2
+    (tmp_path / "trials.jsonl").write_text("".join(json.dumps(r) + "\n" for r in records))
+    entry = write_report(tmp_path, plots=False)["obstacle"]["default"][0]
+    assert entry["n_fell"] == 15 and entry["falls_by_feet_across"] == [8, 0, 7]
+    assert "fell 15/20 (before the box 8, astride 0, across 7)" in format_summary(write_report(tmp_path, plots=False))
+    for record in records:
+        del record["metrics"]["feet_across"]
+    (tmp_path / "trials.jsonl").write_text("".join(json.dumps(r) + "\n" for r in records))
+    entry = write_report(tmp_path, plots=False)["obstacle"]["default"][0]
+    assert entry["falls_by_feet_across"] == [0, 0, 0] and "fell 15/20, detected" in format_summary(
+        write_report(tmp_path, plots=False))
+
+
 def test_a_tiny_obstacle_campaign_runs_through_the_real_machinery(tmp_path, capsys):
     """One 0.3 s trial per height (the PD controller: the run is short, the robot does not cross), the
     summary by height beside seed 000's table, and its figure."""

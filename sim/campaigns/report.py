@@ -199,7 +199,9 @@ def _mean(values: list[Any]) -> float | None:
 
 def _obstacle_summary(spec: CampaignSpec, rows) -> dict[str, Any]:
     """Per variant and box height: success, touched, fell and detected rates, mean crossing time [s],
-    mean |height estimate error| [m], and the seed-000 thesis's success rate (None where it has none)."""
+    mean |height estimate error| [m], the falls by the feet across the box when they happened
+    (``falls_by_feet_across``: [before, astride, after], from the ``feet_across`` metric; records without it are not
+    counted), and the seed-000 thesis's success rate (None where it has none)."""
     out: dict[str, Any] = {}
     for variant in spec.variants:
         entries = []
@@ -213,11 +215,21 @@ def _obstacle_summary(spec: CampaignSpec, rows) -> dict[str, Any]:
                 "height": height, **_stats(selected),
                 "touched_rate": rate["touched"], "detected_rate": rate["detected"],
                 "crossing_time_mean": _mean([m.get("crossing_time") for m in metrics]),
+                "falls_by_feet_across": [sum(1 for m in metrics if m.get("fell") and m.get("feet_across") == k)
+                                         for k in range(3)],
                 "height_error_abs_mean": _mean(errors),
                 "paper_success_rate": PAPER_OBSTACLE_SUCCESS.get(round(float(height), 3)),
             })
         out[variant] = entries
     return out
+
+
+def _fall_phases(entry: dict[str, Any]) -> str:
+    """" (before the box B, astride A, after it C)" of an obstacle entry's falls, or "" when no fall has the count."""
+    before, astride, after = entry.get("falls_by_feet_across") or (0, 0, 0)
+    if before + astride + after == 0:
+        return ""
+    return f" (before the box {before}, astride {astride}, across {after})"
 
 
 def format_summary(summary: dict[str, Any]) -> str:
@@ -278,7 +290,7 @@ def format_summary(summary: dict[str, Any]) -> str:
             paper = "" if e["paper_success_rate"] is None else f" (seed 000: {pct(e['paper_success_rate']).strip()})"
             lines.append(
                 f"  obstacle {100 * e['height']:.0f} cm, {variant}: success {pct(e['success_rate']).strip()}{paper}, "
-                f"touched {pct(e['touched_rate']).strip()}, fell {e['n_fell']}/{e['n']}, detected "
+                f"touched {pct(e['touched_rate']).strip()}, fell {e['n_fell']}/{e['n']}{_fall_phases(e)}, detected "
                 f"{pct(e['detected_rate']).strip()}"
             )
     for e in summary.get("errors", []):
