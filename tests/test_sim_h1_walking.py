@@ -38,3 +38,25 @@ def test_h1_stepping_in_place_stays_in_place(in_place):
     assert np.max(np.abs(com[-1, :2] - com[0, :2])) < 0.08
     pelvis_height = in_place.ticks["qpos"][:, 2]
     assert pelvis_height.min() > 0.85  # it stands at 1.00 m; the fall threshold is 0.60 m
+
+
+def test_a_walk_at_speed_gets_its_own_fddp_iterations():
+    """``fast_max_iterations``: an update whose planned |v_x| is at least ``fast_speed`` runs up to that many FDDP
+    iterations (the crossing's budget first); slower ones the preset's."""
+    from wbmpc.errors import ParameterError
+    from wbmpc.walking.controller import WalkingController
+    from wbmpc.walking.controller_config import WalkingControllerConfig
+    from wbmpc.walking.preset import load_walking_preset
+
+    preset = load_walking_preset("h1", {"fast_max_iterations": 4, "fast_speed": 0.8, "crossing_max_iterations": 30})
+    budget = WalkingController(preset)._iteration_budget
+    walking = {"crossing_nodes": 0.0, "negotiation_mode": 0.0}
+    assert budget({**walking, "sequencer_v_x": 0.5}) is None
+    assert budget({**walking, "sequencer_v_x": 0.8}) == budget({**walking, "sequencer_v_x": -1.0}) == 4
+    assert budget({**walking, "crossing_nodes": 5.0, "sequencer_v_x": 1.0}) == 30
+    for bad, message in (({"fast_max_iterations": 4}, r"fast_speed=0.0 m/s must be > 0 with fast_max_iterations=4"),
+                         ({"fast_speed": 0.8}, r"fast_speed=0.8 m/s must be > 0 with fast_max_iterations=0 \(0 "
+                                               r"without\)"),
+                         ({"fast_max_iterations": 2.5, "fast_speed": 0.8}, r"fast_max_iterations=2.5 must be 0")):
+        with pytest.raises(ParameterError, match=message):
+            WalkingControllerConfig(**bad)

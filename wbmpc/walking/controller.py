@@ -228,8 +228,9 @@ class WalkingController:
 
     def _iteration_budget(self, record: dict[str, float], t: float | None = None) -> int | None:
         """FDDP iterations of the update at ``t`` [s]: ``crossing_max_iterations`` while the horizon holds a crossing
-        swing and ``crossing_iterations_hold`` after, else ``negotiation_max_iterations`` while negotiating, else None
-        (``max_iterations``); 0 means unset. An update that sees a crossing records its ``t`` (the hold's start)."""
+        swing and ``crossing_iterations_hold`` after, else ``negotiation_max_iterations`` while negotiating, else
+        ``fast_max_iterations`` at a planned |v_x| of ``fast_speed`` or more, else None (``max_iterations``); 0 means
+        unset. An update that sees a crossing records its ``t`` (the hold's start)."""
         cfg = self.config
         if cfg.crossing_max_iterations:
             if record.get("crossing_nodes", 0.0) > 0:
@@ -240,6 +241,8 @@ class WalkingController:
                 return cfg.crossing_max_iterations
         if cfg.negotiation_max_iterations and record.get("negotiation_mode") == NEGOTIATION:
             return cfg.negotiation_max_iterations
+        if cfg.fast_max_iterations and abs(record.get("sequencer_v_x", 0.0)) >= cfg.fast_speed:
+            return cfg.fast_max_iterations
         return None
 
     # ------------------------------------------------------------------ every tick
