@@ -169,7 +169,13 @@ class WalkingControllerConfig:
             budgets take precedence. A walk at speed changes the OCP more from one update to the next (shorter,
             quicker steps): the H1 at 1.0 m/s kept its MPC cost 10-100x lower with 4 iterations than with 3
             (docs/closed_loop.md "The H1 at 1.0 m/s, session 20").
-        fast_speed: [m/s], > 0 when ``fast_max_iterations`` is set, else 0: where ``fast_max_iterations`` begins.
+        fast_swing_path_weight: the OCP's ``swing_path_weight`` (the swing foot's (x, y) along a path from lift-off to
+            its foothold, at rest at both ends with the "smooth" timing) from that speed on, >= 0 (0: the OCP's own at
+            every speed). It needs the OCP's swing path terms (``swing_path_weight`` or ``obstacle_swing_path_weight``
+            > 0). At 1.0 m/s the H1's swing foot, free between lift-off and touchdown, stayed back and then landed 5-7
+            cm short of its foothold, still moving (docs/closed_loop.md "The H1 at 1.0 m/s, session 20").
+        fast_speed: [m/s], > 0 when ``fast_max_iterations`` or ``fast_swing_path_weight`` is set, else 0: the planned
+            |v_x| from which they apply.
     """
 
     n_nodes: int = 100
@@ -210,6 +216,7 @@ class WalkingControllerConfig:
     crossing_max_iterations: int = 0
     crossing_iterations_hold: float = 0.0
     fast_max_iterations: int = 0
+    fast_swing_path_weight: float = 0.0
     fast_speed: float = 0.0
 
     def __post_init__(self) -> None:
@@ -284,9 +291,13 @@ class WalkingControllerConfig:
         fast = self.fast_max_iterations
         if isinstance(fast, bool) or not (isinstance(fast, int) and fast >= 0):
             raise ParameterError(f"fast_max_iterations={fast!r} must be 0 (max_iterations) or an integer >= 1")
+        path = self.fast_swing_path_weight
+        if isinstance(path, bool) or not (np.isfinite(path) and path >= 0.0):
+            raise ParameterError(f"fast_swing_path_weight={path!r} must be finite and >= 0 (0: the OCP's own)")
         speed = self.fast_speed
-        if isinstance(speed, bool) or not (np.isfinite(speed) and (speed > 0.0 if fast else speed == 0.0)):
-            raise ParameterError(f"fast_speed={speed!r} m/s must be > 0 with fast_max_iterations={fast} (0 without)")
+        if isinstance(speed, bool) or not (np.isfinite(speed) and (speed > 0.0 if fast or path else speed == 0.0)):
+            raise ParameterError(f"fast_speed={speed!r} m/s must be > 0 with fast_max_iterations={fast} or "
+                                 f"fast_swing_path_weight={path} set (0 without)")
         hold = self.crossing_iterations_hold
         if isinstance(hold, bool) or not (np.isfinite(hold) and 0.0 <= hold <= 10.0):
             raise ParameterError(f"crossing_iterations_hold={hold!r} s must be in [0, 10] s")
