@@ -310,7 +310,7 @@ OBSTACLE_FIELDS = {
 # preset schedules its gait by speed (the H1's, for 1.0 m/s); the others keep the defaults
 SPEED_SCHEDULE_FIELDS = {
     "planner": {"fast_speed_start", "fast_speed_full", "fast_t_nom", "fast_t_min", "fast_double_support", "fast_l_max"},
-    "controller": {"fast_max_iterations", "fast_speed"},
+    "controller": {"fast_max_iterations", "fast_swing_path_weight", "fast_speed"},
 }
 
 
@@ -405,7 +405,7 @@ def test_g1_obstacle_settings_keep_its_walking_and_load_for_its_obstacle_runs():
 
 
 def test_h1_preset_states_every_tuned_number():
-    preset = _assert_preset_states_every_field("h1", LIPM_CORRECTIONS, obstacles=True)
+    preset = _assert_preset_states_every_field("h1", LIPM_CORRECTIONS, obstacles=True, speed_schedule=True)
     # the soles' undetermined squeeze is split by the sole-weighted damping, which the KKT backend solves
     assert preset.ocp.contact_damping > 0 and preset.ocp.contact_damping_moments == "sole"
     assert preset.ocp.dynamics_backend == "kkt"
