@@ -103,8 +103,9 @@ class DcmFootstepPlanner:
 
     @property
     def double_support(self) -> float:
-        """Both feet on the ground after each touchdown for this long [s] (``params.double_support``)."""
-        return self.params.double_support
+        """Both feet on the ground after each touchdown for this long [s] (``params.double_support`` at the speed
+        of the last plan, see ``SequencerParams.at_speed``)."""
+        return self.sequencer.params.double_support
 
     @property
     def backend(self) -> str:
@@ -195,7 +196,8 @@ class DcmFootstepPlanner:
         key = (stance.foot, stance.t_start)
         decided = self._swing_decision[2] if len(obstacles) > 0 and self._swing_decision is not None \
             and self._swing_decision[:2] == key else None
-        swinging = t >= stance.t_start + self.params.double_support
+        timing = self.sequencer.set_speed(command.v_x)
+        swinging = t >= stance.t_start + timing.double_support
         kept = decided if swinging else (True if decided else None)
         # a stance that began with the touchdown of a settled crossing swing resumes the walk with a settled step
         if self._resume is None or self._resume[:2] != key:
@@ -239,6 +241,7 @@ class DcmFootstepPlanner:
         ``stance.foot`` begins: the stance position plus the offset aimed at by the touchdown that
         ends a stance on the other foot, rotated by the stance yaw."""
         command = as_velocity_command(command)
+        self.sequencer.set_speed(command.v_x)
         gait = self.sequencer.nominal_gait((command.v_x, command.v_y), self.corrections)
         return stance.position + rotate_xy(gait.dcm_offset(other_foot(stance.foot)), stance.yaw)
 

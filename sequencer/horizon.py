@@ -318,9 +318,22 @@ class FootstepSequencer:
     def __init__(self, params: SequencerParams, backend: str = "exact"):
         if not isinstance(params, SequencerParams):
             raise ParameterError(f"params must be a SequencerParams, got {type(params).__name__}")
-        self.params = params
+        self.base_params = params
         self.backend_name = backend
         self.backend = make_backend(backend)
+        self._use(params.at_speed(params.v_x))
+
+    def set_speed(self, v_x: float) -> SequencerParams:
+        """Plan with ``base_params.at_speed(v_x)`` from now on (the speed schedule at forward command ``v_x``
+        [m/s]; ``plan`` calls it with its command) and return them."""
+        params = self.base_params.at_speed(v_x)
+        if params is not self.params:
+            self._use(params)
+        return params
+
+    def _use(self, params: SequencerParams) -> None:
+        """``params`` (the schedule's set at one speed) and the values derived from them."""
+        self.params = params
         omega = params.omega
         self._omega = omega
         self._gamma_nom = math.exp(omega * params.t_nom)
@@ -404,7 +417,8 @@ class FootstepSequencer:
             stance_yaw: world yaw ψ_0 of the stance foot's heading frame [rad].
             yaw_rate: commanded turning rate r [rad/s]; step k's QP is written in the heading frame
                 ψ_k, ψ_{k+1} = ψ_k + r T_k.
-            velocity: (v_x, v_y) [m/s] in the heading frame; None = ``params.v_x``, ``params.v_y``.
+            velocity: (v_x, v_y) [m/s] in the heading frame; None = ``params.v_x``, ``params.v_y``. The plan's
+                timing is the speed schedule's at v_x (:meth:`set_speed`).
             corrections: live LIPM corrections; None = ``params.swing_drift``, ``params.dcm_offset_bias``.
             obstacles: :class:`sequencer.obstacles.Obstacle` s the footholds avoid (:mod:`sequencer.footholds`,
                 the before/beyond choice per step); empty: the plan without obstacles, bit for bit.
@@ -444,6 +458,7 @@ class FootstepSequencer:
         stance_yaw, yaw_rate = float(stance_yaw), float(yaw_rate)
         if not (math.isfinite(stance_yaw) and math.isfinite(yaw_rate)):
             raise ParameterError(f"stance_yaw={stance_yaw} rad and yaw_rate={yaw_rate} rad/s must be finite")
+        self.set_speed(self.base_params.v_x if velocity is None else velocity[0])
         gait, per_stance = self._gait_tables(velocity, corrections)
         params = self.params
         constraints = None

@@ -13,6 +13,7 @@ y = -0.07 moving towards the right foot); see ``docs/sequencer.md``.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,6 +25,9 @@ from wbmpc.config import dataclass_from_table, named_preset, read_toml
 from wbmpc.errors import ParameterError
 
 PRESET_DIR = Path(__file__).resolve().parent / "presets"
+# The fields of the speed schedule and the fields holding their values at fast_speed_full (SequencerParams.at_speed).
+SCHEDULED_FIELDS = (("t_nom", "fast_t_nom"), ("t_min", "fast_t_min"), ("double_support", "fast_double_support"),
+                    ("l_max", "fast_l_max"))
 
 
 @dataclass(frozen=True)
@@ -151,6 +155,17 @@ class SequencerParams:
             H1's touchdown) is more than the whole body can follow.
         swing_commit_rate: [m/s] >= 0, the lateral speed of the committed foothold (0 with swing_commit_time > 0:
             held where the plan put it when the commitment began).
+        fast_speed_start, fast_speed_full: the speed schedule of the step timing [m/s] (0 and 0: off): with
+            0 <= fast_speed_start < fast_speed_full <= 5, the fields of ``SCHEDULED_FIELDS`` (t_nom, t_min,
+            double_support, l_max) keep their values while the commanded forward speed |v_x| is at most
+            fast_speed_start, take their ``fast_*`` values from fast_speed_full on, and move linearly in between
+            (:meth:`at_speed`; a walk at speed wants shorter, quicker steps than a slow one, docs/closed_loop.md
+            "The H1 at 1.0 m/s, session 20").
+        fast_t_nom, fast_t_min: the nominal step duration and its lower bound at fast_speed_full [s] (0: not
+            scheduled, t_nom or t_min at every speed); fast_double_support: the double support after each
+            touchdown at fast_speed_full [s] (0: not scheduled); fast_l_max: the step length's upper bound at
+            fast_speed_full [m] (0: not scheduled). The fully fast set must be valid on its own (t_min <= t_nom,
+            double_support < t_min, l_min <= l_max): every speed in between then is too.
         sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m],
             >= 0 (0: a point foot); sole_half_width: its half width [m], >= 0. The footholds keep the whole
             sole rectangle outside the grown footprints.
@@ -197,6 +212,12 @@ class SequencerParams:
     obstacle_width_min: float = 0.0
     swing_commit_time: float = 0.0
     swing_commit_rate: float = 0.0
+    fast_speed_start: float = 0.0
+    fast_speed_full: float = 0.0
+    fast_t_nom: float = 0.0
+    fast_t_min: float = 0.0
+    fast_double_support: float = 0.0
+    fast_l_max: float = 0.0
     sole_front: float = 0.0
     sole_rear: float = 0.0
     sole_half_width: float = 0.0
@@ -292,13 +313,43 @@ class SequencerParams:
             raise ParameterError(f"obstacle_width_min={self.obstacle_width_min} m must be 0 (off) or in "
                                  f"[2 sole_half_width={2.0 * self.sole_half_width} m, "
                                  f"min(w_right_min, -w_left_max)={inner} m]")
+        self._check_speed_schedule()
         self.check_velocity(self.v_x, self.v_y)
+
+    def _check_speed_schedule(self) -> None:
+        """The speed schedule's fields (see the class docstring): off with every one of them 0, or
+        0 <= fast_speed_start < fast_speed_full <= 5 m/s and a valid fully fast parameter set."""
+        start, full = self.fast_speed_start, self.fast_speed_full
+        if full == 0.0:
+            for name in ("fast_speed_start", *(fast for _, fast in SCHEDULED_FIELDS)):
+                if getattr(self, name) != 0.0:
+                    raise ParameterError(f"{name}={getattr(self, name)} needs fast_speed_full > 0 m/s (the speed "
+                                         f"schedule is off with fast_speed_full = 0)")
+            return
+        if not 0.0 <= start < full <= 5.0:
+            raise ParameterError(f"fast_speed_start={start} m/s and fast_speed_full={full} m/s must satisfy "
+                                 f"0 <= fast_speed_start < fast_speed_full <= 5 m/s")
+        try:
+            _scheduled(self, 1.0)
+        except ParameterError as err:
+            raise ParameterError(f"the timing at fast_speed_full={full} m/s (the fast_* values) is invalid: "
+                                 f"{err}") from None
 
     # ------------------------------------------------------------------ derived values
     @property
     def omega(self) -> float:
         """LIPM natural frequency sqrt(gravity / z_c) [1/s]."""
         return math.sqrt(self.gravity / self.z_c)
+
+    def at_speed(self, v_x: float) -> "SequencerParams":
+        """The parameters a plan at forward command ``v_x`` [m/s] (heading frame) uses: these, with the fields
+        of the speed schedule (``fast_speed_start``, ``fast_speed_full``) interpolated at |v_x|; ``self`` itself
+        when the schedule is off or |v_x| <= fast_speed_start. The returned set has the schedule off."""
+        full = self.fast_speed_full
+        if full == 0.0:
+            return self
+        fraction = (abs(float(v_x)) - self.fast_speed_start) / (full - self.fast_speed_start)
+        return self if fraction <= 0.0 else _scheduled(self, min(fraction, 1.0))
 
     @property
     def l_nom(self) -> float:
@@ -351,12 +402,44 @@ class SequencerParams:
         when no v_y fits both).
         """
         v_y_min, v_y_max = -math.inf, math.inf
-        for foot in FEET:
-            low, high = self.width_bounds(foot)
-            lateral = stance_sign(foot) * self.pelvis_width
-            v_y_min = max(v_y_min, (low + lateral) / self.t_nom)
-            v_y_max = min(v_y_max, (high + lateral) / self.t_nom)
-        return {"v_x": (self.l_min / self.t_nom, self.l_max / self.t_nom), "v_y": (v_y_min, v_y_max)}
+        for timing in self._timing_ends():
+            for foot in FEET:
+                low, high = timing.width_bounds(foot)
+                lateral = stance_sign(foot) * timing.pelvis_width
+                v_y_min = max(v_y_min, (low + lateral) / timing.t_nom)
+                v_y_max = min(v_y_max, (high + lateral) / timing.t_nom)
+        if self.fast_speed_full == 0.0:
+            return {"v_x": (self.l_min / self.t_nom, self.l_max / self.t_nom), "v_y": (v_y_min, v_y_max)}
+        return {"v_x": (-self._v_x_reach(-1.0), self._v_x_reach(1.0)), "v_y": (v_y_min, v_y_max)}
+
+    def _timing_ends(self) -> tuple["SequencerParams", ...]:
+        """The parameters at both ends of the speed schedule (these alone when it is off)."""
+        return (self,) if self.fast_speed_full == 0.0 else (self, _scheduled(self, 1.0))
+
+    def _v_x_fits(self, v_x: float) -> bool:
+        """Whether the nominal step v_x t_nom at ``v_x`` [m/s] lies within [l_min, l_max], both at that speed."""
+        timing = self.at_speed(v_x)
+        return timing.l_min / timing.t_nom <= v_x <= timing.l_max / timing.t_nom
+
+    def _v_x_reach(self, direction: float) -> float:
+        """The largest |v_x| [m/s] in ``direction`` (+1 forward, -1 backward) up to which every command from 0
+        fits the step length bounds with the scheduled timing (:meth:`_v_x_fits`; 0.01 m/s scan, then bisection),
+        at most 5 m/s."""
+        if not self._v_x_fits(0.0):
+            return 0.0
+        fits = 0.0
+        for step in range(1, 501):
+            speed = 0.01 * step
+            if not self._v_x_fits(direction * speed):
+                break
+            fits = speed
+        else:
+            return fits
+        low, high = fits, fits + 0.01
+        for _ in range(60):
+            middle = 0.5 * (low + high)
+            low, high = (middle, high) if self._v_x_fits(direction * middle) else (low, middle)
+        return low
 
     def check_velocity(self, v_x: float, v_y: float) -> None:
         """Raise ParameterError (naming the component, its value and the allowed range) unless command
@@ -364,20 +447,22 @@ class SequencerParams:
 
         The check is on the range itself, so a command clipped to :meth:`velocity_range` always passes.
         """
-        v_x_min, v_x_max = self.l_min / self.t_nom, self.l_max / self.t_nom
-        if not v_x_min <= v_x <= v_x_max:
+        timing = self.at_speed(v_x)
+        if not self._v_x_fits(v_x):
+            v_x_min, v_x_max = self.velocity_range()["v_x"]
+            scheduled = "" if timing is self else f" (t_nom={timing.t_nom:.4g} s at this speed)"
             raise ParameterError(
-                f"v_x={v_x} m/s gives a nominal step length v_x*t_nom={v_x * self.t_nom:.4g} m outside [l_min, l_max] "
-                f"= [{self.l_min}, {self.l_max}] m: v_x must lie within [{v_x_min:.4g}, {v_x_max:.4g}] m/s"
+                f"v_x={v_x} m/s gives a nominal step length v_x*t_nom={v_x * timing.t_nom:.4g} m outside [l_min, l_max] "
+                f"= [{timing.l_min}, {timing.l_max}] m{scheduled}: v_x must lie within [{v_x_min:.4g}, {v_x_max:.4g}] m/s"
             )
         for foot in FEET:
             low, high = self.width_bounds(foot)
             lateral = stance_sign(foot) * self.pelvis_width
-            if not (low + lateral) / self.t_nom <= v_y <= (high + lateral) / self.t_nom:
+            if not (low + lateral) / timing.t_nom <= v_y <= (high + lateral) / timing.t_nom:
                 v_y_min, v_y_max = self.velocity_range()["v_y"]
                 allowed = (f"v_y must lie within [{v_y_min:.4g}, {v_y_max:.4g}] m/s" if v_y_min <= v_y_max
                            else "no v_y fits the width bounds of both stances")
-                nominal = nominal_step_width(self.pelvis_width, v_y, self.t_nom, foot)
+                nominal = nominal_step_width(self.pelvis_width, v_y, timing.t_nom, foot)
                 raise ParameterError(
                     f"pelvis_width={self.pelvis_width} m and v_y={v_y} m/s give a nominal {foot}-stance width "
                     f"{nominal:.4g} m outside [w_{foot}_min, w_{foot}_max] = [{low}, {high}] m: {allowed}"
@@ -396,8 +481,8 @@ class SequencerParams:
         dcm_offset_bias = self.dcm_offset_bias if dcm_offset_bias is None else check_dcm_offset_bias(dcm_offset_bias)
         stance_drift = self.stance_drift if stance_drift is None else check_stance_drift(stance_drift)
         self.check_velocity(v_x, v_y)
-        return nominal_gait(self.omega, self.t_nom, self.pelvis_width, v_x, v_y, swing_drift, dcm_offset_bias,
-                            stance_drift)
+        return nominal_gait(self.omega, self.at_speed(v_x).t_nom, self.pelvis_width, v_x, v_y, swing_drift,
+                            dcm_offset_bias, stance_drift)
 
     # ------------------------------------------------------------------ presets and I/O
     @classmethod
@@ -436,3 +521,14 @@ class SequencerParams:
     def to_dict(self) -> dict:
         """Field name -> value (floats and the name string)."""
         return dataclasses.asdict(self)
+
+
+@functools.lru_cache(maxsize=256)
+def _scheduled(params: SequencerParams, fraction: float) -> SequencerParams:
+    """``params`` with each scheduled field (``SCHEDULED_FIELDS``) moved ``fraction`` in [0, 1] of the way to its
+    ``fast_*`` value (those at 0 stay), and the schedule off (validated by the constructor)."""
+    values = {name: getattr(params, fast) if fraction == 1.0
+              else getattr(params, name) + fraction * (getattr(params, fast) - getattr(params, name))
+              for name, fast in SCHEDULED_FIELDS if getattr(params, fast) != 0.0}
+    off = {name: 0.0 for name in ("fast_speed_start", "fast_speed_full", *(fast for _, fast in SCHEDULED_FIELDS))}
+    return dataclasses.replace(params, **values, **off)

@@ -38,3 +38,44 @@ def test_h1_stepping_in_place_stays_in_place(in_place):
     assert np.max(np.abs(com[-1, :2] - com[0, :2])) < 0.08
     pelvis_height = in_place.ticks["qpos"][:, 2]
     assert pelvis_height.min() > 0.85  # it stands at 1.00 m; the fall threshold is 0.60 m
+
+
+def test_a_walk_at_speed_gets_its_own_fddp_iterations():
+    """``fast_max_iterations``: an update whose planned |v_x| is at least ``fast_speed`` runs up to that many FDDP
+    iterations (the crossing's budget first); slower ones the preset's."""
+    from wbmpc.errors import ParameterError
+    from wbmpc.walking.controller import WalkingController
+    from wbmpc.walking.controller_config import WalkingControllerConfig
+    from wbmpc.walking.preset import load_walking_preset
+
+    preset = load_walking_preset("h1", {"fast_max_iterations": 4, "fast_speed": 0.8, "crossing_max_iterations": 30})
+    budget = WalkingController(preset)._iteration_budget
+    walking = {"crossing_nodes": 0.0, "negotiation_mode": 0.0}
+    assert budget({**walking, "sequencer_v_x": 0.5}) is None
+    assert budget({**walking, "sequencer_v_x": 0.8}) == budget({**walking, "sequencer_v_x": -1.0}) == 4
+    assert budget({**walking, "crossing_nodes": 5.0, "sequencer_v_x": 1.0}) == 30
+    for bad, message in (({"fast_max_iterations": 4}, r"fast_speed=0.0 m/s must be > 0 with fast_max_iterations=4"),
+                         ({"fast_speed": 0.8}, r"fast_speed=0.8 m/s must be > 0 with fast_max_iterations=0 or "
+                                               r"fast_swing_path_weight=0.0 set \(0 without\)"),
+                         ({"fast_swing_path_weight": -1.0}, r"fast_swing_path_weight=-1.0 must be finite and >= 0"),
+                         ({"fast_max_iterations": 2.5, "fast_speed": 0.8}, r"fast_max_iterations=2.5 must be 0")):
+        with pytest.raises(ParameterError, match=message):
+            WalkingControllerConfig(**bad)
+
+
+def test_a_walk_at_speed_tracks_the_swing_path_of_fast_swing_path_weight():
+    """``fast_swing_path_weight``: from a planned |v_x| of ``fast_speed`` on, the OCP's ``{foot}_swing_path`` terms (the
+    H1 has them for its crossings, off while walking) track every swing's path with that weight."""
+    from wbmpc.walking.controller import WalkingController
+    from wbmpc.walking.preset import load_walking_preset
+
+    def active_weights(options):
+        controller = WalkingController(load_walking_preset("h1", {"negotiation_lookahead": 0.0,
+                                                                  "perception.enabled": False, **options}))
+        log = run_scenario("walk", robot="h1", duration=0.9, velocity_command=(0.3, 0.0, 0.0), ramp_time=0.0,
+                           controller=controller, progress=False)
+        assert log.status == "completed", (log.fall_time, log.fall_reason, log.error)
+        return {item.weight for node in controller.mpc.ocp._swing_path_terms for item in node if item.active}
+
+    assert active_weights({"fast_swing_path_weight": 1e3, "fast_speed": 0.2}) == {1e3}
+    assert active_weights({"fast_swing_path_weight": 1e3, "fast_speed": 0.4}) == set()  # below fast_speed

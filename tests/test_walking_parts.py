@@ -306,8 +306,16 @@ OBSTACLE_FIELDS = {
                    "negotiation_max_iterations", "crossing_max_iterations", "crossing_iterations_hold"},
 }
 
+# the speed schedule (SequencerParams.fast_*, WalkingControllerConfig.fast_max_iterations / fast_speed): off unless a
+# preset schedules its gait by speed (the H1's, for 1.0 m/s); the others keep the defaults
+SPEED_SCHEDULE_FIELDS = {
+    "planner": {"fast_speed_start", "fast_speed_full", "fast_t_nom", "fast_t_min", "fast_double_support", "fast_l_max"},
+    "controller": {"fast_max_iterations", "fast_swing_path_weight", "fast_speed"},
+}
 
-def _assert_preset_states_every_field(robot: str, planner_skip: set[str], obstacles: bool = False):
+
+def _assert_preset_states_every_field(robot: str, planner_skip: set[str], obstacles: bool = False,
+                                      speed_schedule: bool = False):
     """Every field of the tuned sections is written in ``presets/<robot>.toml`` (nothing left to
     code defaults) but the run options and ``planner_skip`` (and the obstacle fields unless ``obstacles``);
     returns the loaded preset."""
@@ -318,9 +326,9 @@ def _assert_preset_states_every_field(robot: str, planner_skip: set[str], obstac
     with (PRESET_DIR / f"{robot}.toml").open("rb") as stream:
         data = tomllib.load(stream)
     skip = {"controller": RUN_OPTIONS, "planner": planner_skip}
-    if not obstacles:
-        skip = {section: skip.get(section, set()) | OBSTACLE_FIELDS.get(section, set())
-                for section in {*skip, *OBSTACLE_FIELDS}}
+    for optional, fields in ((obstacles, OBSTACLE_FIELDS), (speed_schedule, SPEED_SCHEDULE_FIELDS)):
+        if not optional:
+            skip = {section: skip.get(section, set()) | fields.get(section, set()) for section in {*skip, *fields}}
     preset = load_walking_preset(robot)
     for section in ("planner", "ocp", "controller", "fall", "command"):
         fields = {f.name for f in dataclasses.fields(getattr(preset, section))} - skip.get(section, set())
@@ -397,7 +405,7 @@ def test_g1_obstacle_settings_keep_its_walking_and_load_for_its_obstacle_runs():
 
 
 def test_h1_preset_states_every_tuned_number():
-    preset = _assert_preset_states_every_field("h1", LIPM_CORRECTIONS, obstacles=True)
+    preset = _assert_preset_states_every_field("h1", LIPM_CORRECTIONS, obstacles=True, speed_schedule=True)
     # the soles' undetermined squeeze is split by the sole-weighted damping, which the KKT backend solves
     assert preset.ocp.contact_damping > 0 and preset.ocp.contact_damping_moments == "sole"
     assert preset.ocp.dynamics_backend == "kkt"

@@ -76,6 +76,12 @@ _HELP = {
     "sole_half_width": "sole half width [m]",
     "swing_commit_time": "the swing's foothold committed in its last this long [s] (0: re-planned to touchdown)",
     "swing_commit_rate": "lateral speed of the committed swing foothold [m/s]",
+    "fast_speed_start": "speed schedule: |v_x| up to which t_nom, t_min, double_support, l_max hold [m/s]",
+    "fast_speed_full": "speed schedule: |v_x| from which the fast_* values hold [m/s] (0: off)",
+    "fast_t_nom": "t_nom at fast_speed_full [s] (0: not scheduled)",
+    "fast_t_min": "t_min at fast_speed_full [s] (0: not scheduled)",
+    "fast_double_support": "double_support at fast_speed_full [s] (0: not scheduled)",
+    "fast_l_max": "l_max at fast_speed_full [m] (0: not scheduled)",
 }
 
 

@@ -119,6 +119,9 @@ class WalkingController:
         self.mpc = WalkingMPC(robot, preset.ocp, n_nodes=cfg.n_nodes, dt=cfg.node_dt, max_iterations=cfg.max_iterations,
                               horizon_end=cfg.mpc_horizon_end, time_budget=cfg.mpc_time_budget, solver=self.mpc_solver,
                               restart_after_failures=cfg.mpc_restart_after_failures)
+        if cfg.fast_swing_path_weight and not (preset.ocp.swing_path_weight or preset.ocp.obstacle_swing_path_weight):
+            raise ParameterError(f"fast_swing_path_weight={cfg.fast_swing_path_weight} needs the OCP's swing path terms: "
+                                 f"[ocp] swing_path_weight or obstacle_swing_path_weight > 0 (both are 0)")
         self.feedback = FeedbackLaw(self.mpc.ocp.state, cfg.node_dt, cfg.delay_nodes, cfg.interpolate, cfg.feedback,
                                     cfg.computation_delay)
         self.planning.reset(x0, t0, self.command)
@@ -181,9 +184,10 @@ class WalkingController:
                 f"{t + self.reference_stage.horizon:.3f} s: nothing left to follow"
             )
         tic = time.perf_counter()
+        path_weight = cfg.fast_swing_path_weight if cfg.fast_swing_path_weight and self._at_speed(record) else None
         reference = self.reference_stage.sample(plan, t, measured.com[:2], measurement.foot_in_contact,
                                                 planning.swing_liftoff,
-                                                liftoffs=self.mpc.ocp.config.swing_path_weight > 0)
+                                                liftoffs=self.mpc.ocp.config.swing_path_weight > 0 or bool(path_weight))
         if cfg.touchdown_detection == "contact":
             record["touchdown_wait"] = reference.touchdown_wait
         record["crossing_nodes"] = 0.0 if reference.crossings is None else float(np.sum(reference.crossings.index >= 0))
@@ -195,7 +199,8 @@ class WalkingController:
         else:
             solution = self.mpc.update(t, x, reference.schedule, reference.com_terminal, reference.touchdown_depth,
                                        reference.crossings, max_iterations=self._iteration_budget(record, t),
-                                       com_path=reference.com_path, swing_liftoff=reference.swing_liftoff)
+                                       com_path=reference.com_path, swing_liftoff=reference.swing_liftoff,
+                                       swing_path_weight=path_weight)
             ok, status = bool(solution.ok), str(solution.status)
             restart = bool(solution.restart)
             record["mpc_prepared_used"] = float(getattr(self.mpc.problem, "prepared_used", 0))
@@ -228,8 +233,9 @@ class WalkingController:
 
     def _iteration_budget(self, record: dict[str, float], t: float | None = None) -> int | None:
         """FDDP iterations of the update at ``t`` [s]: ``crossing_max_iterations`` while the horizon holds a crossing
-        swing and ``crossing_iterations_hold`` after, else ``negotiation_max_iterations`` while negotiating, else None
-        (``max_iterations``); 0 means unset. An update that sees a crossing records its ``t`` (the hold's start)."""
+        swing and ``crossing_iterations_hold`` after, else ``negotiation_max_iterations`` while negotiating, else
+        ``fast_max_iterations`` at a planned |v_x| of ``fast_speed`` or more, else None (``max_iterations``); 0 means
+        unset. An update that sees a crossing records its ``t`` (the hold's start)."""
         cfg = self.config
         if cfg.crossing_max_iterations:
             if record.get("crossing_nodes", 0.0) > 0:
@@ -240,7 +246,15 @@ class WalkingController:
                 return cfg.crossing_max_iterations
         if cfg.negotiation_max_iterations and record.get("negotiation_mode") == NEGOTIATION:
             return cfg.negotiation_max_iterations
+        if cfg.fast_max_iterations and self._at_speed(record):
+            return cfg.fast_max_iterations
         return None
+
+    def _at_speed(self, record: dict[str, float]) -> bool:
+        """Whether this replan's planned |v_x| (``sequencer_v_x``) is at least ``fast_speed`` (> 0: the fast_* options
+        apply)."""
+        speed = self.config.fast_speed
+        return speed > 0.0 and abs(record.get("sequencer_v_x", 0.0)) >= speed
 
     # ------------------------------------------------------------------ every tick
     def compute(self, t: float, measurement: Measurement) -> np.ndarray:

@@ -163,6 +163,19 @@ class WalkingControllerConfig:
         crossing_iterations_hold: the ``crossing_max_iterations`` budget is kept this long [s] after the last update
             whose horizon held a crossing swing (>= 0; 0: none): the H1, both feet just across with its DCM behind
             them, failed at the first update back on the walking budget.
+        fast_max_iterations: FDDP iterations per MPC update while the planner's forward command |v_x| (heading
+            frame, the user's plus the speed integral's, ``sequencer_v_x`` in the replan record) is at least
+            ``fast_speed``, an integer >= 1, or 0 (``max_iterations`` at every speed). The crossing and negotiation
+            budgets take precedence. A walk at speed changes the OCP more from one update to the next (shorter,
+            quicker steps): the H1 at 1.0 m/s kept its MPC cost 10-100x lower with 4 iterations than with 3
+            (docs/closed_loop.md "The H1 at 1.0 m/s, session 20").
+        fast_swing_path_weight: the OCP's ``swing_path_weight`` (the swing foot's (x, y) along a path from lift-off to
+            its foothold, at rest at both ends with the "smooth" timing) from that speed on, >= 0 (0: the OCP's own at
+            every speed). It needs the OCP's swing path terms (``swing_path_weight`` or ``obstacle_swing_path_weight``
+            > 0). At 1.0 m/s the H1's swing foot, free between lift-off and touchdown, stayed back and then landed 5-7
+            cm short of its foothold, still moving (docs/closed_loop.md "The H1 at 1.0 m/s, session 20").
+        fast_speed: [m/s], > 0 when ``fast_max_iterations`` or ``fast_swing_path_weight`` is set, else 0: the planned
+            |v_x| from which they apply.
     """
 
     n_nodes: int = 100
@@ -202,6 +215,9 @@ class WalkingControllerConfig:
     negotiation_max_iterations: int = 0
     crossing_max_iterations: int = 0
     crossing_iterations_hold: float = 0.0
+    fast_max_iterations: int = 0
+    fast_swing_path_weight: float = 0.0
+    fast_speed: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("mpc_prepare", "interpolate", "feedback"):
@@ -272,6 +288,16 @@ class WalkingControllerConfig:
             value = getattr(self, name)
             if isinstance(value, bool) or not (isinstance(value, int) and value >= 0):
                 raise ParameterError(f"{name}={value!r} must be 0 ({fallback}) or an integer >= 1")
+        fast = self.fast_max_iterations
+        if isinstance(fast, bool) or not (isinstance(fast, int) and fast >= 0):
+            raise ParameterError(f"fast_max_iterations={fast!r} must be 0 (max_iterations) or an integer >= 1")
+        path = self.fast_swing_path_weight
+        if isinstance(path, bool) or not (np.isfinite(path) and path >= 0.0):
+            raise ParameterError(f"fast_swing_path_weight={path!r} must be finite and >= 0 (0: the OCP's own)")
+        speed = self.fast_speed
+        if isinstance(speed, bool) or not (np.isfinite(speed) and (speed > 0.0 if fast or path else speed == 0.0)):
+            raise ParameterError(f"fast_speed={speed!r} m/s must be > 0 with fast_max_iterations={fast} or "
+                                 f"fast_swing_path_weight={path} set (0 without)")
         hold = self.crossing_iterations_hold
         if isinstance(hold, bool) or not (np.isfinite(hold) and 0.0 <= hold <= 10.0):
             raise ParameterError(f"crossing_iterations_hold={hold!r} s must be in [0, 10] s")

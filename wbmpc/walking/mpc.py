@@ -62,17 +62,18 @@ class WalkingMPC:
 
     def update(self, t: float, x_measured, schedule, com_terminal_reference,
                touchdown_depth: float = 0.0, crossings=None, max_iterations: int | None = None,
-               com_path=None, swing_liftoff=None) -> MPCSolution:
+               com_path=None, swing_liftoff=None, swing_path_weight: float | None = None) -> MPCSolution:
         """Write the schedule and the terminal CoM reference (3,) [m, world] into the OCP, then
         re-solve from the measured state; never raises (failures come back with ok=False).
         ``touchdown_depth`` [m], ``crossings`` (swings over obstacles), ``com_path`` (the plan's CoM at the nodes),
-        ``swing_liftoff`` (every swing's lift-off): see :meth:`~wbmpc.walking.ocp.WalkingOCP.update`;
+        ``swing_liftoff`` (every swing's lift-off), ``swing_path_weight`` (this update's):
+        see :meth:`~wbmpc.walking.ocp.WalkingOCP.update`;
         ``max_iterations``: this update's FDDP iterations
         (None: the MPC's own, see :meth:`~wbmpc.ocp.mpc.RecedingHorizonMPC.update`)."""
         return self.receding.update(
             t, x_measured,
             lambda x: self.ocp.update(x, schedule, com_terminal_reference, touchdown_depth, crossings, com_path,
-                                      swing_liftoff),
+                                      swing_liftoff, swing_path_weight),
             max_iterations=max_iterations,
         )
 

@@ -731,7 +731,8 @@ class WalkingOCP:
 
     # ------------------------------------------------------------------ update
     def update(self, x0: np.ndarray, schedule, com_terminal_reference: np.ndarray,
-               touchdown_depth: float = 0.0, crossings=None, com_path=None, swing_liftoff=None) -> None:
+               touchdown_depth: float = 0.0, crossings=None, com_path=None, swing_liftoff=None,
+               swing_path_weight: float | None = None) -> None:
         """Set the initial state, the per-node contacts and references from a schedule.
 
         Args:
@@ -754,6 +755,9 @@ class WalkingOCP:
                 (:func:`wbmpc.walking.reference.swing_liftoffs`), or None: the ``{foot}_swing_path`` terms of
                 ``swing_path_weight`` track :func:`swing_path` from there to the schedule's touchdown (off at
                 NaN rows and with None).
+            swing_path_weight: this update's weight of those terms instead of the config's (None: the config's;
+                e.g. the controller's ``fast_swing_path_weight`` at speed); > 0 needs the terms (the config's
+                ``swing_path_weight`` or ``obstacle_swing_path_weight`` > 0).
         """
         self.problem.set_x0(x0)
         if schedule.n_nodes != self.n_nodes:
@@ -788,16 +792,20 @@ class WalkingOCP:
                         item.active = False
                     if shank is not None:
                         shank.active = False
+        path_weight = cfg.swing_path_weight if swing_path_weight is None else float(swing_path_weight)
+        if path_weight > 0 and self._swing_path_terms is None:
+            raise ParameterError(f"swing_path_weight={path_weight} needs the OCP's swing path terms: built with "
+                                 f"swing_path_weight or obstacle_swing_path_weight > 0 (both are 0)")
         if self._swing_path_terms is not None:  # off until a swing with a known lift-off turns them on
             for node_items in self._swing_path_terms:
                 for item in node_items:
                     item.active = False
-            if cfg.swing_path_weight > 0 and swing_liftoff is not None:
+            if path_weight > 0 and swing_liftoff is not None:
                 liftoff = np.asarray(swing_liftoff, dtype=float)
                 if liftoff.shape != np.shape(schedule.touchdown_position):
                     raise ParameterError(f"swing_liftoff has shape {liftoff.shape}, the schedule's touchdowns "
                                          f"{np.shape(schedule.touchdown_position)}")
-                self._swing_paths(liftoff[:, columns], ~in_contact, np.nan_to_num(phase), touchdown)
+                self._swing_paths(liftoff[:, columns], ~in_contact, np.nan_to_num(phase), touchdown, path_weight)
         heights = self.ground_height + swing_height_reference(np.nan_to_num(phase), apex)
         if crossings is not None:
             crossing_heights = self._clearance(crossings, ~in_contact, np.nan_to_num(phase), touchdown, columns)
@@ -874,14 +882,13 @@ class WalkingOCP:
             self.problem.sync()
 
     def _swing_paths(self, liftoff: np.ndarray, swinging: np.ndarray, phase: np.ndarray,
-                     touchdown: np.ndarray) -> None:
-        """Turn on ``{foot}_swing_path`` (weight ``swing_path_weight``) at every running swing node whose lift-off
+                     touchdown: np.ndarray, weight: float) -> None:
+        """Turn on ``{foot}_swing_path`` (with ``weight``) at every running swing node whose lift-off
         ``liftoff`` (n + 1, n_feet, 2) [m] is known (finite), with the reference :func:`swing_path` from it to the
         schedule's ``touchdown`` (n + 1, n_feet, 2) [m] at the node's phase (both in the OCP's foot order)."""
         cfg = self.config
         known = swinging & np.isfinite(liftoff).all(axis=2)
         path = swing_path(np.nan_to_num(liftoff), np.nan_to_num(touchdown), phase, cfg.swing_path_timing)
-        weight = cfg.swing_path_weight
         for k, j in zip(*np.nonzero(known[:self.n_nodes]), strict=True):
             item = self._swing_path_terms[k][j]
             item.active = True
