@@ -169,7 +169,8 @@ class DcmFootstepPlanner:
         its swing begins, and the swing in progress keeps the decision it lifted off with. With
         ``params.obstacle_double_support`` > 0 (a quasi-static crossing) a crossing swing lifts off after that
         long a double support, and the stance that begins with its touchdown resumes the walk with another such
-        step (``first_resume`` of :meth:`FootstepSequencer.plan`). Empty: the plan without obstacles, bit for bit.
+        step (``first_resume`` of :meth:`FootstepSequencer.plan`); with ``params.obstacle_resume_double_support`` > 0
+        only that resuming step is settled. Empty: the plan without obstacles, bit for bit.
 
         Raises:
             ParameterError: bad input, or a command outside :meth:`command_range` (clip it first).
@@ -215,7 +216,10 @@ class DcmFootstepPlanner:
         if len(obstacles) > 0 and kept is None:
             self._swing_decision = (*key, plan.steps[0].crossing is not None)
         first = plan.steps[0]
-        self._landing = (first.foot, first.crossing is not None and first.settle_dcm is not None)
+        # the stance its touchdown begins resumes the walk with a settled step: after a settled crossing swing, or
+        # after any crossing swing with a resuming settle (the lead's next step crosses: it is no resuming step)
+        self._landing = (first.foot, first.crossing is not None
+                         and (first.settle_dcm is not None or self.params.obstacle_resume_double_support > 0.0))
         return plan
 
     def _committed_lateral(self, t: float, stance: StanceState, key: tuple, swinging: bool) -> tuple | None:

@@ -165,6 +165,11 @@ class FootholdGeometry:
             and the step after it lift off after this long a settling double support
             (``SequencerParams.obstacle_trailing_double_support`` [s]; planned by
             :class:`sequencer.horizon.FootstepSequencer`, the choice of footholds is unchanged); 0: none.
+        resume_double_support: > 0: the step that resumes the walk after the trailing crossing swing (both feet
+            beyond the obstacle) lifts off after this long a settling double support, the trailing swing itself
+            dynamic (``SequencerParams.obstacle_resume_double_support`` [s]; planned by
+            :class:`sequencer.horizon.FootstepSequencer` once the trailing foot is down); 0: none (or
+            ``trailing_double_support``'s).
         aim_duration: the crossing duration T_c,aim [s] the last step before an obstacle aims for (its offset
             (ℓ_c + b_c) exp(-ω T_c,aim), at least the nominal one); 0: the crossing's longest, ``step_duration_max``.
         crossing_drift: κ_c [-] >= 0: a swing over an obstacle ends with the DCM κ_c d further along the heading than
@@ -197,6 +202,7 @@ class FootholdGeometry:
     step_duration_max: float = 0.0
     swing_length_max: float = 0.0
     trailing_double_support: float = 0.0
+    resume_double_support: float = 0.0
     aim_duration: float = 0.0
     approach_distance: float = 0.0
     crossing_drift: float = 0.0

@@ -48,6 +48,7 @@ from wbmpc.errors import ParameterError
 # the obstacle options only the 'exact' backend plans: (SequencerParams field, its value's unit and what it plans)
 EXACT_ONLY_OPTIONS = (("obstacle_double_support", "s (a quasi-static crossing)"),
                       ("obstacle_trailing_double_support", "s"),
+                      ("obstacle_resume_double_support", "s"),
                       ("obstacle_crossing_cop", "m (the crossing's centre of pressure)"),
                       ("obstacle_approach_distance", "m (the even approach)"),
                       ("obstacle_width_min", "m (the narrower steps of a negotiation)"))
@@ -533,6 +534,8 @@ class FootstepSequencer:
         halt = constraints.geometry.halt_double_support if constraints is not None else 0.0
         # a settle before the trailing crossing swing (and the step resuming the walk after it) only
         halt_trailing = constraints.geometry.trailing_double_support if constraints is not None else 0.0
+        # a settle before the step resuming the walk after the trailing crossing swing
+        halt_resume = constraints.geometry.resume_double_support if constraints is not None else 0.0
         resume_next = first_resume  # the step ending the current stance resumes the walk after a crossing
         for _ in range(self._max_steps):
             lift = liftoff if not steps else (vectors[-2][:2] if len(steps) >= 2 else p0_first)
@@ -542,8 +545,8 @@ class FootstepSequencer:
                 p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom, constraints, lift, cross_kept,
                 approach=self._approach(p0x, p0y, yaw, stance, per_stance, l_nom, constraints), lateral_window=window)
             settle, start_qp, own_halt = None, stance_start, 0.0
-            if halt > 0.0 or halt_trailing > 0.0:  # settled crossing swings (obstacle_double_support,
-                # obstacle_trailing_double_support)
+            if halt > 0.0 or halt_trailing > 0.0 or halt_resume > 0.0:  # settled crossing swings and resuming
+                # steps (obstacle_double_support, obstacle_trailing_double_support, obstacle_resume_double_support)
                 c, s = math.cos(yaw), math.sin(yaw)
                 ox, oy = per_stance[other_foot(stance)][1]
                 walking = (p0x + c * ox - s * oy, p0y + s * ox + c * oy)  # the nominal DCM at a stance start
@@ -560,8 +563,9 @@ class FootstepSequencer:
                 if crosses:  # the trailing settle once the lead foot is down (the plan's first step): planned
                     # earlier, it changed the H1's approach to the box or its lead swing (docs/ocp.md)
                     own_halt = halt_trailing if trailing and halt_trailing > 0.0 and not steps else halt
-                else:  # resuming the walk after the trailing crossing
-                    own_halt = halt_trailing if halt_trailing > 0.0 else halt
+                else:  # resuming the walk after the trailing crossing (a resuming settle alone: once the trailing
+                    # foot is down, the resuming step the plan's first)
+                    own_halt = (0.0 if steps else halt_resume) if halt_resume > 0.0 else (halt_trailing or halt)
                 if (crosses or resume_next) and own_halt > 0.0:
                     # before a crossing swing on the stance foot along the heading and across it where the crossing
                     # duration's LIPM carries the DCM to its nominal offset at a nominal width, (b_y + w_nom)
@@ -590,7 +594,7 @@ class FootstepSequencer:
                     px, py, gamma, bx, by, bits, cop = step
                 # quasi-static: the walk resumes after the trailing crossing (the step after the lead crosses too);
                 # a trailing settle alone: after the settled trailing crossing
-                resume_next = crosses if halt > 0.0 else (trailing and own_halt > 0.0)
+                resume_next = crosses if halt > 0.0 else (trailing and (own_halt > 0.0 or halt_resume > 0.0))
             pivots.append((-cop * math.cos(yaw), -cop * math.sin(yaw)) if cop != 0.0 else None)
             duration = math.log(gamma) / omega
             touchdown = max(start_qp + duration, t) if settle is not None else start_qp + duration

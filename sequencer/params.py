@@ -109,6 +109,15 @@ class SequencerParams:
             With ``obstacle_double_support`` = 0 only that swing halts (the lead crossing stays dynamic: a
             halt before the lead swing left the H1 without the DCM velocity to reach beyond the box); with both
             > 0 this one replaces ``obstacle_double_support`` for the trailing swing and the step after it.
+        obstacle_resume_double_support: [s], 0 or in [double_support, 5]: once the trailing crossing swing is down
+            (both feet beyond the obstacle) the step that resumes the walk lifts off this long after that touchdown,
+            with the settled model of ``obstacle_double_support`` (the DCM settling on the walk's stance-start DCM),
+            the crossing swings themselves dynamic: the body, whose DCM the H1's trailing touchdown left behind the
+            feet with the obstacle right behind them, is brought over the feet in a double support instead of a
+            step in place that cannot step back (docs/ocp.md, "The walk after a crossing"). Planned once the
+            trailing foot is down (the resuming step the plan's first): every plan before is the dynamic crossing's.
+            Not with ``obstacle_double_support`` or ``obstacle_trailing_double_support`` (they settle the resuming
+            step themselves). The 'exact' backend only.
         obstacle_aim_duration: the crossing duration [s] the last step before an obstacle aims for, 0 (the
             crossing's longest, max(t_max, obstacle_step_duration_max)) or in [max(t_min,
             obstacle_step_duration_min), that]: that step aims at the DCM offset from which the crossing step
@@ -203,6 +212,7 @@ class SequencerParams:
     obstacle_offset_tolerance: float = 0.03
     obstacle_double_support: float = 0.0
     obstacle_trailing_double_support: float = 0.0
+    obstacle_resume_double_support: float = 0.0
     obstacle_aim_duration: float = 0.0
     obstacle_approach_distance: float = 0.0
     obstacle_crossing_drift: float = 0.0
@@ -283,6 +293,15 @@ class SequencerParams:
                 or self.double_support <= self.obstacle_trailing_double_support <= 5.0):
             raise ParameterError(f"obstacle_trailing_double_support={self.obstacle_trailing_double_support} s must "
                                  f"be 0 or in [double_support={self.double_support} s, 5 s]")
+        if not (self.obstacle_resume_double_support == 0.0
+                or self.double_support <= self.obstacle_resume_double_support <= 5.0):
+            raise ParameterError(f"obstacle_resume_double_support={self.obstacle_resume_double_support} s must "
+                                 f"be 0 or in [double_support={self.double_support} s, 5 s]")
+        if self.obstacle_resume_double_support > 0.0 and (self.obstacle_double_support > 0.0
+                                                          or self.obstacle_trailing_double_support > 0.0):
+            raise ParameterError(f"obstacle_resume_double_support={self.obstacle_resume_double_support} s needs "
+                                 f"obstacle_double_support = obstacle_trailing_double_support = 0 (they settle the "
+                                 f"resuming step themselves)")
         crossing_max = max(self.t_max, self.obstacle_step_duration_max)
         if not (self.obstacle_aim_duration == 0.0 or crossing_min <= self.obstacle_aim_duration <= crossing_max):
             raise ParameterError(f"obstacle_aim_duration={self.obstacle_aim_duration} s must be 0 or in "
@@ -385,6 +404,7 @@ class SequencerParams:
                                 self.obstacle_double_support, max(self.t_max, self.obstacle_step_duration_max),
                                 self.obstacle_swing_length_max,
                                 trailing_double_support=self.obstacle_trailing_double_support,
+                                resume_double_support=self.obstacle_resume_double_support,
                                 aim_duration=self.obstacle_aim_duration,
                                 approach_distance=self.obstacle_approach_distance,
                                 crossing_drift=self.obstacle_crossing_drift,

@@ -339,6 +339,62 @@ def test_a_trailing_settle_halts_the_trailing_crossing_swing_once_the_lead_foot_
     assert unsettled.steps[0].double_support is None and unsettled.steps[0].crossing is not None
 
 
+def test_a_resuming_settle_halts_only_the_step_after_the_trailing_crossing():
+    """obstacle_resume_double_support > 0: every plan until the trailing foot is down is the dynamic crossing's, bit
+    for bit (the lead and the trailing crossing swings at the walking double support, no settle planned after them:
+    planned early, a settle holds the OCP's CoM reference back, docs/ocp.md); from the trailing foot beyond the box
+    the step resuming the walk lifts off after that long a double support, both feet on the ground, the plan's DCM
+    settling on the walk's stance-start DCM; the steps after it walk."""
+    from sequencer.schedule import contact_schedule
+
+    resuming = dataclasses.replace(H1, obstacle_resume_double_support=0.5, horizon=6.0)
+    dynamic = dataclasses.replace(resuming, obstacle_resume_double_support=0.0)
+    box = Obstacle(np.array([1.05, 0.0]), 0.0, 0.1, 1.2, 0.1)
+    stance, measured = _start(DcmFootstepPlanner(dynamic))
+    plan = DcmFootstepPlanner(dynamic).plan(0.0, stance, measured, COMMAND, obstacles=(box,))
+    lead = next(k for k, step in enumerate(plan.steps) if step.crossing is not None)
+    planners = {"dynamic": DcmFootstepPlanner(dynamic), "resuming": DcmFootstepPlanner(resuming)}
+    plans = {name: planner.plan(0.0, stance, measured, COMMAND, obstacles=(box,)) for name, planner in planners.items()}
+    # the first plan: the dynamic crossing's
+    assert plans["resuming"].steps[lead + 1].crossing is not None
+    np.testing.assert_array_equal(plans["resuming"].positions, plan.positions)
+    np.testing.assert_array_equal(plans["resuming"].touchdown_times, plan.touchdown_times)
+    assert all(step.settle_dcm is None and step.double_support is None for step in plans["resuming"].steps)
+    # the stance of the lead foot (the trailing swing next): still dynamic, bit for bit
+    down = plan.steps[lead]
+    lead_stance = StanceState(down.foot, down.position, 0.0, down.touchdown_time,
+                              swing_liftoff=plan.steps[lead - 1].position)
+    at_lead = ReducedState(np.array([*down.dcm_at_touchdown, 0.97]), np.zeros(3), down.dcm_at_touchdown)
+    after_lead = {name: planner.plan(down.touchdown_time, lead_stance, at_lead, COMMAND, obstacles=(box,))
+                  for name, planner in planners.items()}
+    assert after_lead["resuming"].steps[0].crossing is not None
+    np.testing.assert_array_equal(after_lead["resuming"].positions, after_lead["dynamic"].positions)
+    np.testing.assert_array_equal(after_lead["resuming"].touchdown_times, after_lead["dynamic"].touchdown_times)
+    assert all(step.settle_dcm is None for step in after_lead["resuming"].steps)
+    # the trailing foot down beyond the box (the planner saw it land): the resuming step settles
+    swing = after_lead["resuming"].steps[0]
+    trailing_stance = StanceState(swing.foot, swing.position, 0.0, swing.touchdown_time, swing_liftoff=lead_stance.position)
+    at_trailing = ReducedState(np.array([*swing.dcm_at_touchdown, 0.97]), np.zeros(3), swing.dcm_at_touchdown)
+    after = planners["resuming"].plan(swing.touchdown_time, trailing_stance, at_trailing, COMMAND, obstacles=(box,))
+    first = after.steps[0]
+    assert first.crossing is None and first.double_support == 0.5 and first.settle_dcm is not None
+    assert all(step.double_support is None and step.settle_dcm is None for step in after.steps[1:])
+    assert _sole_overlaps(after, box, resuming.foothold_geometry()) == []
+    start, settle_end = first.stance_start_time, first.stance_start_time + 0.5 - resuming.double_support
+    np.testing.assert_allclose(after.dcm_at(np.linspace(0.5 * (start + settle_end), settle_end - 1e-3, 5)),
+                               np.tile(first.settle_dcm, (5, 1)), atol=1e-12)
+    schedule = contact_schedule(after, start + 0.01, 0.02, 50, rounding="nearest")
+    assert schedule.in_contact[schedule.times < start + 0.5 - 0.011].all()
+    # without the option the same stance steps on at the walking double support
+    unsettled = planners["dynamic"].plan(swing.touchdown_time, trailing_stance, at_trailing, COMMAND, obstacles=(box,))
+    assert unsettled.steps[0].double_support is None and unsettled.steps[0].settle_dcm is None
+    for value in (0.05, 6.0, float("nan")):
+        with pytest.raises(ParameterError, match="obstacle_resume_double_support"):
+            dataclasses.replace(H1, obstacle_resume_double_support=value)
+    with pytest.raises(ParameterError, match="obstacle_resume_double_support=0.5 s needs obstacle_double_support"):
+        dataclasses.replace(resuming, obstacle_trailing_double_support=0.6)
+
+
 def _plans_towards_a_box(field: str, values: tuple[float, float]):
     """(box, {value: plan}, the lead crossing's index) of the H1 geometry walking towards a 10 cm box with the planner
     parameter ``field`` at each of ``values``: both plans cross with the same step and keep every step before the
@@ -616,7 +672,7 @@ def test_approach_distance_bad_input():
 
 
 @pytest.mark.parametrize("field, value", [("obstacle_double_support", 0.8), ("obstacle_trailing_double_support", 0.6),
-                                          ("obstacle_approach_distance", 1.0)])
+                                          ("obstacle_resume_double_support", 0.5), ("obstacle_approach_distance", 1.0)])
 def test_an_exact_only_option_with_another_backend_is_a_parameter_error(field, value):
     planner = DcmFootstepPlanner(dataclasses.replace(H1, **{field: value}), backend="osqp")
     stance, measured = _start(planner)

@@ -294,6 +294,7 @@ OBSTACLE_FIELDS = {
     "planner": {"obstacle_margin", "obstacle_approach_margin", "obstacle_step_length_max",
                 "obstacle_step_duration_min", "obstacle_step_duration_max", "obstacle_swing_length_max",
                 "obstacle_offset_tolerance", "obstacle_double_support", "obstacle_trailing_double_support",
+                "obstacle_resume_double_support",
                 "obstacle_aim_duration", "obstacle_approach_distance", "obstacle_crossing_drift",
                 "obstacle_crossing_cop", "obstacle_crossing_offset", "obstacle_lateral_aim_duration", "obstacle_width_min",
                 "sole_front", "sole_rear", "sole_half_width"},

@@ -63,6 +63,8 @@ _HELP = {
     "obstacle_double_support": "quasi-static crossing: double support before a crossing swing [s] (0: off)",
     "obstacle_trailing_double_support": "double support before the trailing crossing swing and the step after it "
                                         "[s] (0: off)",
+    "obstacle_resume_double_support": "double support before the step resuming the walk after the trailing "
+                                      "crossing swing [s] (0: off)",
     "obstacle_aim_duration": "crossing duration the last step before an obstacle aims for [s] (0: the longest)",
     "obstacle_crossing_drift": "DCM gain of a swing over an obstacle per metre of its travel [-] (0: the LIPM's)",
     "obstacle_lateral_aim_duration": "crossing duration [s] whose lateral DCM offset the last step before an "
