@@ -4,9 +4,9 @@ and how well did its perception see the box.
 Definitions (world frame, the box of ``params["obstacle_truth"]``, crossed along its depth axis):
 
 - ``crossed``: at the end of the run the base and both feet (sole centres) are beyond the box's far
-  edge; ``crossing_time`` [s]: the first tick at which they all were (None: never); ``feet_across``: how
-  many feet (sole centres) are beyond the far edge at the last tick (for a fall: 0 before or during the lead
-  crossing, 1 astride the box, 2 after both crossed);
+  edge; ``crossing_time`` [s]: the first tick at which they all were (None: never); ``feet_across``: the
+  most feet (sole centres) beyond the far edge at any tick (for a fall: 0, it fell before or during the lead
+  crossing; 1, astride the box; 2, after both feet had crossed, whatever it fell back onto);
 - ``resting_on_obstacle``: a foot or any other part of the robot (shank) touches the box at the
   last tick (``ticks["obstacle_contact"]``, :mod:`sim.falls`);
 - ``touched``: any robot-box contact during the run; ``first_touch_time`` [s];
@@ -61,7 +61,7 @@ def obstacle_metrics(log) -> dict[str, Any]:
         "obstacle_near_edge": near,
         "crossed": crossed,
         "crossing_time": float(t[np.argmax(beyond)]) if beyond.any() else None,
-        "feet_across": int(np.sum(feet[-1] > far)),
+        "feet_across": int(np.max(np.sum(feet > far, axis=1))),
         "touched": bool(touching.any()),
         "first_touch_time": float(t[np.argmax(touching)]) if touching.any() else None,
         "resting_on_obstacle": resting,

@@ -151,6 +151,8 @@ def test_success_needs_the_base_and_both_feet_beyond_the_far_edge_and_nothing_le
     m = obstacle_metrics(crossed)
     assert m["success"] and m["crossed"] and not m["touched"] and m["crossing_time"] == pytest.approx(0.2)
     assert m["feet_across"] == 2
+    back = synthetic_log([0.5, 1.0, 1.3, 1.1], [[0.5, 0.5], [1.0, 1.4], [1.25, 1.4], [1.1, 1.15]], no_contact, "fell")
+    assert obstacle_metrics(back)["feet_across"] == 2  # both feet had crossed; it fell back over the box
     trailing = synthetic_log([0.5, 1.0, 1.3, 1.5], [[0.5, 0.5], [1.0, 1.4], [1.0, 1.4], [1.1, 1.5]], no_contact)
     assert not obstacle_metrics(trailing)["success"] and obstacle_metrics(trailing)["crossing_time"] is None
     assert obstacle_metrics(trailing)["feet_across"] == 1  # astride: the right foot beyond the far edge (1.2 m)

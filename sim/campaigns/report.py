@@ -199,9 +199,9 @@ def _mean(values: list[Any]) -> float | None:
 
 def _obstacle_summary(spec: CampaignSpec, rows) -> dict[str, Any]:
     """Per variant and box height: success, touched, fell and detected rates, mean crossing time [s],
-    mean |height estimate error| [m], the falls by the feet across the box when they happened
-    (``falls_by_feet_across``: [before, astride, after], from the ``feet_across`` metric; records without it are not
-    counted), and the seed-000 thesis's success rate (None where it has none)."""
+    mean |height estimate error| [m], the falls by the most feet that got across the box before them
+    (``falls_by_feet_across``: [0, 1, 2], from the ``feet_across`` metric: before the box, astride it, after
+    crossing; records without it are not counted), and the seed-000 thesis's success rate (None where it has none)."""
     out: dict[str, Any] = {}
     for variant in spec.variants:
         entries = []
