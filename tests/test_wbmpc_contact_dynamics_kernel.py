@@ -1,5 +1,5 @@
 """The one-call KKT contact dynamics of a node (wbmpc/ocp/kernels/contact_dynamics.py) against the
-three calls it replaces (the actuation, the contact set's calc, the damped KKT solve): the same
+separate calls (the actuation, the contact set's calc, the damped KKT solve): the same
 accelerations, forces and KKT factors to the last bit."""
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from wbmpc.walking.preset import load_walking_preset
 
 
 def _separate_calls(dam, data, x, u):
-    """The dynamics as three calls (the path of a node whose 6D contacts have Kp > 0): (a, forces, M⁻¹, Y)."""
+    """The dynamics as separate calls (the path of a node whose 6D contacts have Kp > 0): (a, forces, M⁻¹, Y)."""
     nq, nc = dam.state.nq, dam.nc
     q, v = x[:nq], x[nq:]
     dam.actuation.calc(data.tau, u)

@@ -250,13 +250,13 @@ class DifferentialActionModelContactFwdDynamics:
             data.active_contacts = self.active_contacts
             data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
         contact_set = self.contact_set
-        if nc and not contact_set.has_positioned_soles:  # torques, contacts and KKT solve in one compiled call
+        self.actuation.calc(data.tau, u)
+        if nc and not contact_set.has_positioned_soles:  # contacts and KKT solve in one compiled call
             contact_set.refresh_references()
-            solved = contact_kkt_dynamics(x, u, pdata.M, pdata.nle, self.contact_damping, self.row_scales,
+            solved = contact_kkt_dynamics(x, pdata.M, pdata.nle, self.contact_damping, self.row_scales,
                                           *contact_set.kernel_arguments,
                                           *data.contact_kkt_arguments(contact_set.kinds.size, nc))
         else:
-            self.actuation.calc(data.tau, u)
             Jc, a0 = data.Jc_all[:nc], data.a0_all[:nc]
             if nc:  # the contacts' Jacobians and drifts (zero joint accelerations), compiled
                 contact_set.calc(data.tree, data.contact_work, q, v, data.zero_acceleration, Jc, a0)

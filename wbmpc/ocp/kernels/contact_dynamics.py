@@ -1,9 +1,9 @@
 """One node's damped KKT contact dynamics in one compiled call (the "kkt" backend's calc for a node
-with contacts): the joint torques from the controls, the contacts' Jacobian and drift
-(:func:`~wbmpc.ocp.kernels.contact.contact_set_calc`) and the damped KKT solve
-(:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_dynamics`), the same kernels in the same order as three
-separate calls, so the same numbers to the last bit; one Python-to-compiled crossing per node
-instead of three, and none of the Python between them (it was a third of an H1 node's calc).
+with contacts): the contacts' Jacobian and drift (:func:`~wbmpc.ocp.kernels.contact.contact_set_calc`)
+and the damped KKT solve (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_dynamics`) under the generalised
+torques the actuation model wrote, the same kernels in the same order as two separate calls, so the
+same numbers to the last bit; one Python-to-compiled crossing per node instead of two, and none of
+the Python between them.
 """
 
 from __future__ import annotations
@@ -15,21 +15,22 @@ from wbmpc.ocp.kernels.kkt import damped_kkt_dynamics
 
 
 @njit(cache=True)
-def contact_kkt_dynamics(x, u, M, nle, mu, scales, kinds, joints, frame_rotations, frame_translations, kp, kd,
+def contact_kkt_dynamics(x, M, nle, mu, scales, kinds, joints, frame_rotations, frame_translations, kp, kd,
                          references, corners, spreads, inverse_arms, tau, zero_acceleration, parents,
                          placement_rotation, placement_translation, axes, idx_q, idx_v, R, p, ov, oa, J, oRf, opf, fJf,
                          velocity, acceleration, Jc, a0, a, force, Minv, factor, factor_inverse, A, Y, G, G_factor,
                          G_factor_inverse, J_scaled, a_free, tau_residual, residual, force_scaled):
     """Accelerations a (nv,) and stacked contact forces ``force`` (nc,) of a free-flyer robot at the
-    state x (nx,) under the controls u (nu,) [N·m] (the last nu joint torques; the free flyer's are 0).
+    state x (nx,) under the generalised torques ``tau`` (nv,) [N, N·m].
 
     Args:
-        x, u: the state and the controls.
+        x: the state.
         M (nv, nv) (upper triangle read), nle (nv,): Pinocchio's ``crba`` and ``nonLinearEffects`` at x.
         mu, scales (nc,): the damping and the row scales of :func:`~wbmpc.ocp.kernels.kkt.damped_kkt_dynamics`.
         kinds ... inverse_arms: the contact set's arrays (:attr:`wbmpc.ocp.contacts.ContactSet.kernel_arguments`),
             Kp terms of 6D contacts excluded (the caller adds them, then solves apart).
-        tau (nv,), zero_acceleration (nv,) zeros, then parents ... acceleration: the node data's buffers
+        tau (nv,): the actuation model's torques (``ActuationFloatingBase.calc``); zero_acceleration (nv,)
+            zeros, then parents ... acceleration: the node data's buffers
             (:meth:`wbmpc.ocp.dynamics.DifferentialActionDataContactFwdDynamics.contact_kkt_arguments`):
             the tree and the contacts' frame kinematics, left for the derivatives, Jc (nc, nv), a0 (nc,),
             a, force, and the KKT buffers (:meth:`~wbmpc.ocp.kernels.kkt.KKTBuffers.dynamics_buffers`).
@@ -37,13 +38,7 @@ def contact_kkt_dynamics(x, u, M, nle, mu, scales, kinds, joints, frame_rotation
     Returns:
         True, or False when M or the contacts' damped Delassus matrix is not positive definite.
     """
-    nv = a.size
-    nq = x.size - nv
-    n_base = nv - u.size
-    for i in range(n_base):
-        tau[i] = 0.0
-    for i in range(u.size):
-        tau[n_base + i] = u[i]
+    nq = x.size - a.size
     contact_set_calc(x[:nq], x[nq:], zero_acceleration, parents, placement_rotation, placement_translation, axes,
                      idx_q, idx_v, R, p, ov, oa, J, kinds, joints, frame_rotations, frame_translations, kp, kd,
                      references, corners, spreads, inverse_arms, oRf, opf, fJf, velocity, acceleration, Jc, a0)
