@@ -95,6 +95,14 @@ fell backwards with the trailing foot beyond the box, where it cannot step back.
 DCM to get there), and the last step before the obstacle at the offset from which it does; the DCM check ("cross,
 unless the DCM cannot carry it") still compares with the crossing's aim without Δb.
 
+**The landing room.** The lead crossing lands on the far side's bound b (the QP's nominal step is shorter), and
+the trailing foot can then land no further back than the lead foot: the box, behind both, bounds it. A whole-body
+robot whose DCM lags behind the lead foot (the H1's by 5-9 cm after the trailing swing, measured) then stands with
+both feet at the bound, the DCM behind the soles and every next foothold pinned there: it fell back over the box.
+With ``obstacle_landing_room`` r > 0 the lead crossing lands at least min(b + r, its length bound) beyond its
+stance (forwards; backwards the mirror), and the last step before the obstacle aims at the offset the crossing of
+that length needs: the trailing foot can land up to r behind the lead foot, under a lagging DCM.
+
 **The lateral aim.** A crossing step lasts longer than a walking step (T_c against t_nom), and the lateral DCM
 offset it starts from grows by exp(ω T_c), not exp(ω t_nom): from the nominal offset b_y,nom the crossing spreads
 the feet (on the H1 a 0.6 s crossing lands 0.2 m wider than the nominal width, and the QP's lateral cost bounded
@@ -181,6 +189,9 @@ class FootholdGeometry:
         crossing_offset: Δb [m] >= 0: the lead crossing aims at the nominal DCM offset along the heading plus Δb at
             its touchdown, the last step before the obstacle at the offset that reaches it ("The crossing's momentum"
             in the module docstring); 0: the nominal offset.
+        landing_room: r [m] >= 0: the lead crossing lands at least r beyond the obstacle's far bound, within its length
+            bound, and the last step before it aims for that crossing ("The landing room" in the module docstring);
+            0: on the bound.
         lateral_aim_fraction: the last step before an obstacle and the lead crossing aim at this fraction of the
             nominal lateral DCM offset, exp(-ω (T_lat - t_nom)) in (0, 1] ("The lateral aim" in the module docstring);
             1: the nominal.
@@ -209,6 +220,12 @@ class FootholdGeometry:
     lateral_aim_fraction: float = 1.0
     crossing_cop: float = 0.0
     crossing_offset: float = 0.0
+    landing_room: float = 0.0
+
+    def landing_length(self, length: float) -> float:
+        """|ℓ| [m] of a lead crossing whose far bound is ``length`` [m] (>= 0) along the direction of travel:
+        ``length`` + ``landing_room``, at most ``step_length_max`` (never below ``length``)."""
+        return max(length, min(length + self.landing_room, self.step_length_max))
 
 
 @dataclass(frozen=True, slots=True)
@@ -466,12 +483,12 @@ class FootholdConstraints:
             along = [((l_lo, min(l_hi, a), w_lo, w_hi, t_lo, t_hi), None, False),
                      ((max(l_lo, b), l_hi, w_lo, w_hi, t_lo, t_hi), None, False)]
         elif ahead:  # beyond (crossing, when walking forwards) or before
-            along = [((max(l_lo, b), max(l_hi, reach), w_lo, w_hi, t_cross, t_cross_hi), None, True)] \
-                if step_length_nominal > 0.0 else []
+            along = [((max(l_lo, self.geometry.landing_length(b)), max(l_hi, reach), w_lo, w_hi, t_cross, t_cross_hi),
+                       None, True)] if step_length_nominal > 0.0 else []
             along.append(((l_lo, min(l_hi, a), w_lo, w_hi, t_lo, t_hi), prepare, False))
         else:  # behind: beyond it backwards (walking backwards), or stay
-            along = [((min(l_lo, -reach), min(l_hi, a), w_lo, w_hi, t_cross, t_cross_hi), None, True)] \
-                if step_length_nominal < 0.0 else []
+            along = [((min(l_lo, -reach), min(l_hi, -self.geometry.landing_length(-a)), w_lo, w_hi, t_cross,
+                       t_cross_hi), None, True)] if step_length_nominal < 0.0 else []
             along.append(((max(l_lo, b), l_hi, w_lo, w_hi, t_lo, t_hi), prepare, False))
         beside = [(l_lo, l_hi, w_lo, min(w_hi, c), t_lo, t_hi), (l_lo, l_hi, max(w_lo, d), w_hi, t_lo, t_hi)]
         return ([option for option in along if self._feasible(option[0])],
@@ -547,12 +564,14 @@ class FootholdConstraints:
     def last_step_aim(self, crossing_length: float, sign: float, step_length_nominal: float,
                       offset_nominal: float, travel: float = 0.0) -> float:
         """b_x [m], heading frame: the DCM offset the last step before an obstacle aims at, from which the crossing
-        step of ``crossing_length`` [m] reaches its own aim (b_c, or without a travel bound the nominal offset plus
+        step of ``crossing_length`` [m] to the far bound (plus its landing room) reaches its own aim (b_c, or without a travel bound the nominal offset plus
         the crossing's momentum sign Δb)
         within T_c,aim, and at least the nominal offset: sign max((ℓ_c + δ + sign b_c - κ_c d_c) exp(-ω T_c,aim) - δ,
         sign b_nom), d_c = ``travel`` [m] the crossing swing's travel from its lift-off (the crossing drift), δ the
         crossing's centre of pressure behind its stance foothold (``crossing_cop``)."""
         decay = math.exp(-self.omega * (self.geometry.aim_duration or self.geometry.step_duration_max))
+        room = self.geometry.landing_length(crossing_length) - crossing_length  # the landing room
+        crossing_length, travel = crossing_length + room, abs(travel) + room if travel else travel
         target = self._crossing_aim(crossing_length, sign, step_length_nominal, offset_nominal) \
             if self.geometry.swing_length_max > 0.0 else offset_nominal + sign * self.geometry.crossing_offset
         drift = self.geometry.crossing_drift * abs(travel)

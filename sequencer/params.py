@@ -141,6 +141,10 @@ class SequencerParams:
             aims at the nominal DCM offset along the heading plus Δb at its touchdown, and the last step before the
             obstacle at the offset that reaches it ("The crossing's momentum" in :mod:`sequencer.footholds`): the
             body keeps moving over the lead foot through the trailing swing; 0: the nominal offset.
+        obstacle_landing_room: r [m] in [0, 0.5): the lead crossing lands at least r beyond the obstacle's far bound
+            (within ``obstacle_step_length_max``), so that the trailing foot can land behind it, under a DCM that
+            lags the lead foot, where the passed obstacle bounds every foothold ("The landing room" in
+            :mod:`sequencer.footholds`); the last step before the obstacle aims for that longer crossing. 0: on the bound.
         obstacle_lateral_aim_duration: T_lat [s], 0 (off) or in [t_nom, max(t_max, obstacle_step_duration_max)]:
             the last step before an obstacle and the lead crossing aim at the lateral DCM offset
             b_y,nom exp(-ω (T_lat - t_nom)) instead of b_y,nom, the one from which a crossing step lasting T_lat ends at
@@ -220,6 +224,7 @@ class SequencerParams:
     obstacle_crossing_cop: float = 0.0
     obstacle_crossing_offset: float = 0.0
     obstacle_width_min: float = 0.0
+    obstacle_landing_room: float = 0.0
     swing_commit_time: float = 0.0
     swing_commit_rate: float = 0.0
     fast_speed_start: float = 0.0
@@ -319,6 +324,9 @@ class SequencerParams:
         if not (0.0 <= self.obstacle_crossing_offset < 0.3):
             raise ParameterError(f"obstacle_crossing_offset={self.obstacle_crossing_offset} m must be in [0, 0.3) m "
                                  f"(0: the lead crossing aims at the nominal DCM offset)")
+        if not (0.0 <= self.obstacle_landing_room < 0.5):
+            raise ParameterError(f"obstacle_landing_room={self.obstacle_landing_room} m must be in [0, 0.5) m "
+                                 f"(0: the lead crossing lands on the obstacle's far bound)")
         if not (0.0 <= self.swing_commit_time <= self.t_max):
             raise ParameterError(f"swing_commit_time={self.swing_commit_time} s must be in [0 (off), t_max={self.t_max} s]")
         if not (0.0 <= self.swing_commit_rate <= 10.0):
@@ -410,6 +418,7 @@ class SequencerParams:
                                 crossing_drift=self.obstacle_crossing_drift,
                                 crossing_cop=self.obstacle_crossing_cop,
                                 crossing_offset=self.obstacle_crossing_offset,
+                                landing_room=self.obstacle_landing_room,
                                 lateral_aim_fraction=math.exp(-self.omega * (self.obstacle_lateral_aim_duration - self.t_nom))
                                 if self.obstacle_lateral_aim_duration > 0.0 else 1.0)
 

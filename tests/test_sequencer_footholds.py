@@ -502,6 +502,51 @@ def test_the_lead_crossing_aims_at_its_momentum_beyond_the_nominal_offset():
         dataclasses.replace(H1, obstacle_crossing_offset=0.3)
 
 
+def test_the_lead_crossing_lands_with_room_beyond_the_far_bound_within_its_length_bound():
+    """obstacle_landing_room r: the lead crossing lands r beyond the box's far bound (b = far side + margin + heel),
+    at most its length bound from the stance, and never short of b; the rest of the crossing is planned as before
+    (the trailing swing still passes over the box, every sole outside it), and r = 0 is the plan on the bound, bit
+    for bit."""
+    box = Obstacle(np.array([0.7425, 0.0]), 0.0, 0.1, 1.2, 0.1)  # far side 0.7925 m
+    stance = StanceState("left", np.array([0.45, 0.203]), 0.0, 0.0, swing_liftoff=np.array([0.33, -0.203]))
+    dcm = stance.position + np.array([0.06, -0.09])
+    measured = ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm)
+    params = dataclasses.replace(H1, obstacle_crossing_cop=0.05)
+    bound = 0.7925 + H1.obstacle_margin + H1.sole_rear  # the lead foothold's far bound along x [m]
+    reach = stance.position[0] + max(H1.l_max, H1.obstacle_step_length_max)
+    plans = {room: DcmFootstepPlanner(dataclasses.replace(params, obstacle_landing_room=room)).plan(
+        0.0, stance, measured, COMMAND, obstacles=(box,)) for room in (0.0, 0.08, 0.3)}
+    lead = {room: plan.steps[0] for room, plan in plans.items()}
+    assert all(step.crossing is not None for step in lead.values())
+    assert lead[0.0].position[0] == pytest.approx(bound, abs=1e-9)
+    assert lead[0.08].position[0] == pytest.approx(bound + 0.08, abs=1e-9)
+    assert lead[0.3].position[0] == pytest.approx(reach, abs=1e-9) and reach < bound + 0.3
+    for room, plan in plans.items():
+        assert plan.steps[1].crossing is not None  # the trailing swing passes over the box
+        assert _sole_overlaps(plan, box, H1.foothold_geometry()) == []
+    default = DcmFootstepPlanner(params).plan(0.0, stance, measured, COMMAND, obstacles=(box,))
+    for step, other in zip(default.steps, plans[0.0].steps):
+        np.testing.assert_array_equal(step.position, other.position)
+        assert step.touchdown_time == other.touchdown_time
+    with pytest.raises(ParameterError, match=r"obstacle_landing_room=0.5 m must be in \[0, 0.5\) m"):
+        dataclasses.replace(H1, obstacle_landing_room=0.5)
+
+
+def test_the_last_step_before_the_box_aims_for_the_crossing_with_its_landing_room():
+    """The last step before the box aims at the DCM offset from which the longer crossing (to the far bound plus the
+    landing room) reaches its aim: further ahead than without room, as a crossing that much longer asks."""
+    geometry = H1.foothold_geometry()
+    with_room = dataclasses.replace(geometry, landing_room=0.1)
+    from sequencer.footholds import FootholdConstraints
+    plain, roomy = (FootholdConstraints((), g, H1.omega) for g in (geometry, with_room))
+    nominal = 0.05
+    assert roomy.last_step_aim(0.5, 1.0, 0.12, nominal) == pytest.approx(plain.last_step_aim(0.6, 1.0, 0.12, nominal))
+    assert roomy.last_step_aim(0.5, 1.0, 0.12, nominal) > plain.last_step_aim(0.5, 1.0, 0.12, nominal)
+    top = geometry.step_length_max  # the room ends at the crossing's length bound
+    assert roomy.last_step_aim(top - 0.02, 1.0, 0.12, nominal) == pytest.approx(
+        plain.last_step_aim(top, 1.0, 0.12, nominal))
+
+
 def test_a_negotiation_narrows_the_inner_width_bound_so_the_last_step_reaches_its_lateral_aim():
     """obstacle_width_min: with the DCM far across the heading from the left stance, the last step before the box is
     held by the walk's 0.30 m inner width bound 2.4 cm off the lateral aim of a 0.7 s crossing (a lateral DCM offset of

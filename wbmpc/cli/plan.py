@@ -72,6 +72,7 @@ _HELP = {
     "obstacle_crossing_cop": "bound of a crossing swing's centre of pressure from its stance foothold along the "
                              "heading [m] (0: the foothold)",
     "obstacle_crossing_offset": "DCM offset the lead crossing aims at beyond the nominal one [m] (0: the nominal)",
+    "obstacle_landing_room": "the lead crossing lands at least this beyond the obstacle's far bound [m] (0: on it)",
     "obstacle_approach_distance": "even steps to the last foothold before an obstacle within this distance [m] "
                                   "(0: greedy)",
     "obstacle_width_min": "inner width bound of every step while obstacles are planned around [m] (0: the walk's)",
