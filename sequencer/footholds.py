@@ -564,7 +564,8 @@ class FootholdConstraints:
     def last_step_aim(self, crossing_length: float, sign: float, step_length_nominal: float,
                       offset_nominal: float, travel: float = 0.0) -> float:
         """b_x [m], heading frame: the DCM offset the last step before an obstacle aims at, from which the crossing
-        step of ``crossing_length`` [m] to the far bound (plus its landing room) reaches its own aim (b_c, or without a travel bound the nominal offset plus
+        step of ``crossing_length`` [m] to the far bound (plus its landing room) reaches its own aim (b_c, or without a
+        travel bound the nominal offset plus
         the crossing's momentum sign Δb)
         within T_c,aim, and at least the nominal offset: sign max((ℓ_c + δ + sign b_c - κ_c d_c) exp(-ω T_c,aim) - δ,
         sign b_nom), d_c = ``travel`` [m] the crossing swing's travel from its lift-off (the crossing drift), δ the

@@ -521,7 +521,7 @@ def test_the_lead_crossing_lands_with_room_beyond_the_far_bound_within_its_lengt
     assert lead[0.0].position[0] == pytest.approx(bound, abs=1e-9)
     assert lead[0.08].position[0] == pytest.approx(bound + 0.08, abs=1e-9)
     assert lead[0.3].position[0] == pytest.approx(reach, abs=1e-9) and reach < bound + 0.3
-    for room, plan in plans.items():
+    for plan in plans.values():
         assert plan.steps[1].crossing is not None  # the trailing swing passes over the box
         assert _sole_overlaps(plan, box, H1.foothold_geometry()) == []
     default = DcmFootstepPlanner(params).plan(0.0, stance, measured, COMMAND, obstacles=(box,))
