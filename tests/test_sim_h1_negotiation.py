@@ -36,6 +36,11 @@ def test_h1_negotiates_a_perceived_box_from_the_first_replan(approach):
     replans = log.replans
     assert np.all(replans["negotiation_mode"] == NEGOTIATION) and replans["negotiation_switch"][0] == 1.0
     assert np.all(replans["obstacles_planned"] == 1.0)
+    # the planned box as the planner saw it, along the stance heading (here the true box, crossed along world x)
+    truth = box.obstacle()
+    np.testing.assert_allclose(replans["obstacle_near"], truth.center[0] - truth.depth / 2, atol=0.02)
+    np.testing.assert_allclose(replans["obstacle_far"], truth.center[0] + truth.depth / 2, atol=0.02)
+    np.testing.assert_allclose(replans["obstacle_height"], box.height)
     assert np.all(replans["sequencer_v_x"] <= preset.controller.negotiation_speed_max + 1e-12)
     assert replans["crossing_nodes"].max() > 0  # the OCP's horizon held crossing swings
 

@@ -18,6 +18,7 @@ the lift-off point of the swinging foot (``StanceState.swing_liftoff``: the prev
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from typing import Any
 
@@ -234,6 +235,7 @@ class PlanningStage:
             "negotiation_switch": float(mode_switch),
             "obstacles_perceived": float(len(obstacles)),
             "obstacles_planned": float(len(planned_obstacles)),
+            **_nearest_obstacle_extent(planned_obstacles, stance.position, stance.yaw),
         }
         if self.measure_angular_momentum:  # about the planned contact: the sole's point on the ground under it
             contact = np.array([*self.slide.plan_position, feet[stance_index, 2]])
@@ -278,3 +280,18 @@ class PlanningStage:
         self.planner = planner
         self._range = planner.command_range()
         self._planner_after = None
+
+
+def _nearest_obstacle_extent(obstacles, stance_position, stance_yaw: float) -> dict[str, float]:
+    """The planned obstacle nearest the stance as the planner sees it, for the replan log: its footprint's near and
+    far ends along the stance heading ``obstacle_near`` / ``obstacle_far`` [m] (world coordinates along the heading
+    of ``stance_yaw`` [rad], the same axis as the stance's (x cos + y sin)) and ``obstacle_height`` [m]; NaN without
+    one. What a perceived box was when a plan was made (the estimate changes as the robot approaches it)."""
+    if not obstacles:
+        return {"obstacle_near": np.nan, "obstacle_far": np.nan, "obstacle_height": np.nan}
+    heading = np.array([math.cos(stance_yaw), math.sin(stance_yaw)])
+    along = [obstacle.footprint_corners() @ heading for obstacle in obstacles]
+    stance_along = float(np.asarray(stance_position, dtype=float)[:2] @ heading)
+    nearest = min(range(len(obstacles)), key=lambda k: abs(float(along[k].mean()) - stance_along))
+    return {"obstacle_near": float(along[nearest].min()), "obstacle_far": float(along[nearest].max()),
+            "obstacle_height": float(obstacles[nearest].height)}
