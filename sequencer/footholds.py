@@ -409,7 +409,9 @@ class FootholdConstraints:
         foot lifted off (world (x, y) [m], None: unknown), for the crossing duration; the sign of
         ``step_length_nominal`` [m] (the nominal step along the heading) is the direction of travel: only
         an obstacle in that direction is crossed (0: stepping in place crosses none). ``cross`` keeps a decision
-        already made (the swing in progress: True crosses when one step reaches beyond, whatever the DCM;
+        already made (the swing in progress: True crosses when one step reaches beyond, whatever the DCM, also
+        when the step's own foothold stops short of the obstacle (the DCM fallen back: the H1's at the last step's
+        touchdown turned a planned crossing into a step in place in the double support before it, and fell);
         False stays before); None decides.
 
         Raises:
@@ -424,6 +426,8 @@ class FootholdConstraints:
         for _ in range(2 * len(boxes) + 2):
             hit = next((box for box in boxes if box[0] < candidate.dx < box[1] and box[2] < candidate.dy < box[3]),
                        None)
+            if hit is None and cross and not changed:  # a kept crossing, whatever the step's own foothold
+                hit = self._kept_crossing(boxes, candidate, sign)
             if hit is None:
                 if lengthened or not self._crosses(p0, yaw, candidate, liftoff):
                     return candidate, changed
@@ -461,6 +465,15 @@ class FootholdConstraints:
             changed = True
         raise FootholdInfeasible(f"the footholds of the stance p0={p0.tolist()} m did not settle outside the "
                                  f"{len(boxes)} obstacles")
+
+    @staticmethod
+    def _kept_crossing(boxes, candidate: StepCandidate, sign: float):
+        """The box (a, b, c, d) a kept crossing decision is about when ``candidate`` stops short of every box: the
+        nearest one ahead in the direction of travel ``sign`` (its middle ahead, the foothold at or before its near
+        bound) across the foothold's lateral position; None: no such box."""
+        ahead = [box for box in boxes if sign * (box[0] + box[1]) > 0.0 and box[2] < candidate.dy < box[3]
+                 and (candidate.dx <= box[0] if sign > 0.0 else candidate.dx >= box[1])]
+        return min(ahead, key=lambda box: abs(box[0] if sign > 0.0 else box[1]), default=None)
 
     def _options(self, box, bounds: StepBounds, step_length_nominal: float,
                  offset_nominal: float) -> tuple[list, list]:
