@@ -208,6 +208,13 @@ def test_a_planned_crossing_is_kept_and_the_swing_keeps_its_decision():
     assert late.crossing is None and late.position[0] + H1.sole_front <= 0.6925 - H1.obstacle_margin + 1e-9
     assert first_step(planner, 0.05, 0.3).crossing is not None  # the DCM ran on in the double support: it crosses
     assert first_step(planner, 0.08, 0.06).crossing is not None  # and keeps crossing when the DCM falls back
+    # ... also behind the stance foot, where the step's own foothold (a step back) stops short of the box: the
+    # decision is about the box ahead, not about where that foothold is (seed 33 at 10 cm: stepped in place, fell)
+    assert DcmFootstepPlanner(H1).plan(0.0, stance, ReducedState(np.array([*(stance.position + [-0.05, -0.09]), 0.97]),
+                                                                 np.zeros(3), stance.position + [-0.05, -0.09]),
+                                       COMMAND, obstacles=(box,)).steps[0].position[0] < stance.position[0]
+    fallen = first_step(planner, 0.09, -0.05)
+    assert fallen.crossing is not None and fallen.position[0] - H1.sole_rear >= 0.7925 + H1.obstacle_margin - 1e-9
     assert first_step(planner, 0.2, 0.06).crossing is not None  # in the swing too
     planner = DcmFootstepPlanner(H1)
     assert first_step(planner, 0.12, 0.06).crossing is None  # lifted off before the box
