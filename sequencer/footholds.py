@@ -103,6 +103,14 @@ With ``obstacle_landing_room`` r > 0 the lead crossing lands at least min(b + r,
 stance (forwards; backwards the mirror), and the last step before the obstacle aims at the offset the crossing of
 that length needs: the trailing foot can land up to r behind the lead foot, under a lagging DCM.
 
+**The far margin.** Both crossing feet land beyond the far side, the trailing one no further back than the lead
+foot's bound; a whole-body robot whose DCM lags (the H1's 9 cm behind both soles at the trailing touchdown, seed 6)
+stands there with the DCM behind its heels. ``far_margin`` grows the side further along the heading by less than
+``obstacle_margin`` (by ``obstacle_far_margin_reduction`` less; only less: the side moved back by the difference
+still bounds a turned box's): the lead crossing that much shorter and both feet that much nearer the box, nearer
+the DCM. The side facing the stance keeps its margin (the last step before the obstacle is the one a foot
+overshoots).
+
 **The lateral aim.** A crossing step lasts longer than a walking step (T_c against t_nom), and the lateral DCM
 offset it starts from grows by exp(ω T_c), not exp(ω t_nom): from the nominal offset b_y,nom the crossing spreads
 the feet (on the H1 a 0.6 s crossing lands 0.2 m wider than the nominal width, and the QP's lateral cost bounded
@@ -189,6 +197,8 @@ class FootholdGeometry:
         crossing_offset: Δb [m] >= 0: the lead crossing aims at the nominal DCM offset along the heading plus Δb at
             its touchdown, the last step before the obstacle at the offset that reaches it ("The crossing's momentum"
             in the module docstring); 0: the nominal offset.
+        far_margin: the footprint's side further along the heading grown by this instead of ``margin`` [m], in
+            [0, margin] ("The far margin" in the module docstring); None: ``margin``.
         landing_room: r [m] >= 0: the lead crossing lands at least r beyond the obstacle's far bound, within its length
             bound, and the last step before it aims for that crossing ("The landing room" in the module docstring);
             0: on the bound.
@@ -221,6 +231,7 @@ class FootholdGeometry:
     crossing_cop: float = 0.0
     crossing_offset: float = 0.0
     landing_room: float = 0.0
+    far_margin: float | None = None
 
     def landing_length(self, length: float) -> float:
         """|ℓ| [m] of a lead crossing whose far bound is ``length`` [m] (>= 0) along the direction of travel:
@@ -287,6 +298,8 @@ def forbidden_box(obstacle: Obstacle, p0, yaw: float, geometry: FootholdGeometry
         if polygon.shape[0] == 0:
             return (math.inf, math.inf, math.inf, math.inf)
     a, b = float(polygon[:, 0].min()) - geometry.sole_front, float(polygon[:, 0].max()) + geometry.sole_rear
+    if geometry.far_margin is not None:  # the far side's own margin: the grown side moved back by the difference
+        b -= geometry.margin - geometry.far_margin
     if a + b > 0.0:  # the near side is the one facing the stance
         a -= geometry.approach_margin
     else:

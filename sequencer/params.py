@@ -75,6 +75,11 @@ class SequencerParams:
             (:mod:`sequencer.footholds`: no sole lands within it of an obstacle).
         obstacle_approach_margin: the obstacle's near side (facing the stance along the heading) grown by this
             much more for the footholds [m], >= 0: the last step before it is the one a foot overshoots.
+        obstacle_far_margin_reduction: [m] in [0, obstacle_margin]: the footprint's side further along the stance's
+            heading (the far side of an obstacle crossed walking forwards, where both crossing feet land) grown by
+            ``obstacle_margin`` minus this: the lead crossing that much shorter, and the trailing foot can land that
+            much further back, under a DCM that lags the lead foot ("The far margin" in :mod:`sequencer.footholds`).
+            0: ``obstacle_margin`` on every side.
         obstacle_step_length_max: length bound [m], > 0, of a step that goes beyond an obstacle (the planner
             uses max(l_max, this): the crossing step may be longer than a walking one).
         obstacle_step_duration_min: duration lower bound [s] of a step whose swing passes over an obstacle
@@ -209,6 +214,7 @@ class SequencerParams:
     stance_drift: float = 0.0
     obstacle_margin: float = 0.05
     obstacle_approach_margin: float = 0.0
+    obstacle_far_margin_reduction: float = 0.0
     obstacle_step_length_max: float = 0.3
     obstacle_step_duration_min: float = 0.0
     obstacle_step_duration_max: float = 0.0
@@ -278,6 +284,9 @@ class SequencerParams:
                      "sole_rear", "sole_half_width"):
             if getattr(self, name) < 0:
                 raise ParameterError(f"{name}={getattr(self, name)} m must be >= 0")
+        if not (0.0 <= self.obstacle_far_margin_reduction <= self.obstacle_margin):
+            raise ParameterError(f"obstacle_far_margin_reduction={self.obstacle_far_margin_reduction} m must be in "
+                                 f"[0, obstacle_margin={self.obstacle_margin} m]")
         if not self.obstacle_step_length_max > 0:
             raise ParameterError(f"obstacle_step_length_max={self.obstacle_step_length_max} m must be > 0")
         crossing_longest = max(self.t_max, self.obstacle_step_duration_max)
@@ -419,6 +428,8 @@ class SequencerParams:
                                 crossing_cop=self.obstacle_crossing_cop,
                                 crossing_offset=self.obstacle_crossing_offset,
                                 landing_room=self.obstacle_landing_room,
+                                far_margin=self.obstacle_margin - self.obstacle_far_margin_reduction
+                                if self.obstacle_far_margin_reduction > 0.0 else None,
                                 lateral_aim_fraction=math.exp(-self.omega * (self.obstacle_lateral_aim_duration - self.t_nom))
                                 if self.obstacle_lateral_aim_duration > 0.0 else 1.0)
 

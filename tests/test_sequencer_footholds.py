@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from sequencer.dcm_planner import DcmFootstepPlanner
-from sequencer.footholds import crossing_of, rectangles_overlap, sole_corners
+from sequencer.footholds import crossing_of, forbidden_box, rectangles_overlap, sole_corners
 from sequencer.obstacles import Obstacle
 from sequencer.params import SequencerParams
 from sequencer.planner import ReducedState, StanceState, VelocityCommand
@@ -537,6 +537,34 @@ def test_the_lead_crossing_lands_with_room_beyond_the_far_bound_within_its_lengt
         assert step.touchdown_time == other.touchdown_time
     with pytest.raises(ParameterError, match=r"obstacle_landing_room=0.5 m must be in \[0, 0.5\) m"):
         dataclasses.replace(H1, obstacle_landing_room=0.5)
+
+
+def test_the_far_margin_brings_both_crossing_feet_nearer_the_box():
+    """obstacle_far_margin_reduction: the box's far side (further along the heading) grown by obstacle_margin minus
+    it: the lead crossing lands that much nearer the box (on the new bound), the side facing the stance keeps its
+    margin (the last step before the box is unchanged), and every sole stays outside the box grown by the far margin
+    on that side; a turned box's bound moves back by the same amount."""
+    box = Obstacle(np.array([0.7425, 0.0]), 0.0, 0.1, 1.2, 0.1)  # far side 0.7925 m
+    stance = StanceState("left", np.array([0.45, 0.203]), 0.0, 0.0, swing_liftoff=np.array([0.33, -0.203]))
+    dcm = stance.position + np.array([0.06, -0.09])
+    measured = ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm)
+    params = dataclasses.replace(H1, obstacle_crossing_cop=0.05, obstacle_margin=0.08)
+    plans = {cut: DcmFootstepPlanner(dataclasses.replace(params, obstacle_far_margin_reduction=cut)).plan(
+        0.0, stance, measured, COMMAND, obstacles=(box,)) for cut in (0.0, 0.04)}
+    lead = {cut: plan.steps[0] for cut, plan in plans.items()}
+    assert all(step.crossing is not None for step in lead.values())
+    assert lead[0.0].position[0] == pytest.approx(0.7925 + 0.08 + H1.sole_rear, abs=1e-9)
+    assert lead[0.04].position[0] == pytest.approx(0.7925 + 0.04 + H1.sole_rear, abs=1e-9)
+    far_only = dataclasses.replace(params.foothold_geometry(), margin=0.04)  # the whole box grown by the far margin
+    assert _sole_overlaps(plans[0.04], box, far_only) == []
+    geometry = dataclasses.replace(params, obstacle_far_margin_reduction=0.04).foothold_geometry()
+    for yaw in (0.0, 0.3):
+        turned = Obstacle(box.center, yaw, box.depth, box.width, box.height)
+        a0, b0, c0, d0 = forbidden_box(turned, stance.position, 0.0, params.foothold_geometry(), (-0.6, -0.22))
+        a, b, c, d = forbidden_box(turned, stance.position, 0.0, geometry, (-0.6, -0.22))
+        assert (a, c, d) == (a0, c0, d0) and b == pytest.approx(b0 - 0.04)
+    with pytest.raises(ParameterError, match=r"obstacle_far_margin_reduction=0.09 m must be in \[0, obstacle_margin"):
+        dataclasses.replace(params, obstacle_far_margin_reduction=0.09)
 
 
 def test_the_last_step_before_the_box_aims_for_the_crossing_with_its_landing_room():

@@ -73,6 +73,7 @@ _HELP = {
                              "heading [m] (0: the foothold)",
     "obstacle_crossing_offset": "DCM offset the lead crossing aims at beyond the nominal one [m] (0: the nominal)",
     "obstacle_landing_room": "the lead crossing lands at least this beyond the obstacle's far bound [m] (0: on it)",
+    "obstacle_far_margin_reduction": "an obstacle's side further along the heading grown by obstacle_margin minus this [m]",
     "obstacle_approach_distance": "even steps to the last foothold before an obstacle within this distance [m] "
                                   "(0: greedy)",
     "obstacle_width_min": "inner width bound of every step while obstacles are planned around [m] (0: the walk's)",
