@@ -58,7 +58,15 @@ def test_a_walk_at_speed_gets_its_own_fddp_iterations():
                          ({"fast_speed": 0.8}, r"fast_speed=0.8 m/s must be > 0 with fast_max_iterations=0 or "
                                                r"fast_swing_path_weight=0.0 set \(0 without\)"),
                          ({"fast_swing_path_weight": -1.0}, r"fast_swing_path_weight=-1.0 must be finite and >= 0"),
-                         ({"fast_max_iterations": 2.5, "fast_speed": 0.8}, r"fast_max_iterations=2.5 must be 0")):
+                         ({"fast_max_iterations": 2.5, "fast_speed": 0.8}, r"fast_max_iterations=2.5 must be 0"),
+                         ({"fast_swing_path_speed": 0.4}, r"fast_swing_path_speed=0.4 m/s must be >= 0 \(0: fast_speed\) "
+                                                          r"with fast_swing_path_weight=0.0 set, 0 without"),
+                         ({"fast_swing_path_weight": 1e3, "fast_swing_path_speed": -0.1},
+                          r"fast_swing_path_speed=-0.1 m/s must be >= 0"),
+                         ({"fast_swing_path_weight": 1e3, "fast_swing_path_speed": float("nan")},
+                          r"fast_swing_path_speed=nan m/s must be >= 0"),
+                         ({"fast_max_iterations": 4, "fast_swing_path_weight": 1e3, "fast_swing_path_speed": 0.4},
+                          r"fast_speed=0.0 m/s must be > 0 with fast_max_iterations=4")):
         with pytest.raises(ParameterError, match=message):
             WalkingControllerConfig(**bad)
 
@@ -79,3 +87,26 @@ def test_a_walk_at_speed_tracks_the_swing_path_of_fast_swing_path_weight():
 
     assert active_weights({"fast_swing_path_weight": 1e3, "fast_speed": 0.2}) == {1e3}
     assert active_weights({"fast_swing_path_weight": 1e3, "fast_speed": 0.4}) == set()  # below fast_speed
+    # fast_swing_path_speed: the swing path from its own speed, the iterations from fast_speed
+    assert active_weights({"fast_swing_path_weight": 1e3, "fast_swing_path_speed": 0.2, "fast_max_iterations": 4,
+                           "fast_speed": 0.8}) == {1e3}
+    assert active_weights({"fast_swing_path_weight": 1e3, "fast_swing_path_speed": 0.4, "fast_max_iterations": 4,
+                           "fast_speed": 0.2}) == set()
+
+
+def test_fast_swing_path_speed_sets_the_swing_path_threshold_apart_from_fast_speed():
+    """``fast_swing_path_speed``: the planned |v_x| from which ``fast_swing_path_weight`` applies (0: ``fast_speed``);
+    the FDDP iterations keep ``fast_speed``; without ``fast_max_iterations`` ``fast_speed`` may stay 0."""
+    from wbmpc.walking.controller import WalkingController
+    from wbmpc.walking.controller_config import WalkingControllerConfig
+    from wbmpc.walking.preset import load_walking_preset
+
+    controller = WalkingController(load_walking_preset("h1", {"fast_max_iterations": 4, "fast_speed": 0.6,
+                                                              "fast_swing_path_weight": 1e3,
+                                                              "fast_swing_path_speed": 0.4}))
+    walking = {"crossing_nodes": 0.0, "negotiation_mode": 0.0}
+    for v_x, path, budget in ((0.3, None, None), (0.4, 1e3, None), (-0.5, 1e3, None), (0.6, 1e3, 4)):
+        record = {**walking, "sequencer_v_x": v_x}
+        assert controller._swing_path_weight(record) == path, v_x
+        assert controller._iteration_budget(record) == budget, v_x
+    WalkingControllerConfig(fast_swing_path_weight=1e3, fast_swing_path_speed=0.4)  # no fast_speed needed

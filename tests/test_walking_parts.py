@@ -311,7 +311,7 @@ OBSTACLE_FIELDS = {
 # preset schedules its gait by speed (the H1's, for 1.0 m/s); the others keep the defaults
 SPEED_SCHEDULE_FIELDS = {
     "planner": {"fast_speed_start", "fast_speed_full", "fast_t_nom", "fast_t_min", "fast_double_support", "fast_l_max"},
-    "controller": {"fast_max_iterations", "fast_swing_path_weight", "fast_speed"},
+    "controller": {"fast_max_iterations", "fast_swing_path_weight", "fast_speed", "fast_swing_path_speed"},
 }
 
 

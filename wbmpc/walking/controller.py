@@ -184,7 +184,7 @@ class WalkingController:
                 f"{t + self.reference_stage.horizon:.3f} s: nothing left to follow"
             )
         tic = time.perf_counter()
-        path_weight = cfg.fast_swing_path_weight if cfg.fast_swing_path_weight and self._at_speed(record) else None
+        path_weight = self._swing_path_weight(record)
         reference = self.reference_stage.sample(plan, t, measured.com[:2], measurement.foot_in_contact,
                                                 planning.swing_liftoff,
                                                 liftoffs=self.mpc.ocp.config.swing_path_weight > 0 or bool(path_weight))
@@ -250,10 +250,18 @@ class WalkingController:
             return cfg.fast_max_iterations
         return None
 
-    def _at_speed(self, record: dict[str, float]) -> bool:
-        """Whether this replan's planned |v_x| (``sequencer_v_x``) is at least ``fast_speed`` (> 0: the fast_* options
-        apply)."""
-        speed = self.config.fast_speed
+    def _swing_path_weight(self, record: dict[str, float]) -> float | None:
+        """The OCP's swing path weight of this replan: ``fast_swing_path_weight`` at a planned |v_x| of
+        ``fast_swing_path_speed`` (0: ``fast_speed``) or more, else None (the OCP's own)."""
+        cfg = self.config
+        if cfg.fast_swing_path_weight and self._at_speed(record, cfg.fast_swing_path_speed or cfg.fast_speed):
+            return cfg.fast_swing_path_weight
+        return None
+
+    def _at_speed(self, record: dict[str, float], speed: float | None = None) -> bool:
+        """Whether this replan's planned |v_x| (``sequencer_v_x``) is at least ``speed`` [m/s] (default ``fast_speed``;
+        > 0: the fast_* options apply; ``fast_swing_path_speed`` for the swing path)."""
+        speed = self.config.fast_speed if speed is None else speed
         return speed > 0.0 and abs(record.get("sequencer_v_x", 0.0)) >= speed
 
     # ------------------------------------------------------------------ every tick

@@ -170,12 +170,16 @@ class WalkingControllerConfig:
             quicker steps): the H1 at 1.0 m/s kept its MPC cost 10-100x lower with 4 iterations than with 3
             (docs/closed_loop.md "The H1 at 1.0 m/s, session 20").
         fast_swing_path_weight: the OCP's ``swing_path_weight`` (the swing foot's (x, y) along a path from lift-off to
-            its foothold, at rest at both ends with the "smooth" timing) from that speed on, >= 0 (0: the OCP's own at
-            every speed). It needs the OCP's swing path terms (``swing_path_weight`` or ``obstacle_swing_path_weight``
-            > 0). At 1.0 m/s the H1's swing foot, free between lift-off and touchdown, stayed back and then landed 5-7
-            cm short of its foothold, still moving (docs/closed_loop.md "The H1 at 1.0 m/s, session 20").
-        fast_speed: [m/s], > 0 when ``fast_max_iterations`` or ``fast_swing_path_weight`` is set, else 0: the planned
-            |v_x| from which they apply.
+            its foothold, at rest at both ends with the "smooth" timing) from that speed (or ``fast_swing_path_speed``)
+            on, >= 0 (0: the OCP's own at every speed). It needs the OCP's swing path terms (``swing_path_weight`` or
+            ``obstacle_swing_path_weight`` > 0). At 1.0 m/s the H1's swing foot, free between lift-off and touchdown,
+            stayed back and then landed 5-7 cm short of its foothold, still moving (docs/closed_loop.md "The H1 at
+            1.0 m/s, session 20").
+        fast_speed: [m/s], > 0 when ``fast_max_iterations`` is set, or ``fast_swing_path_weight`` without
+            ``fast_swing_path_speed``, else 0: the planned |v_x| from which they apply.
+        fast_swing_path_speed: [m/s], the planned |v_x| from which ``fast_swing_path_weight`` applies instead of
+            ``fast_speed``, > 0 (only with ``fast_swing_path_weight`` set), or 0 (``fast_speed``): the swing path can
+            then be tracked from a lower speed than the one that buys the extra FDDP iterations.
     """
 
     n_nodes: int = 100
@@ -218,6 +222,7 @@ class WalkingControllerConfig:
     fast_max_iterations: int = 0
     fast_swing_path_weight: float = 0.0
     fast_speed: float = 0.0
+    fast_swing_path_speed: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("mpc_prepare", "interpolate", "feedback"):
@@ -294,8 +299,17 @@ class WalkingControllerConfig:
         path = self.fast_swing_path_weight
         if isinstance(path, bool) or not (np.isfinite(path) and path >= 0.0):
             raise ParameterError(f"fast_swing_path_weight={path!r} must be finite and >= 0 (0: the OCP's own)")
+        path_speed = self.fast_swing_path_speed
+        if isinstance(path_speed, bool) or not (np.isfinite(path_speed) and (path_speed >= 0.0 if path
+                                                                            else path_speed == 0.0)):
+            raise ParameterError(f"fast_swing_path_speed={path_speed!r} m/s must be >= 0 (0: fast_speed) with "
+                                 f"fast_swing_path_weight={path} set, 0 without")
         speed = self.fast_speed
-        if isinstance(speed, bool) or not (np.isfinite(speed) and (speed > 0.0 if fast or path else speed == 0.0)):
+        if fast or (path and not path_speed):
+            allowed = speed > 0.0
+        else:  # unused with fast_swing_path_speed alone, which then needs no fast_speed
+            allowed = speed >= 0.0 if path else speed == 0.0
+        if isinstance(speed, bool) or not (np.isfinite(speed) and allowed):
             raise ParameterError(f"fast_speed={speed!r} m/s must be > 0 with fast_max_iterations={fast} or "
                                  f"fast_swing_path_weight={path} set (0 without)")
         hold = self.crossing_iterations_hold
