@@ -105,11 +105,10 @@ that length needs: the trailing foot can land up to r behind the lead foot, unde
 
 **The far margin.** Both crossing feet land beyond the far side, the trailing one no further back than the lead
 foot's bound; a whole-body robot whose DCM lags (the H1's 9 cm behind both soles at the trailing touchdown, seed 6)
-stands there with the DCM behind its heels. ``far_margin`` grows the side further along the heading by less than
-``obstacle_margin`` (by ``obstacle_far_margin_reduction`` less; only less: the side moved back by the difference
-still bounds a turned box's): the lead crossing that much shorter and both feet that much nearer the box, nearer
-the DCM. The side facing the stance keeps its margin (the last step before the obstacle is the one a foot
-overshoots).
+stands there with the DCM behind its heels. ``far_margin_reduction`` grows the side further along the heading by
+that much less than ``obstacle_margin`` (only less: the side moved back by the difference still bounds a turned
+box's): the lead crossing that much shorter and both feet that much nearer the box, nearer the DCM. The side
+facing the stance keeps its margin (the last step before the obstacle is the one a foot overshoots).
 
 **The lateral aim.** A crossing step lasts longer than a walking step (T_c against t_nom), and the lateral DCM
 offset it starts from grows by exp(ω T_c), not exp(ω t_nom): from the nominal offset b_y,nom the crossing spreads
@@ -197,8 +196,8 @@ class FootholdGeometry:
         crossing_offset: Δb [m] >= 0: the lead crossing aims at the nominal DCM offset along the heading plus Δb at
             its touchdown, the last step before the obstacle at the offset that reaches it ("The crossing's momentum"
             in the module docstring); 0: the nominal offset.
-        far_margin: the footprint's side further along the heading grown by this instead of ``margin`` [m], in
-            [0, margin] ("The far margin" in the module docstring); None: ``margin``.
+        far_margin_reduction: the footprint's side further along the heading grown by ``margin`` minus this [m], in
+            [0, margin] ("The far margin" in the module docstring); 0: ``margin``.
         landing_room: r [m] >= 0: the lead crossing lands at least r beyond the obstacle's far bound, within its length
             bound, and the last step before it aims for that crossing ("The landing room" in the module docstring);
             0: on the bound.
@@ -231,7 +230,7 @@ class FootholdGeometry:
     crossing_cop: float = 0.0
     crossing_offset: float = 0.0
     landing_room: float = 0.0
-    far_margin: float | None = None
+    far_margin_reduction: float = 0.0
 
     def landing_length(self, length: float) -> float:
         """|ℓ| [m] of a lead crossing whose far bound is ``length`` [m] (>= 0) along the direction of travel:
@@ -298,8 +297,7 @@ def forbidden_box(obstacle: Obstacle, p0, yaw: float, geometry: FootholdGeometry
         if polygon.shape[0] == 0:
             return (math.inf, math.inf, math.inf, math.inf)
     a, b = float(polygon[:, 0].min()) - geometry.sole_front, float(polygon[:, 0].max()) + geometry.sole_rear
-    if geometry.far_margin is not None:  # the far side's own margin: the grown side moved back by the difference
-        b -= geometry.margin - geometry.far_margin
+    b -= geometry.far_margin_reduction  # the far side's own margin: the grown side moved back by the difference
     if a + b > 0.0:  # the near side is the one facing the stance
         a -= geometry.approach_margin
     else:
@@ -598,10 +596,10 @@ class FootholdConstraints:
         crossing's centre of pressure behind its stance foothold (``crossing_cop``)."""
         decay = math.exp(-self.omega * (self.geometry.aim_duration or self.geometry.step_duration_max))
         room = self.geometry.landing_length(crossing_length) - crossing_length  # the landing room
-        crossing_length, travel = crossing_length + room, abs(travel) + room if travel else travel
+        crossing_length += room
         target = self._crossing_aim(crossing_length, sign, step_length_nominal, offset_nominal) \
             if self.geometry.swing_length_max > 0.0 else offset_nominal + sign * self.geometry.crossing_offset
-        drift = self.geometry.crossing_drift * abs(travel)
+        drift = self.geometry.crossing_drift * (abs(travel) + room if travel else 0.0)
         cop = self.geometry.crossing_cop
         return sign * max((crossing_length + cop + sign * target - drift) * decay - cop, sign * offset_nominal)
 

@@ -428,8 +428,7 @@ class SequencerParams:
                                 crossing_cop=self.obstacle_crossing_cop,
                                 crossing_offset=self.obstacle_crossing_offset,
                                 landing_room=self.obstacle_landing_room,
-                                far_margin=self.obstacle_margin - self.obstacle_far_margin_reduction
-                                if self.obstacle_far_margin_reduction > 0.0 else None,
+                                far_margin_reduction=self.obstacle_far_margin_reduction,
                                 lateral_aim_fraction=math.exp(-self.omega * (self.obstacle_lateral_aim_duration - self.t_nom))
                                 if self.obstacle_lateral_aim_duration > 0.0 else 1.0)
 
