@@ -110,6 +110,16 @@ that much less than ``obstacle_margin`` (only less: the side moved back by the d
 box's): the lead crossing that much shorter and both feet that much nearer the box, nearer the DCM. The side
 facing the stance keeps its margin (the last step before the obstacle is the one a foot overshoots).
 
+**The passed obstacle's centre of pressure.** Once the trailing foot is down beyond the obstacle the walk's next
+foothold is bounded by the obstacle's far side behind it. A whole-body robot whose DCM lags behind its feet there (the
+H1's 5-9 cm behind both sole frames at the trailing touchdown, with 13.75 cm of heel behind them) can carry the DCM
+forwards on its heels; the point-foot plan cannot: it predicts the body falling back, asks for a step back, and every
+foothold is pinned at the far bound (the H1 stepped in place and fell back over the box). With
+``obstacle_passed_cop`` δ_p > 0 such a step (the option that keeps the foothold on the far side of a box whose middle
+lies behind the stance) pivots within δ_p of its stance foothold, chosen by its QP as for a crossing (the heel side
+carries the DCM forwards), and the trailing crossing swing within max(δ, δ_p); the plan's CoM prediction pivots there.
+A step whose nominal foothold is free of the box plans as the walk does: the pivot ends once the DCM is ahead.
+
 **The lateral aim.** A crossing step lasts longer than a walking step (T_c against t_nom), and the lateral DCM
 offset it starts from grows by exp(ω T_c), not exp(ω t_nom): from the nominal offset b_y,nom the crossing spreads
 the feet (on the H1 a 0.6 s crossing lands 0.2 m wider than the nominal width, and the QP's lateral cost bounded
@@ -193,6 +203,10 @@ class FootholdGeometry:
         crossing_cop: δ [m] >= 0: every swing over an obstacle pivots on a centre of pressure within δ of its stance
             foothold along the heading, chosen by its QP ("The crossing's centre of pressure" in the module
             docstring); 0: the foothold.
+        passed_cop: δ_p [m] >= 0: a step whose stance foot is beyond an obstacle it has just crossed and whose foothold
+            that obstacle bounds (the trailing crossing swing, a step pinned at the far bound after it) pivots on a
+            centre of pressure within max(δ, δ_p) of its stance foothold ("The passed obstacle's centre of pressure" in
+            the module docstring); 0: δ for the trailing swing, the foothold for a pinned step.
         crossing_offset: Δb [m] >= 0: the lead crossing aims at the nominal DCM offset along the heading plus Δb at
             its touchdown, the last step before the obstacle at the offset that reaches it ("The crossing's momentum"
             in the module docstring); 0: the nominal offset.
@@ -228,6 +242,7 @@ class FootholdGeometry:
     crossing_drift: float = 0.0
     lateral_aim_fraction: float = 1.0
     crossing_cop: float = 0.0
+    passed_cop: float = 0.0
     crossing_offset: float = 0.0
     landing_room: float = 0.0
     far_margin_reduction: float = 0.0
@@ -446,7 +461,8 @@ class FootholdConstraints:
                 if trailing[0] <= candidate.dx <= trailing[1] and candidate.duration >= trailing[4] - 1e-12:
                     return candidate, changed
                 bounds = trailing
-                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along)
+                candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along,
+                                             cop_bound=self._trailing_cop_bound(boxes, sign, lift_along))
                 changed, lengthened = True, True
                 continue
             along, beside = self._options(hit, bounds, step_length_nominal, offset_nominal)
@@ -470,12 +486,24 @@ class FootholdConstraints:
                     f"within the step bounds {tuple(round(v, 4) for v in bounds)} (stance p0={p0.tolist()} m)")
             solved = [checked if checked is not None and option is checked[1]  # solved for the DCM check
                       else self._solve_option(solve, option, far, crossing, step_length_nominal, offset_nominal,
-                                              lift_along)
-                      for option, far, crossing in options]
+                                              lift_along, passed)
+                      for option, far, crossing, passed in options]
             candidate, bounds, aim = min(solved, key=lambda triple: triple[0].objective)
             changed = True
         raise FootholdInfeasible(f"the footholds of the stance p0={p0.tolist()} m did not settle outside the "
                                  f"{len(boxes)} obstacles")
+
+    def _trailing_cop_bound(self, boxes, sign: float, lift_along: float | None) -> float | None:
+        """The pivot bound [m] of a swing over an obstacle (:meth:`swing_solve`): max(``crossing_cop``, ``passed_cop``)
+        for the trailing swing (a box (a, b, c, d) whose middle lies behind the stance in the direction of travel
+        ``sign`` and ahead of the lift-off ``lift_along`` [m], when known), else None (``crossing_cop``)."""
+        if self.geometry.passed_cop <= 0.0:
+            return None
+        for a, b, _, _ in boxes:
+            middle = 0.5 * (a + b)
+            if sign * middle < 0.0 and (lift_along is None or sign * (middle - lift_along) > 0.0):
+                return max(self.geometry.crossing_cop, self.geometry.passed_cop)
+        return None
 
     @staticmethod
     def _kept_crossing(boxes, candidate: StepCandidate, sign: float):
@@ -488,11 +516,12 @@ class FootholdConstraints:
 
     def _options(self, box, bounds: StepBounds, step_length_nominal: float,
                  offset_nominal: float) -> tuple[list, list]:
-        """The feasible candidates (bounds, far side for a last step before it or None, crossing?) of a foothold
-        outside ``box``, as (along the heading, beside it): along, the crossing step first when the obstacle
+        """The feasible candidates (bounds, far side for a last step before it or None, crossing?, passed?) of a
+        foothold outside ``box``, as (along the heading, beside it): along, the crossing step first when the obstacle
         (the box's middle) lies in the direction of travel and one step reaches beyond it, then the step
         before it (both sides, no crossing, when the stance sole is itself within the box); beside it, either
-        side within the width bounds."""
+        side within the width bounds. Passed: the step along the direction of travel away from a box whose middle
+        lies behind the stance (a foothold pinned at the far bound of an obstacle just crossed)."""
         a, b, c, d = box
         l_lo, l_hi, w_lo, w_hi, t_lo, t_hi = bounds
         reach, t_cross = self.geometry.step_length_max, max(t_lo, self.geometry.step_duration_min)
@@ -503,23 +532,24 @@ class FootholdConstraints:
         if not inside and (ahead == (step_length_nominal > 0.0)) and step_length_nominal != 0.0 and b - a <= reach \
                 and self.geometry.halt_double_support == 0.0:
             prepare = b if ahead else a  # crossable from the foothold at the safe distance
+        forwards, backwards = step_length_nominal > 0.0, step_length_nominal < 0.0
         if inside:  # either side, no crossing step
-            along = [((l_lo, min(l_hi, a), w_lo, w_hi, t_lo, t_hi), None, False),
-                     ((max(l_lo, b), l_hi, w_lo, w_hi, t_lo, t_hi), None, False)]
+            along = [((l_lo, min(l_hi, a), w_lo, w_hi, t_lo, t_hi), None, False, backwards and ahead),
+                     ((max(l_lo, b), l_hi, w_lo, w_hi, t_lo, t_hi), None, False, forwards and not ahead)]
         elif ahead:  # beyond (crossing, when walking forwards) or before
             along = [((max(l_lo, self.geometry.landing_length(b)), max(l_hi, reach), w_lo, w_hi, t_cross, t_cross_hi),
-                       None, True)] if step_length_nominal > 0.0 else []
-            along.append(((l_lo, min(l_hi, a), w_lo, w_hi, t_lo, t_hi), prepare, False))
+                       None, True, False)] if forwards else []
+            along.append(((l_lo, min(l_hi, a), w_lo, w_hi, t_lo, t_hi), prepare, False, backwards))
         else:  # behind: beyond it backwards (walking backwards), or stay
             along = [((min(l_lo, -reach), min(l_hi, -self.geometry.landing_length(-a)), w_lo, w_hi, t_cross,
-                       t_cross_hi), None, True)] if step_length_nominal < 0.0 else []
-            along.append(((max(l_lo, b), l_hi, w_lo, w_hi, t_lo, t_hi), prepare, False))
+                       t_cross_hi), None, True, False)] if backwards else []
+            along.append(((max(l_lo, b), l_hi, w_lo, w_hi, t_lo, t_hi), prepare, False, forwards))
         beside = [(l_lo, l_hi, w_lo, min(w_hi, c), t_lo, t_hi), (l_lo, l_hi, max(w_lo, d), w_hi, t_lo, t_hi)]
         return ([option for option in along if self._feasible(option[0])],
-                [(option, None, False) for option in beside if self._feasible(option)])
+                [(option, None, False, False) for option in beside if self._feasible(option)])
 
     def _solve_option(self, solve, bounds: StepBounds, far: float | None, crossing: bool, step_length_nominal: float,
-                      offset_nominal: float, lift_along: float | None = None
+                      offset_nominal: float, lift_along: float | None = None, passed: bool = False
                       ) -> tuple[StepCandidate, StepBounds, float | None]:
         """(candidate, bounds, aimed offset) of one option. ``far`` (the far side b of the obstacle the next step
         crosses, relative to this stance [m]) marks the last step before it: that step aims at the DCM offset
@@ -530,13 +560,17 @@ class FootholdConstraints:
         13 cm past the foot that should have stopped it). ``crossing`` (a step
         beyond, with a swing travel bound) aims at b_c of "Two steps ahead" in the module docstring. Three
         fixed-point passes: the foothold moves with the aim. A crossing's candidate carries the crossing drift
-        (:meth:`swing_solve`; ``lift_along``: its lift-off along the heading from this stance [m], None: unknown)."""
+        (:meth:`swing_solve`; ``lift_along``: its lift-off along the heading from this stance [m], None: unknown).
+        A ``passed`` option (a foothold pinned at the far bound of an obstacle behind the stance) pivots on the centre
+        of pressure within ``passed_cop`` of its stance foothold (:meth:`pivot_solve`)."""
         sign = 1.0 if step_length_nominal > 0.0 else -1.0
         if far is None and not (crossing and self.geometry.swing_length_max > 0.0):
             if crossing:  # the lead crossing: the trailing crossing swing follows it (the lateral aim)
                 aim = offset_nominal + sign * self.geometry.crossing_offset if self.geometry.crossing_offset else None
                 return self.swing_solve(solve, bounds, aim, offset_nominal, lift_along,
                                         self.geometry.lateral_aim_fraction), bounds, aim
+            if passed:
+                return self.pivot_solve(solve, bounds, None, bound=self.geometry.passed_cop), bounds, None
             return solve(bounds, None), bounds, None
         foothold = bounds[1] if sign > 0.0 else bounds[0]
         aim, candidate = None, None
@@ -553,29 +587,31 @@ class FootholdConstraints:
         return candidate, bounds, aim
 
     def swing_solve(self, solve, bounds: StepBounds, aim: float | None, offset_nominal: float,
-                    lift_along: float | None, lateral: float = 1.0) -> StepCandidate:
+                    lift_along: float | None, lateral: float = 1.0, cop_bound: float | None = None) -> StepCandidate:
         """``solve(bounds, aim)`` for a swing over an obstacle with the crossing drift κ_c d ("Crossing drift" in
         the module docstring; d = ℓ - ``lift_along`` [m], the swing's signed travel along the heading, ℓ with
         the lift-off unknown): the QP's LIPM offset aimed at b - κ_c d (b = ``aim``, or ``offset_nominal`` for
         None), the candidate's offset h + κ_c d (two fixed-point passes: d moves with the foothold). κ_c = 0:
-        ``solve(bounds, aim)``. Every solve pivots on the crossing's centre of pressure (:meth:`pivot_solve`) and aims
-        at ``lateral`` times the nominal lateral offset."""
+        ``solve(bounds, aim)``. Every solve pivots on the crossing's centre of pressure (:meth:`pivot_solve`, within
+        ``cop_bound`` [m], None: ``crossing_cop``) and aims at ``lateral`` times the nominal lateral offset."""
         kappa = self.geometry.crossing_drift
-        candidate = self.pivot_solve(solve, bounds, aim, lateral)
+        candidate = self.pivot_solve(solve, bounds, aim, lateral, cop_bound)
         if kappa <= 0.0:
             return candidate
         target = offset_nominal if aim is None else aim
         drift = 0.0
         for _ in range(2):
             drift = kappa * (candidate.dx - (0.0 if lift_along is None else lift_along))
-            candidate = self.pivot_solve(solve, bounds, target - drift, lateral)
+            candidate = self.pivot_solve(solve, bounds, target - drift, lateral, cop_bound)
         return replace(candidate, hx=candidate.hx + drift)
 
-    def pivot_solve(self, solve, bounds: StepBounds, aim: float | None, lateral: float = 1.0) -> StepCandidate:
-        """``solve(bounds, aim, lateral, cop=δ_c)`` at the pivot δ_c in [-δ, δ] (δ = ``crossing_cop``, :data:`PIVOT_SAMPLES`
-        values) of least QP objective, the nearest the foothold among equal ones (relative 1e-9); δ = 0:
-        ``solve(bounds, aim, lateral)``."""
-        bound = self.geometry.crossing_cop
+    def pivot_solve(self, solve, bounds: StepBounds, aim: float | None, lateral: float = 1.0,
+                    bound: float | None = None) -> StepCandidate:
+        """``solve(bounds, aim, lateral, cop=δ_c)`` at the pivot δ_c in [-δ, δ] (δ = ``bound`` [m], None:
+        ``crossing_cop``; :data:`PIVOT_SAMPLES` values) of least QP objective, the nearest the foothold among equal ones
+        (relative 1e-9); δ = 0: ``solve(bounds, aim, lateral)``."""
+        if bound is None:
+            bound = self.geometry.crossing_cop
         if bound <= 0.0:
             return solve(bounds, aim, lateral)
         best = None

@@ -50,6 +50,7 @@ EXACT_ONLY_OPTIONS = (("obstacle_double_support", "s (a quasi-static crossing)")
                       ("obstacle_trailing_double_support", "s"),
                       ("obstacle_resume_double_support", "s"),
                       ("obstacle_crossing_cop", "m (the crossing's centre of pressure)"),
+                      ("obstacle_passed_cop", "m (the passed obstacle's centre of pressure)"),
                       ("obstacle_approach_distance", "m (the even approach)"),
                       ("obstacle_width_min", "m (the narrower steps of a negotiation)"))
 #: options of the 'exact' backend only, with or without obstacles

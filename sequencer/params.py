@@ -142,6 +142,12 @@ class SequencerParams:
             pressure" in :mod:`sequencer.footholds`; the 'exact' backend only); 0: the foothold (a point foot's).
             The plan's CoM prediction pivots there too (``PlannedStep.cop_offset``), so the OCP's terminal CoM
             follows.
+        obstacle_passed_cop: δ_p [m] in [0, 0.2): a step whose stance foot is beyond an obstacle it has just crossed
+            and whose foothold that obstacle bounds (the trailing crossing swing, the steps pinned at its far bound
+            after it) pivots on a centre of pressure within δ_p of its stance foothold along the heading (the trailing
+            swing within max(δ, δ_p)): the heel carries a DCM that lags behind the feet forwards, where the point-foot
+            plan has it fall back over the obstacle ("The passed obstacle's centre of pressure" in
+            :mod:`sequencer.footholds`; the 'exact' backend only); 0: off.
         obstacle_crossing_offset: Δb [m] in [0, 0.3): the lead crossing (the step from before an obstacle to beyond it)
             aims at the nominal DCM offset along the heading plus Δb at its touchdown, and the last step before the
             obstacle at the offset that reaches it ("The crossing's momentum" in :mod:`sequencer.footholds`): the
@@ -228,6 +234,7 @@ class SequencerParams:
     obstacle_crossing_drift: float = 0.0
     obstacle_lateral_aim_duration: float = 0.0
     obstacle_crossing_cop: float = 0.0
+    obstacle_passed_cop: float = 0.0
     obstacle_crossing_offset: float = 0.0
     obstacle_width_min: float = 0.0
     obstacle_landing_room: float = 0.0
@@ -330,6 +337,9 @@ class SequencerParams:
         if not (0.0 <= self.obstacle_crossing_cop < 0.2):
             raise ParameterError(f"obstacle_crossing_cop={self.obstacle_crossing_cop} m must be in [0, 0.2) m "
                                  f"(0: the foothold, a point foot's centre of pressure)")
+        if not (0.0 <= self.obstacle_passed_cop < 0.2):
+            raise ParameterError(f"obstacle_passed_cop={self.obstacle_passed_cop} m must be in [0, 0.2) m "
+                                 f"(0: off)")
         if not (0.0 <= self.obstacle_crossing_offset < 0.3):
             raise ParameterError(f"obstacle_crossing_offset={self.obstacle_crossing_offset} m must be in [0, 0.3) m "
                                  f"(0: the lead crossing aims at the nominal DCM offset)")
@@ -426,6 +436,7 @@ class SequencerParams:
                                 approach_distance=self.obstacle_approach_distance,
                                 crossing_drift=self.obstacle_crossing_drift,
                                 crossing_cop=self.obstacle_crossing_cop,
+                                passed_cop=self.obstacle_passed_cop,
                                 crossing_offset=self.obstacle_crossing_offset,
                                 landing_room=self.obstacle_landing_room,
                                 far_margin_reduction=self.obstacle_far_margin_reduction,

@@ -71,6 +71,8 @@ _HELP = {
                                      "obstacle aims at (0: off)",
     "obstacle_crossing_cop": "bound of a crossing swing's centre of pressure from its stance foothold along the "
                              "heading [m] (0: the foothold)",
+    "obstacle_passed_cop": "bound of the centre of pressure from the stance foothold of a step pinned beyond an "
+                           "obstacle just crossed [m] (0: off)",
     "obstacle_crossing_offset": "DCM offset the lead crossing aims at beyond the nominal one [m] (0: the nominal)",
     "obstacle_landing_room": "the lead crossing lands at least this beyond the obstacle's far bound [m] (0: on it)",
     "obstacle_far_margin_reduction": "an obstacle's side further along the heading grown by obstacle_margin minus this [m]",
