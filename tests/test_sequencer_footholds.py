@@ -484,6 +484,66 @@ def test_a_crossing_swing_pivots_on_the_centre_of_pressure_its_qp_chooses():
             0.0, stance, measured, COMMAND, obstacles=(box,))
 
 
+def test_a_step_pinned_beyond_a_crossed_box_pivots_on_its_heel_side_and_walks_on():
+    """obstacle_passed_cop δ_p: after the trailing touchdown both feet stand on the box's far bound with the DCM 8 cm
+    behind the stance foot; the point-foot plan pins every next foothold at the bound and has the DCM fall back (the
+    H1 fell back over the box there), with δ_p = 12 cm the step pivots behind the foot (within δ_p, chosen by its QP)
+    and the plan carries the DCM forwards and walks on, every sole outside the box; a DCM ahead of the feet plans as
+    without it, bit for bit."""
+    box = Obstacle(np.array([0.7425, 0.0]), 0.0, 0.1, 1.2, 0.1)  # far side 0.7925 m
+    bound = 0.7925 + H1.obstacle_margin + H1.sole_rear  # a foothold's far bound along x [m]
+    params = dataclasses.replace(H1, obstacle_crossing_cop=0.05)
+    stance = StanceState("right", np.array([bound, -0.203]), 0.0, 0.0, swing_liftoff=np.array([bound, 0.203]))
+
+    def plans(lag):
+        dcm = stance.position + np.array([-lag, 0.09])
+        measured = ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm)
+        return dcm, {cop: DcmFootstepPlanner(dataclasses.replace(params, obstacle_passed_cop=cop)).plan(
+            0.0, stance, measured, COMMAND, obstacles=(box,)) for cop in (0.0, 0.12)}
+
+    dcm, lagging = plans(0.08)
+    pinned, pivoted = lagging[0.0], lagging[0.12]
+    assert pinned.stance_cop_offset is None
+    assert all(step.position[0] == pytest.approx(bound, abs=1e-9) for step in pinned.steps[:3])
+    assert pinned.steps[0].dcm_at_touchdown[0] < dcm[0] - 0.05  # the point-foot plan: falling back over the box
+    assert -0.12 - 1e-9 <= pivoted.stance_cop_offset[0] < -0.08 and pivoted.stance_cop_offset[1] == 0.0
+    pivot = stance.position + pivoted.stance_cop_offset
+    first = pivoted.steps[0]
+    np.testing.assert_allclose(pivot + (dcm - pivot) * np.exp(H1.omega * first.duration), first.dcm_at_touchdown,
+                               atol=1e-9)  # eq. 1b about the pivot
+    assert first.dcm_at_touchdown[0] > dcm[0] + 0.05 and first.position[0] >= bound - 1e-9
+    assert pivoted.steps[2].position[0] > bound + 0.1  # walking on
+    for step in pivoted.steps:
+        np.testing.assert_allclose(pivoted.dcm_at(step.touchdown_time - 1e-9), step.dcm_at_touchdown, atol=1e-6)
+    assert _sole_overlaps(pivoted, box, params.foothold_geometry()) == []
+    _, ahead = plans(-0.06)  # the DCM 6 cm ahead of the feet: nominal footholds free of the box
+    assert ahead[0.12].stance_cop_offset is None
+    _assert_plans_equal(ahead[0.0], ahead[0.12])
+    with pytest.raises(ParameterError, match=r"obstacle_passed_cop=0.2 m must be in \[0, 0.2\) m"):
+        dataclasses.replace(H1, obstacle_passed_cop=0.2)
+
+
+def test_the_trailing_crossing_swing_pivots_within_the_passed_bound():
+    """The trailing crossing swing (its stance, the lead foot, on the far bound; the DCM 4 cm behind it) pivots
+    within max(δ, δ_p): with δ = 5 cm alone it lands beside the lead foot on the bound, with δ_p = 12 cm it pivots
+    further back and lands a step beyond the lead foot, the DCM ahead of it."""
+    box = Obstacle(np.array([0.7425, 0.0]), 0.0, 0.1, 1.2, 0.1)
+    bound = 0.7925 + H1.obstacle_margin + H1.sole_rear
+    params = dataclasses.replace(H1, obstacle_crossing_cop=0.05)
+    stance = StanceState("left", np.array([bound, 0.203]), 0.0, 0.0, swing_liftoff=np.array([0.6, -0.203]))
+    dcm = stance.position + np.array([-0.04, -0.09])
+    measured = ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm)
+    plans = {cop: DcmFootstepPlanner(dataclasses.replace(params, obstacle_passed_cop=cop)).plan(
+        0.0, stance, measured, COMMAND, obstacles=(box,)) for cop in (0.0, 0.12)}
+    trailing = {cop: plan.steps[0] for cop, plan in plans.items()}
+    assert all(step.crossing is not None for step in trailing.values())
+    assert plans[0.0].stance_cop_offset[0] >= -0.05 - 1e-9
+    assert trailing[0.0].position[0] == pytest.approx(bound, abs=1e-9)
+    assert -0.12 - 1e-9 <= plans[0.12].stance_cop_offset[0] < -0.05
+    assert trailing[0.12].position[0] > bound + 0.05 and trailing[0.12].dcm_at_touchdown[0] > trailing[0.12].position[0]
+    assert _sole_overlaps(plans[0.12], box, params.foothold_geometry()) == []
+
+
 def test_the_lead_crossing_aims_at_its_momentum_beyond_the_nominal_offset():
     """obstacle_crossing_offset Δb: the lead crossing lands on the same foothold along the heading (its bound
     beyond the box) with the DCM further ahead, towards Δb beyond the nominal offset, its swing lasting longer for
