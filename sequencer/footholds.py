@@ -389,7 +389,11 @@ def crossing_of(obstacles: Sequence[Obstacle], liftoff, touchdown, yaw: float,
                 geometry: FootholdGeometry) -> Crossing | None:
     """The :class:`Crossing` of a swing from ``liftoff`` to ``touchdown`` (world (x, y) [m]), its sole heading
     ``yaw`` [rad], over the tallest of ``obstacles`` whose footprint grown by the margin the sole meets
-    somewhere on the straight path (tested at :data:`PATH_SAMPLES` positions), or None."""
+    somewhere on the straight path (tested at :data:`PATH_SAMPLES` positions), or None. A swing that lifts off within
+    an obstacle's margin and leaves it (the grown footprint met from the lift-off on, not at the touchdown, the
+    obstacle's own footprint nowhere) does not cross that obstacle: a foot that landed a few millimetres short of the
+    far bound would otherwise step away from the box as a crossing (the slower swing, its plateau and clearance; the
+    H1's step after the trailing touchdown, session 22)."""
     if liftoff is None or not obstacles:
         return None
     start = np.array(liftoff, dtype=float)
@@ -398,6 +402,9 @@ def crossing_of(obstacles: Sequence[Obstacle], liftoff, touchdown, yaw: float,
     best = None
     for obstacle in obstacles:
         over = np.flatnonzero(rectangles_overlap(soles, obstacle.grown(geometry.margin).footprint_corners()))
+        if over.size and over[0] == 0 and over[-1] < PATH_SAMPLES - 1 \
+                and not rectangles_overlap(soles, obstacle.footprint_corners()).any():
+            continue  # lifts off within the margin and leaves it
         if over.size and (best is None or obstacle.height > best[0].height):
             best = (obstacle, (float(phases[over[0]]), float(phases[over[-1]])))
     if best is None:

@@ -140,6 +140,13 @@ def test_crossing_marks_follow_the_sole_along_the_swing():
     assert s_out == pytest.approx((0.59 + 0.1375 - 0.1) / 0.8, abs=0.026)
     assert crossing_of((box,), (0.1, 0.1), (0.2, 0.1), 0.0, geometry) is None  # a step that stays before it
     assert crossing_of((box,), None, (0.9, 0.1), 0.0, geometry) is None  # lift-off unknown
+    # a foot that landed 1 cm short of the far bound (its heel within the margin) and steps away does not cross it;
+    # one lifting off within the near margin and stepping over it does
+    bound = 0.55 + geometry.margin + geometry.sole_rear
+    assert crossing_of((box,), (bound - 0.01, 0.1), (bound + 0.3, 0.1), 0.0, geometry) is None
+    assert crossing_of((box,), (bound - 0.01, 0.1), (bound - 0.005, 0.1), 0.0, geometry) is not None  # stays in it
+    assert crossing_of((box,), (0.45 - geometry.margin - geometry.sole_front + 0.01, 0.1), (0.9, 0.1), 0.0,
+                       geometry) is not None
 
 
 def test_obstacle_helpers_and_bad_input():
