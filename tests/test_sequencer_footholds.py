@@ -766,11 +766,12 @@ def test_crossing_duration_and_travel_bad_input():
 def _h1_preset_plan(overrides: dict, box_x: float = 1.0):
     """The H1 preset's plan (5 s horizon) from a left stance at the origin with the nominal DCM, 0.3 m/s, towards
     a 10 cm box across the path at ``box_x`` [m] (the deterministic scene of docs/scripts/h1_step_over.py), with the
-    crossing's centre of pressure on the foothold and no lateral aim unless overridden (the point-foot LIPM the
-    approach and drift relations below are written in)."""
+    crossing's and the passed box's centres of pressure on the foothold and no lateral aim unless overridden (the
+    point-foot LIPM the approach and drift relations below are written in)."""
     from wbmpc.walking.preset import load_walking_preset
 
-    pinned = {"planner.obstacle_crossing_cop": 0.0, "planner.obstacle_lateral_aim_duration": 0.0}
+    pinned = {"planner.obstacle_crossing_cop": 0.0, "planner.obstacle_passed_cop": 0.0,
+              "planner.obstacle_lateral_aim_duration": 0.0}
     params = load_walking_preset("h1", {"planner.horizon": 5.0, **pinned, **overrides}).planner_params
     planner = DcmFootstepPlanner(params)
     box = Obstacle(np.array([box_x, 0.0]), 0.0, 0.1, 1.2, 0.1)
