@@ -204,9 +204,9 @@ class FootholdGeometry:
             foothold along the heading, chosen by its QP ("The crossing's centre of pressure" in the module
             docstring); 0: the foothold.
         passed_cop: δ_p [m] >= 0: a step whose stance foot is beyond an obstacle it has just crossed and whose foothold
-            that obstacle bounds (the trailing crossing swing, a step pinned at the far bound after it) pivots on a
-            centre of pressure within max(δ, δ_p) of its stance foothold ("The passed obstacle's centre of pressure" in
-            the module docstring); 0: δ for the trailing swing, the foothold for a pinned step.
+            that obstacle bounds pivots on a centre of pressure chosen by its QP: a step pinned at the far bound within
+            δ_p of its stance foothold, the trailing crossing swing within max(δ, δ_p) ("The passed obstacle's centre of
+            pressure" in the module docstring); 0: the foothold for a pinned step, δ for the trailing swing.
         crossing_offset: Δb [m] >= 0: the lead crossing aims at the nominal DCM offset along the heading plus Δb at
             its touchdown, the last step before the obstacle at the offset that reaches it ("The crossing's momentum"
             in the module docstring); 0: the nominal offset.
