@@ -19,6 +19,10 @@ Per running node k (time t0 + k dt), with the feet in contact given by the sched
   ``obstacle_leg_posture_scale`` ≠ 1 its leg joint-position rows are the term ``leg_posture``, scaled while
   the horizon holds a crossing swing);
 - ``control_bounds``: quadratic barrier outside the robot's torque limits, eq. (22);
+- optional ``joint_limits`` (``joint_limit_weight`` > 0, running and terminal nodes): quadratic barrier on the
+  joint angles outside the model's position limits narrowed by ``joint_limit_margin``. Not in the paper (Bolt's
+  plans stay inside its limits); without it the H1's swing knee was planned past its extension stop (-0.26 rad)
+  over the 20 cm box and MuJoCo's stop held it straight (docs/ocp.md "The knee's extension stop");
 - optional ``{foot}_foothold`` (track the planned touchdown xy at the last swing node; off by
   default: footholds emerge, the paper's choice), ``{foot}_contact_force`` (regularise the
   stance forces towards m g / n_stance) and ``{foot}_friction_cone`` (point feet);
@@ -70,6 +74,7 @@ from wbmpc.ocp.residuals import (
     ResidualFrameTranslation,
     ResidualFrameVelocity,
     ResidualFrictionCone,
+    ResidualJointPosition,
     ResidualState,
     ResidualWrenchCone,
 )
@@ -146,6 +151,9 @@ class WalkingOCPConfig:
         control_weight: w_u of eq. (20) [1/(N·m)²].
         control_bound_weight: w_bu of eq. (22).
         control_bound_fraction: the barrier starts at this fraction of the torque limit, (0, 1].
+        joint_limit_weight: weight of the joint-limit barrier ``joint_limits`` [1/rad²]; 0 = off.
+        joint_limit_margin: the barrier starts this far inside each joint's position limits [rad], >= 0 and
+            less than half of every joint's range.
         com_terminal_weight: w_CoM of eq. (23) (terminal node).
         foothold_weight: planned-foothold xy tracking at the last swing node; 0 = footholds
             emerge (the paper's choice).
@@ -261,6 +269,8 @@ class WalkingOCPConfig:
     control_weight: float = 1e-1
     control_bound_weight: float = 1e4
     control_bound_fraction: float = 1.0
+    joint_limit_weight: float = 0.0
+    joint_limit_margin: float = 0.0
     com_terminal_weight: float = 1e3
     foothold_weight: float = 0.0
     contact_force_weight: float = 0.0
@@ -301,7 +311,7 @@ class WalkingOCPConfig:
 
     def __post_init__(self) -> None:
         for name in ("foot_height_weight", "touchdown_height_weight", "touchdown_velocity_weight", "state_weight",
-                     "control_weight", "control_bound_weight",
+                     "control_weight", "control_bound_weight", "joint_limit_weight",
                      "com_terminal_weight", "foothold_weight", "contact_force_weight", "friction_cone_weight",
                      "wrench_cone_weight", "swing_orientation_weight", "swing_path_weight", "obstacle_clearance_weight",
                      "obstacle_swing_path_weight", "obstacle_foothold_weight", "obstacle_com_weight",
@@ -348,6 +358,9 @@ class WalkingOCPConfig:
         for pair in self.obstacle_shank_frames:
             if len(pair) != 2 or not all(isinstance(name, str) for name in pair):
                 raise ParameterError(f"obstacle_shank_frames: {pair!r} must be (foot, frame name)")
+        if isinstance(self.joint_limit_margin, bool) or not (np.isfinite(self.joint_limit_margin)
+                                                              and self.joint_limit_margin >= 0):
+            raise ParameterError(f"joint_limit_margin={self.joint_limit_margin!r} rad must be finite and >= 0")
         if not (0 < self.control_bound_fraction <= 1):
             raise ParameterError(f"control_bound_fraction={self.control_bound_fraction} must be in (0, 1]")
         if not (0 < self.cop_sole_fraction <= 1):
@@ -602,6 +615,22 @@ class WalkingOCP:
             frames[foot] = model.getFrameId(name)
         return frames
 
+    def _joint_bounds(self, residual: ResidualJointPosition) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) (n_j,) of the joint-limit barrier: the model's position limits of ``residual``'s joints
+        narrowed by ``joint_limit_margin`` [rad]."""
+        model = self.robot.pinocchio_model
+        margin = self.config.joint_limit_margin
+        lower = model.lowerPositionLimit[residual.q_rows] + margin
+        upper = model.upperPositionLimit[residual.q_rows] - margin
+        narrow = np.flatnonzero(lower >= upper)
+        if narrow.size:
+            j = narrow[0]
+            raise ParameterError(f"joint_limit_margin={margin} rad leaves no range for joint {residual.joint_names[j]!r} "
+                                 f"(limits [{model.lowerPositionLimit[residual.q_rows[j]]:.3f}, "
+                                 f"{model.upperPositionLimit[residual.q_rows[j]]:.3f}] rad); it must be less than half "
+                                 "of every joint's range")
+        return lower, upper
+
     def _contact(self, foot: str):
         fid = self.foot_frame_ids[foot]
         gains = self.config.baumgarte_gains
@@ -633,6 +662,10 @@ class WalkingOCP:
             costs.add("control_bounds",
                       CostModelResidual(ResidualControl(state, nu), ActivationQuadraticBarrier(-limit, limit)),
                       cfg.control_bound_weight)
+        if cfg.joint_limit_weight > 0:
+            residual = ResidualJointPosition(state, nu)
+            costs.add("joint_limits", CostModelResidual(residual, ActivationQuadraticBarrier(*self._joint_bounds(residual))),
+                      cfg.joint_limit_weight)
         for foot in self.feet:
             fid = self.foot_frame_ids[foot]
             costs.add(f"{foot}_height",

@@ -16,6 +16,7 @@ from wbmpc.ocp.residuals.frame_rotation import ResidualFrameRotation
 from wbmpc.ocp.residuals.frame_translation import ResidualFrameTranslation
 from wbmpc.ocp.residuals.frame_velocity import ResidualFrameVelocity
 from wbmpc.ocp.residuals.friction_cone import ResidualFrictionCone
+from wbmpc.ocp.residuals.joint_position import ResidualJointPosition
 from wbmpc.ocp.residuals.state import ResidualState
 from wbmpc.ocp.residuals.wrench_cone import ResidualWrenchCone
 
@@ -33,6 +34,7 @@ __all__ = [
     "ResidualFrameTranslation",
     "ResidualFrameVelocity",
     "ResidualFrictionCone",
+    "ResidualJointPosition",
     "ResidualState",
     "ResidualWrenchCone",
 ]
