@@ -115,7 +115,7 @@ def test_a_swing_knee_asked_past_its_extension_stop_is_held_inside_by_the_barrie
     bound at every node."""
     knee_index = None
     minima = {}
-    for name, overrides in (("free", {}), ("barrier", LIMITS)):
+    for name, overrides in (("free", {"joint_limit_weight": 0.0}), ("barrier", LIMITS)):
         weights = dataclasses.replace(load_walking_preset("h1").ocp.state_weights,
                                       joint_position_by_name=(("torso", 10.0), ("shoulder", 3.0), ("elbow", 3.0),
                                                               ("right_knee", 100.0)))
@@ -132,11 +132,40 @@ def test_a_swing_knee_asked_past_its_extension_stop_is_held_inside_by_the_barrie
     assert minima["barrier"] > stop + LIMITS["joint_limit_margin"] - 0.02, minima
 
 
+@needs_h1_extra
+def test_the_h1_preset_plans_inside_its_joint_limits():
+    config = load_walking_preset("h1").ocp
+    assert (config.joint_limit_weight, config.joint_limit_margin) == (LIMITS["joint_limit_weight"],
+                                                                      LIMITS["joint_limit_margin"])
+    h1, ocp = _h1_ocp()
+    assert all("joint_limits" in model.differential.costs.costs for model in ocp.problem.running_models)
+
+
+@needs_h1_extra
+def test_a_margin_by_joint_name_narrows_only_the_joints_it_names():
+    h1, ocp = _h1_ocp(joint_limit_weight=1e5, joint_limit_margin=0.0, joint_limit_margin_by_name=[["knee", 0.05]])
+    activation = ocp.problem.running_models[0].differential.costs.costs["joint_limits"].cost.activation
+    model = h1.pinocchio_model
+    knees = [i for i, name in enumerate(ocp.problem.running_models[0].differential.costs.costs["joint_limits"]
+                                        .cost.residual.joint_names) if "knee" in name]
+    assert len(knees) == 2
+    margin = np.zeros(19)
+    margin[knees] = 0.05
+    np.testing.assert_allclose(activation.lower, model.lowerPositionLimit[7:] + margin)
+    np.testing.assert_allclose(activation.upper, model.upperPositionLimit[7:] - margin)
+    with pytest.raises(ParameterError, match="joint_limit_margin_by_name: 'wrist' matches no joint"):
+        _h1_ocp(joint_limit_weight=1e5, joint_limit_margin_by_name=(("wrist", 0.1),))
+
+
 def test_bad_joint_limit_settings_are_one_line_errors_naming_them():
     with pytest.raises(ParameterError, match="joint_limit_weight=-1.0 must be finite and >= 0"):
         WalkingOCPConfig(joint_limit_weight=-1.0)
     with pytest.raises(ParameterError, match="joint_limit_margin=-0.1 rad must be finite and >= 0"):
         WalkingOCPConfig(joint_limit_margin=-0.1)
+    with pytest.raises(ParameterError, match="joint_limit_margin_by_name: 'knee' has margin=-0.1 rad"):
+        WalkingOCPConfig(joint_limit_margin_by_name=(("knee", -0.1),))
+    with pytest.raises(ParameterError, match="joint_limit_margin_by_name=.* must be .joint name part, margin"):
+        WalkingOCPConfig(joint_limit_margin_by_name=("knee",))
     bolt = load_robot("bolt")  # placeholder limits of +-10 rad
     with pytest.raises(ParameterError, match="joint_limit_margin=11.0 rad leaves no range for joint 'FL_HAA'"):
         WalkingOCP(bolt, WalkingOCPConfig(joint_limit_weight=1.0, joint_limit_margin=11.0), 4, 0.01)

@@ -154,6 +154,9 @@ class WalkingOCPConfig:
         joint_limit_weight: weight of the joint-limit barrier ``joint_limits`` [1/rad²]; 0 = off.
         joint_limit_margin: the barrier starts this far inside each joint's position limits [rad], >= 0 and
             less than half of every joint's range.
+        joint_limit_margin_by_name: (name part, margin [rad]) pairs: a joint whose name contains the part gets
+            that margin instead of ``joint_limit_margin`` (the last pair that matches wins), e.g.
+            ``(("knee", 0.05),)`` keeps the plan off the knees' stops and lets the other joints use their range.
         com_terminal_weight: w_CoM of eq. (23) (terminal node).
         foothold_weight: planned-foothold xy tracking at the last swing node; 0 = footholds
             emerge (the paper's choice).
@@ -271,6 +274,7 @@ class WalkingOCPConfig:
     control_bound_fraction: float = 1.0
     joint_limit_weight: float = 0.0
     joint_limit_margin: float = 0.0
+    joint_limit_margin_by_name: tuple[tuple[str, float], ...] = ()
     com_terminal_weight: float = 1e3
     foothold_weight: float = 0.0
     contact_force_weight: float = 0.0
@@ -361,6 +365,16 @@ class WalkingOCPConfig:
         if isinstance(self.joint_limit_margin, bool) or not (np.isfinite(self.joint_limit_margin)
                                                               and self.joint_limit_margin >= 0):
             raise ParameterError(f"joint_limit_margin={self.joint_limit_margin!r} rad must be finite and >= 0")
+        try:  # TOML arrays as the tuples a frozen config holds
+            pairs = tuple((str(part), float(margin)) for part, margin in self.joint_limit_margin_by_name)
+        except (TypeError, ValueError):
+            raise ParameterError(f"joint_limit_margin_by_name={self.joint_limit_margin_by_name!r} must be (joint name "
+                                 "part, margin [rad]) pairs") from None
+        for part, margin in pairs:
+            if not (np.isfinite(margin) and margin >= 0):
+                raise ParameterError(f"joint_limit_margin_by_name: {part!r} has margin={margin} rad, must be finite "
+                                     "and >= 0")
+        object.__setattr__(self, "joint_limit_margin_by_name", pairs)
         if not (0 < self.control_bound_fraction <= 1):
             raise ParameterError(f"control_bound_fraction={self.control_bound_fraction} must be in (0, 1]")
         if not (0 < self.cop_sole_fraction <= 1):
@@ -617,15 +631,21 @@ class WalkingOCP:
 
     def _joint_bounds(self, residual: ResidualJointPosition) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) (n_j,) of the joint-limit barrier: the model's position limits of ``residual``'s joints
-        narrowed by ``joint_limit_margin`` [rad]."""
+        narrowed by ``joint_limit_margin`` or the joint's ``joint_limit_margin_by_name`` [rad]."""
         model = self.robot.pinocchio_model
-        margin = self.config.joint_limit_margin
+        margin = np.full(residual.nr, self.config.joint_limit_margin)
+        for part, value in self.config.joint_limit_margin_by_name:
+            matched = [i for i, name in enumerate(residual.joint_names) if part in name]
+            if not matched:
+                raise ParameterError(f"joint_limit_margin_by_name: {part!r} matches no joint (joints: "
+                                     f"{residual.joint_names})")
+            margin[matched] = value
         lower = model.lowerPositionLimit[residual.q_rows] + margin
         upper = model.upperPositionLimit[residual.q_rows] - margin
         narrow = np.flatnonzero(lower >= upper)
         if narrow.size:
             j = narrow[0]
-            raise ParameterError(f"joint_limit_margin={margin} rad leaves no range for joint {residual.joint_names[j]!r} "
+            raise ParameterError(f"joint_limit_margin={margin[j]} rad leaves no range for joint {residual.joint_names[j]!r} "
                                  f"(limits [{model.lowerPositionLimit[residual.q_rows[j]]:.3f}, "
                                  f"{model.upperPositionLimit[residual.q_rows[j]]:.3f}] rad); it must be less than half "
                                  "of every joint's range")
