@@ -133,15 +133,6 @@ def test_a_swing_knee_asked_past_its_extension_stop_is_held_inside_by_the_barrie
 
 
 @needs_h1_extra
-def test_the_h1_preset_plans_inside_its_joint_limits():
-    config = load_walking_preset("h1").ocp
-    assert (config.joint_limit_weight, config.joint_limit_margin) == (LIMITS["joint_limit_weight"],
-                                                                      LIMITS["joint_limit_margin"])
-    h1, ocp = _h1_ocp()
-    assert all("joint_limits" in model.differential.costs.costs for model in ocp.problem.running_models)
-
-
-@needs_h1_extra
 def test_a_margin_by_joint_name_narrows_only_the_joints_it_names():
     h1, ocp = _h1_ocp(joint_limit_weight=1e5, joint_limit_margin=0.0, joint_limit_margin_by_name=[["knee", 0.05]])
     activation = ocp.problem.running_models[0].differential.costs.costs["joint_limits"].cost.activation
