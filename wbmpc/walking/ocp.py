@@ -88,6 +88,17 @@ class SlowPathWarning(UserWarning):
     """The walking OCP is evaluated node by node because a term cannot be batched (the message names it)."""
 
 
+def set_by_name_part(values: np.ndarray, pairs, joint_names, field: str) -> None:
+    """values[j] = value for every joint j whose name contains ``part``, for each (part, value) of ``pairs`` in
+    order (the last pair that matches a joint wins); values (n_j,) and joint_names (n_j,) in the same order. A part
+    that matches no joint is a ParameterError naming ``field``."""
+    for part, value in pairs:
+        matched = [j for j, name in enumerate(joint_names) if str(part) in name]
+        if not matched:
+            raise ParameterError(f"{field}: {part!r} matches no joint (joints: {list(joint_names)})")
+        values[matched] = float(value)
+
+
 @dataclass(frozen=True)
 class StateWeights:
     """Diagonal weights of the state regularisation (eq. 21), per component of x ⊖ x*.
@@ -119,11 +130,7 @@ class StateWeights:
         if self.joint_position_by_name:
             if len(joint_names) != nj:
                 raise ParameterError(f"joint_position_by_name needs the {nj} joint names, got {len(joint_names)}")
-            for part, weight in self.joint_position_by_name:
-                matched = [j for j, name in enumerate(joint_names) if str(part) in name]
-                if not matched:
-                    raise ParameterError(f"joint_position_by_name: {part!r} matches no joint (joints: {list(joint_names)})")
-                joint_position[matched] = float(weight)
+            set_by_name_part(joint_position, self.joint_position_by_name, joint_names, "joint_position_by_name")
         w = np.concatenate([
             self.base_position, self.base_orientation, joint_position,
             self.base_linear_velocity, self.base_angular_velocity, np.full(nj, self.joint_velocity),
@@ -634,12 +641,8 @@ class WalkingOCP:
         narrowed by ``joint_limit_margin`` or the joint's ``joint_limit_margin_by_name`` [rad]."""
         model = self.robot.pinocchio_model
         margin = np.full(residual.nr, self.config.joint_limit_margin)
-        for part, value in self.config.joint_limit_margin_by_name:
-            matched = [i for i, name in enumerate(residual.joint_names) if part in name]
-            if not matched:
-                raise ParameterError(f"joint_limit_margin_by_name: {part!r} matches no joint (joints: "
-                                     f"{residual.joint_names})")
-            margin[matched] = value
+        set_by_name_part(margin, self.config.joint_limit_margin_by_name, residual.joint_names,
+                         "joint_limit_margin_by_name")
         lower = model.lowerPositionLimit[residual.q_rows] + margin
         upper = model.upperPositionLimit[residual.q_rows] - margin
         narrow = np.flatnonzero(lower >= upper)
