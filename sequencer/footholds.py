@@ -25,8 +25,9 @@ bound of the QP. The choice is made per step, by the planner, not by the QP:
    step (its offset at touchdown within ``obstacle_offset_tolerance`` of the one it aims at: the
    nominal one, or b_c below):
    b <= max(l_max, obstacle_step_length_max), the crossing step's own length bound, with the
-   duration T in [max(t_min, obstacle_step_duration_min), max(t_max, obstacle_step_duration_max)] (a
-   crossing swing lifts higher and takes longer, and its DCM needs longer to travel the long step);
+   duration T in [max(t_min, obstacle_step_duration_min), ``SequencerParams.crossing_duration_max``] (a
+   crossing swing lifts higher and takes longer, and its DCM needs longer to travel the long step; on a robot
+   without ankle roll a shorter bound keeps the lateral DCM's growth exp(ω T) over the swing small);
    otherwise it stays *before* it (ℓ <= a: the last step
    before the obstacle, its toe ``obstacle_margin`` before the near edge at most). That last step
    aims at the DCM offset from which the crossing step reaches its own aim within its longest
@@ -178,8 +179,8 @@ class FootholdGeometry:
         offset_tolerance: a step crosses only if its DCM offset at touchdown, along the heading, is within
             this of the nominal one [m] (else the robot takes one more step before the obstacle, aiming at
             the offset the crossing needs).
-        step_duration_max: duration upper bound of a crossing step [s] (the planner uses max(t_max, this); 0:
-            the walking bound).
+        step_duration_max: duration upper bound of a crossing step [s], above or below the walking one (0: the
+            walking bound, t_max).
         swing_length_max: the travel bound of a crossing foot from lift-off to touchdown along the heading [m]
             (0: none; see "Two steps ahead" in the module docstring).
         halt_double_support: > 0: a quasi-static crossing (``SequencerParams.obstacle_double_support`` [s]): the
@@ -465,7 +466,8 @@ class FootholdConstraints:
                 if lengthened or not self._crosses(p0, yaw, candidate, liftoff):
                     return candidate, changed
                 trailing = self._trailing_bounds(bounds, p0, yaw, liftoff, boxes, candidate.dx)
-                if trailing[0] <= candidate.dx <= trailing[1] and candidate.duration >= trailing[4] - 1e-12:
+                if trailing[0] <= candidate.dx <= trailing[1] \
+                        and trailing[4] - 1e-12 <= candidate.duration <= trailing[5] + 1e-12:
                     return candidate, changed
                 bounds = trailing
                 candidate = self.swing_solve(solve, bounds, aim, offset_nominal, lift_along,
@@ -532,7 +534,7 @@ class FootholdConstraints:
         a, b, c, d = box
         l_lo, l_hi, w_lo, w_hi, t_lo, t_hi = bounds
         reach, t_cross = self.geometry.step_length_max, max(t_lo, self.geometry.step_duration_min)
-        t_cross_hi = max(t_hi, self.geometry.step_duration_max)
+        t_cross_hi = self.geometry.step_duration_max or t_hi
         inside = a < 0.0 < b and c < 0.0 < d  # the stance sole itself is within the grown footprint
         ahead = a + b > 0.0  # the box's middle ahead of the stance along the heading
         prepare = None  # the far side the next step crosses, when this may be the last step before it
@@ -696,7 +698,7 @@ class FootholdConstraints:
                         lower = a
             l_lo, l_hi = min(max(l_lo, lower), l_hi), max(min(l_hi, upper), l_lo)
         return (l_lo, l_hi, bounds[2], bounds[3], max(bounds[4], self.geometry.step_duration_min),
-                max(bounds[5], self.geometry.step_duration_max))
+                self.geometry.step_duration_max or bounds[5])
 
     def _feasible(self, bounds: StepBounds) -> bool:
         return bounds[0] <= bounds[1] and bounds[2] <= bounds[3] and bounds[4] <= bounds[5]

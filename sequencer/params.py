@@ -83,11 +83,14 @@ class SequencerParams:
         obstacle_step_length_max: length bound [m], > 0, of a step that goes beyond an obstacle (the planner
             uses max(l_max, this): the crossing step may be longer than a walking one).
         obstacle_step_duration_min: duration lower bound [s] of a step whose swing passes over an obstacle
-            (the planner uses max(t_min, this)), <= max(t_max, obstacle_step_duration_max).
+            (the planner uses max(t_min, this)), <= :attr:`crossing_duration_max`.
         obstacle_step_duration_max: duration upper bound [s] of a step whose swing passes over an obstacle,
-            0 (t_max, the walking bound) or in [max(t_min, obstacle_step_duration_min), 3]: a crossing step is
-            longer than a walking one and its DCM, from a walking offset, needs longer to travel it (from 3 cm,
-            a 0.58 m crossing on the H1's LIPM takes 0.93 s, beyond its t_max of 0.8 s).
+            0 (t_max, the walking bound) or in [max(t_min, obstacle_step_duration_min), 3], above t_max or below
+            it (:attr:`crossing_duration_max`). Longer: a crossing step is longer than a walking one and its DCM,
+            from a walking offset, needs longer to travel it (from 3 cm, a 0.58 m crossing on the H1's LIPM
+            takes 0.93 s, beyond its t_max of 0.8 s). Shorter: on a robot without ankle roll the lateral DCM
+            grows as exp(ω T) over the crossing's single support (x 12 over the H1's 0.8 s), so a short
+            crossing keeps a lateral offset at lift-off small at touchdown.
         obstacle_swing_length_max: the travel bound [m] of a foot whose swing passes over an obstacle, from its
             lift-off to its touchdown along the heading, 0 (none) or > 0: the trailing foot, lifting off before
             the obstacle, lands beyond it within this of where it lifted off (a nominal step from the lead foot
@@ -124,7 +127,7 @@ class SequencerParams:
             Not with ``obstacle_double_support`` or ``obstacle_trailing_double_support`` (they settle the resuming
             step themselves). The 'exact' backend only.
         obstacle_aim_duration: the crossing duration [s] the last step before an obstacle aims for, 0 (the
-            crossing's longest, max(t_max, obstacle_step_duration_max)) or in [max(t_min,
+            crossing's longest, :attr:`crossing_duration_max`) or in [max(t_min,
             obstacle_step_duration_min), that]: that step aims at the DCM offset from which the crossing step
             reaches its own aim within this long (a shorter one aims further ahead: it leans the robot into the
             crossing; :mod:`sequencer.footholds`).
@@ -156,7 +159,7 @@ class SequencerParams:
             (within ``obstacle_step_length_max``), so that the trailing foot can land behind it, under a DCM that
             lags the lead foot, where the passed obstacle bounds every foothold ("The landing room" in
             :mod:`sequencer.footholds`); the last step before the obstacle aims for that longer crossing. 0: on the bound.
-        obstacle_lateral_aim_duration: T_lat [s], 0 (off) or in [t_nom, max(t_max, obstacle_step_duration_max)]:
+        obstacle_lateral_aim_duration: T_lat [s], 0 (off) or in [t_nom, :attr:`crossing_duration_max`]:
             the last step before an obstacle and the lead crossing aim at the lateral DCM offset
             b_y,nom exp(-ω (T_lat - t_nom)) instead of b_y,nom, the one from which a crossing step lasting T_lat ends at
             the nominal lateral offset and width ("The lateral aim" in :mod:`sequencer.footholds`); 0: b_y,nom (a
@@ -296,10 +299,11 @@ class SequencerParams:
                                  f"[0, obstacle_margin={self.obstacle_margin} m]")
         if not self.obstacle_step_length_max > 0:
             raise ParameterError(f"obstacle_step_length_max={self.obstacle_step_length_max} m must be > 0")
-        crossing_longest = max(self.t_max, self.obstacle_step_duration_max)
+        crossing_longest = self.crossing_duration_max
         if not 0.0 <= self.obstacle_step_duration_min <= crossing_longest:
             raise ParameterError(f"obstacle_step_duration_min={self.obstacle_step_duration_min} s must be in "
-                                 f"[0, max(t_max, obstacle_step_duration_max)={crossing_longest} s]")
+                                 f"[0, the crossing's duration bound {crossing_longest} s (obstacle_step_duration_max, "
+                                 f"or t_max if 0)]")
         crossing_min = max(self.t_min, self.obstacle_step_duration_min)
         if not (self.obstacle_step_duration_max == 0.0 or crossing_min <= self.obstacle_step_duration_max <= 3.0):
             raise ParameterError(f"obstacle_step_duration_max={self.obstacle_step_duration_max} s must be 0 or in "
@@ -323,11 +327,11 @@ class SequencerParams:
             raise ParameterError(f"obstacle_resume_double_support={self.obstacle_resume_double_support} s needs "
                                  f"obstacle_double_support = obstacle_trailing_double_support = 0 (they settle the "
                                  f"resuming step themselves)")
-        crossing_max = max(self.t_max, self.obstacle_step_duration_max)
+        crossing_max = self.crossing_duration_max
         if not (self.obstacle_aim_duration == 0.0 or crossing_min <= self.obstacle_aim_duration <= crossing_max):
             raise ParameterError(f"obstacle_aim_duration={self.obstacle_aim_duration} s must be 0 or in "
                                  f"[max(t_min, obstacle_step_duration_min)={crossing_min} s, "
-                                 f"max(t_max, obstacle_step_duration_max)={crossing_max} s]")
+                                 f"the crossing's duration bound {crossing_max} s]")
         if not (math.isfinite(self.obstacle_approach_distance) and self.obstacle_approach_distance >= 0.0):
             raise ParameterError(f"obstacle_approach_distance={self.obstacle_approach_distance} m must be 0 (the "
                                  f"greedy approach) or a finite number > 0")
@@ -353,7 +357,7 @@ class SequencerParams:
         lateral = self.obstacle_lateral_aim_duration
         if not (lateral == 0.0 or self.t_nom <= lateral <= crossing_max):
             raise ParameterError(f"obstacle_lateral_aim_duration={lateral} s must be 0 (off) or in [t_nom={self.t_nom} s, "
-                                 f"max(t_max, obstacle_step_duration_max)={crossing_max} s]")
+                                 f"the crossing's duration bound {crossing_max} s]")
         inner = min(self.w_right_min, -self.w_left_max)  # the walk's least width across the heading [m]
         if not (self.obstacle_width_min == 0.0 or 2.0 * self.sole_half_width <= self.obstacle_width_min <= inner):
             raise ParameterError(f"obstacle_width_min={self.obstacle_width_min} m must be 0 (off) or in "
@@ -422,13 +426,20 @@ class SequencerParams:
             self.dcm_offset_bias, self.stance_drift,
         )
 
+    @property
+    def crossing_duration_max(self) -> float:
+        """The duration upper bound [s] of a step whose swing passes over an obstacle: ``obstacle_step_duration_max``,
+        or ``t_max`` when it is 0."""
+        return self.obstacle_step_duration_max or self.t_max
+
     def foothold_geometry(self) -> FootholdGeometry:
         """The obstacle margins, the crossing step's bounds and the sole of these parameters
-        (:class:`sequencer.footholds.FootholdGeometry`; effective crossing bounds: max with l_max, t_min, t_max)."""
+        (:class:`sequencer.footholds.FootholdGeometry`; effective crossing bounds: max with l_max and t_min, the
+        duration bound :attr:`crossing_duration_max`)."""
         return FootholdGeometry(self.obstacle_margin, max(self.l_max, self.obstacle_step_length_max),
                                 max(self.t_min, self.obstacle_step_duration_min), self.sole_front, self.sole_rear,
                                 self.sole_half_width, self.obstacle_offset_tolerance, self.obstacle_approach_margin,
-                                self.obstacle_double_support, max(self.t_max, self.obstacle_step_duration_max),
+                                self.obstacle_double_support, self.crossing_duration_max,
                                 self.obstacle_swing_length_max,
                                 trailing_double_support=self.obstacle_trailing_double_support,
                                 resume_double_support=self.obstacle_resume_double_support,

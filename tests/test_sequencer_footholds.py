@@ -159,7 +159,7 @@ def test_obstacle_helpers_and_bad_input():
     with pytest.raises(ParameterError, match="obstacle_step_length_max=0.0 m must be > 0"):
         dataclasses.replace(H1, obstacle_step_length_max=0.0)
     with pytest.raises(ParameterError, match=r"obstacle_step_duration_min=0.9 s must be in "
-                                             r"\[0, max\(t_max, obstacle_step_duration_max\)=0.8 s\]"):
+                                             r"\[0, the crossing's duration bound 0.8 s"):
         dataclasses.replace(H1, obstacle_step_duration_min=0.9)
     # a crossing longer than any walking step (its own upper bound beyond t_max)
     assert dataclasses.replace(H1, obstacle_step_duration_min=0.9, obstacle_step_duration_max=1.0).foothold_geometry() \
@@ -750,6 +750,32 @@ def test_the_lead_crossing_step_aims_at_the_offset_the_trailing_step_can_carry()
     # the trailing step then lands at the nominal offset, within its travel
     assert plan.steps[trailing].dcm_offset[0] == pytest.approx(b_nominal, abs=3e-3)
     assert along[trailing + 1] - along[trailing - 1] <= TWO_STEPS.obstacle_swing_length_max + 1e-9
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_crossing_bound_below_t_max_shortens_both_crossing_swings(seed):
+    """obstacle_step_duration_max below t_max (the H1 preset's crossings, 0.6 s against its 0.8 s): the lead and
+    trailing crossing steps last at most 0.6 s, every sole stays outside the box, and the walking steps keep their own
+    bound t_max."""
+    from wbmpc.walking.preset import load_walking_preset
+
+    rng = np.random.default_rng(200 + seed)
+    distance, depth = rng.uniform(0.8, 1.4), rng.uniform(0.1, 0.3)
+    obstacle = Obstacle(np.array([distance + 0.5 * depth, 0.0]), 0.0, depth, 1.2, 0.2)
+    durations = {}
+    for name, overrides in (("t_max", {}), ("short", {"planner.obstacle_step_duration_max": 0.6,
+                                                      "planner.obstacle_lateral_aim_duration": 0.6})):
+        params = load_walking_preset("h1", {"planner.horizon": 5.0, **overrides}).planner_params
+        assert params.crossing_duration_max == (0.6 if overrides else params.t_max)
+        planner = DcmFootstepPlanner(params)
+        stance, measured = _start(planner)
+        plan = planner.plan(0.0, stance, measured, COMMAND, obstacles=(obstacle,))
+        assert _sole_overlaps(plan, obstacle, params.foothold_geometry()) == []
+        lead, trailing, _ = _crossings(plan)
+        durations[name] = [plan.steps[k].duration for k in (lead, trailing)]
+        assert max(step.duration for step in plan.steps if step.crossing is None) <= params.t_max + 1e-9
+    assert all(0.6 - 1e-9 <= d <= 0.6 + 1e-9 for d in durations["short"])  # the preset's lower bound is 0.6 s too
+    assert max(durations["t_max"]) > 0.6 + 1e-3  # the bound is active: without it a crossing takes longer
 
 
 def test_crossing_duration_and_travel_bad_input():
