@@ -242,9 +242,9 @@ class DifferentialActionModelContactFwdDynamics:
     def calc_dynamics(self, data, x: np.ndarray, u: np.ndarray, derivatives: bool = True) -> None:
         """The dynamics part of :meth:`calc` (no cost): data.xout (nv,) and the contact forces.
 
-        ``derivatives=False`` (a rollout, "kkt" backend): the KKT solve by triangular solves on the
-        Cholesky factors (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`, the same numbers to
-        rounding), leaving nothing for :meth:`calc_diff_dynamics`, which then refuses to run until
+        ``derivatives=False`` (a rollout, "kkt" backend): the KKT solve by triangular solves on M's
+        tree-sparse Lᵀ D L factors (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`, the same numbers
+        to rounding), leaving nothing for :meth:`calc_diff_dynamics`, which then refuses to run until
         a calc with derivatives (``constraintDynamics``, the "pinocchio" backend's nodes with contacts,
         ignores the flag).
         """
