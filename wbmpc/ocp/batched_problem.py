@@ -438,7 +438,7 @@ class BatchedShootingProblem(ShootingProblem):
         tau[6:] = u
         if kkt is not None:
             dam, data = kkt
-            a = self._kkt_dynamics(kkt, x, u, forces)
+            a = self._kkt_dynamics(kkt, x, u, forces, derivatives=True)
             free_flyer_euler_step(x, a, dt, euler_dx, xnext)
             dam.calc_diff_dynamics(data, x, u)
             da_dx[:] = data.Fx
@@ -475,11 +475,14 @@ class BatchedShootingProblem(ShootingProblem):
         da_du[:] = da_dtau[:, 6:]
 
     @staticmethod
-    def _kkt_dynamics(kkt: tuple, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None) -> np.ndarray:
+    def _kkt_dynamics(kkt: tuple, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None,
+                      derivatives: bool = False) -> np.ndarray:
         """Accelerations (nv,) of a "kkt" backend node, kkt = (dam, data), and its stacked contact
-        forces into ``forces`` (nc_max,) unless None."""
+        forces into ``forces`` (nc_max,) unless None; ``derivatives``: the solve that leaves the KKT
+        factors for ``calc_diff_dynamics`` (else triangular solves, the same numbers to rounding:
+        :meth:`calc` and the rollouts)."""
         dam, data = kkt
-        dam.calc_dynamics(data, x, u)
+        dam.calc_dynamics(data, x, u, derivatives)
         if forces is not None:  # the active contacts' rows, stacked in order
             forces[:dam.nc] = data.force_all[:dam.nc]
         return data.xout

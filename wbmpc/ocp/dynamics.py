@@ -59,8 +59,14 @@ from wbmpc.errors import ParameterError
 from wbmpc.ocp.actuation import ActuationFloatingBase
 from wbmpc.ocp.contacts import ContactModel6D, ContactSet, ContactSetWork, SoleCorners
 from wbmpc.ocp.costs import CostModelSum
-from wbmpc.ocp.kernels.contact_dynamics import contact_kkt_dynamics
-from wbmpc.ocp.kernels.kkt import KKTBuffers, damped_kkt_derivatives, damped_kkt_dynamics
+from wbmpc.ocp.kernels.contact_dynamics import contact_kkt_dynamics, contact_kkt_solve
+from wbmpc.ocp.kernels.kkt import (
+    KKTBuffers,
+    damped_kkt_derivatives,
+    damped_kkt_dynamics,
+    damped_kkt_solve,
+    velocity_parents,
+)
 from wbmpc.ocp.kernels.tree import KinematicTree, tree_support
 from wbmpc.ocp.residuals.base import DataCollector
 from wbmpc.ocp.state import StateMultibody
@@ -133,6 +139,8 @@ class DifferentialActionModelContactFwdDynamics:
                 raise ParameterError(f"backend='kkt' with contacts needs the compiled tree kinematics: {reason}; "
                                      "use backend='pinocchio'")
         self.state = state
+        #: the parent of each velocity row (the sparsity of M the rollouts' KKT solve keeps)
+        self.velocity_parents = velocity_parents(state.pinocchio)
         self.actuation = actuation
         self.nu = actuation.nu
         self.contacts = dict(sorted(contacts.items()))
@@ -231,8 +239,15 @@ class DifferentialActionModelContactFwdDynamics:
         self.calc_dynamics(data, x, u)
         data.cost = self.costs.calc(data.costs, x, u, data.shared)
 
-    def calc_dynamics(self, data, x: np.ndarray, u: np.ndarray) -> None:
-        """The dynamics part of :meth:`calc` (no cost): data.xout (nv,) and the contact forces."""
+    def calc_dynamics(self, data, x: np.ndarray, u: np.ndarray, derivatives: bool = True) -> None:
+        """The dynamics part of :meth:`calc` (no cost): data.xout (nv,) and the contact forces.
+
+        ``derivatives=False`` (a rollout, "kkt" backend): the KKT solve by triangular solves on M's
+        tree-sparse Lᵀ D L factors (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`, the same numbers
+        to rounding), leaving nothing for :meth:`calc_diff_dynamics`, which then refuses to run until
+        a calc with derivatives (``constraintDynamics``, the "pinocchio" backend's nodes with contacts,
+        ignores the flag).
+        """
         model = self.state.pinocchio
         nq = self.state.nq
         q, v = x[:nq], x[nq:]
@@ -251,17 +266,22 @@ class DifferentialActionModelContactFwdDynamics:
             data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
         contact_set = self.contact_set
         self.actuation.calc(data.tau, u)
+        data.kkt_for_derivatives = derivatives
         if nc and not contact_set.has_positioned_soles:  # contacts and KKT solve in one compiled call
             contact_set.refresh_references()
-            solved = contact_kkt_dynamics(x, pdata.M, pdata.nle, self.contact_damping, self.row_scales,
-                                          *contact_set.kernel_arguments,
-                                          *data.contact_kkt_arguments(contact_set.kinds.size, nc))
+            solved = (contact_kkt_dynamics if derivatives else contact_kkt_solve)(
+                x, pdata.M, pdata.nle, self.contact_damping, self.row_scales, *contact_set.kernel_arguments,
+                *data.contact_kkt_arguments(contact_set.kinds.size, nc, derivatives))
         else:
             Jc, a0 = data.Jc_all[:nc], data.a0_all[:nc]
             if nc:  # the contacts' Jacobians and drifts (zero joint accelerations), compiled
                 contact_set.calc(data.tree, data.contact_work, q, v, data.zero_acceleration, Jc, a0)
-            solved = damped_kkt_dynamics(pdata.M, pdata.nle, data.tau, Jc, a0, self.row_scales, self.contact_damping,
-                                         data.xout, data.force_all[:nc], *data.kkt_buffers(nc).dynamics_buffers())
+            buffers = data.kkt_buffers(nc)
+            solved = (damped_kkt_dynamics(pdata.M, pdata.nle, data.tau, Jc, a0, self.row_scales, self.contact_damping,
+                                          data.xout, data.force_all[:nc], *buffers.dynamics_buffers()) if derivatives
+                      else damped_kkt_solve(pdata.M, pdata.nle, data.tau, Jc, a0, self.row_scales,
+                                            self.contact_damping, self.velocity_parents, data.xout,
+                                            data.force_all[:nc], *buffers.solve_buffers()))
         if not solved:
             data.xout[:] = np.nan  # M or the contacts' Delassus matrix is not positive definite: the rollout fails
         forces = data.force_all
@@ -325,6 +345,9 @@ class DifferentialActionModelContactFwdDynamics:
         if self.nc and self.backend == "pinocchio":
             self._calc_diff_constraint_dynamics(data)
             return
+        if not data.kkt_for_derivatives:
+            raise ParameterError("calc_diff_dynamics after calc_dynamics(..., derivatives=False): the KKT solve left "
+                                 "no factors for the derivatives; call calc_dynamics with derivatives=True first")
         model = self.state.pinocchio
         pdata = data.pinocchio
         nq = self.state.nq
@@ -380,6 +403,7 @@ class DifferentialActionDataContactFwdDynamics:
         nv, ndx, nu = state.nv, state.ndx, model.nu
         nc_max = sum(c.nc for c in model.contacts.values())
         self._model = state.pinocchio
+        self.velocity_parents = model.velocity_parents
         self._plain_pinocchio = state.pinocchio.createData()
         self._constraint_pinocchio = None  # created on the first constraint-dynamics evaluation
         self.pinocchio = self._plain_pinocchio
@@ -398,7 +422,7 @@ class DifferentialActionDataContactFwdDynamics:
         self.df_du_all = np.zeros((nc_max, nu))
         self.dtau_dq = np.zeros((nv, nv))  # RNEA derivative with the point forces' rotation terms
         self._kkt_buffers: dict[int, KKTBuffers] = {}  # contact rows -> the KKT kernels' buffers
-        self._contact_kkt_arguments: dict[tuple, tuple] = {}  # (contacts, rows) -> contact_kkt_arguments
+        self._contact_kkt_arguments: dict[tuple, tuple] = {}  # (contacts, rows, derivatives) -> its arguments
         # the compiled tree kinematics the contacts of the kkt backend read, and their buffers (None: the
         # pinocchio backend)
         self.tree = KinematicTree(state.pinocchio) if model.backend == "kkt" and nc_max else None
@@ -408,6 +432,8 @@ class DifferentialActionDataContactFwdDynamics:
         #: (``computeAllTerms``); False: only what the dynamics need (M, b), for a caller that evaluates
         #: the costs from its own kinematics (the batched problem)
         self.kinematics_for_costs = True
+        #: the last "kkt" calc left M⁻¹, A, Y and J̃ for the derivatives (False: a rollout's solve)
+        self.kkt_for_derivatives = True
         self._ndx = ndx
         self.active_contacts = None
         self.fext_joints: list[int] = []
@@ -420,18 +446,23 @@ class DifferentialActionDataContactFwdDynamics:
         c = self.costs
         self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu = c.Lx, c.Lu, c.Lxx, c.Lxu, c.Luu
 
-    def contact_kkt_arguments(self, n_contacts: int, nc: int) -> tuple:
+    def contact_kkt_arguments(self, n_contacts: int, nc: int, derivatives: bool = True) -> tuple:
         """The buffers :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_dynamics` takes after the
         contact set's arrays, for ``n_contacts`` active contacts of ``nc`` stacked rows (tau ... a0, xout,
-        the forces, the KKT buffers), made once per size."""
-        arguments = self._contact_kkt_arguments.get((n_contacts, nc))
+        the forces, the KKT buffers), made once per size; ``derivatives=False``: those of
+        :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_solve` (the velocity rows' parents, the
+        KKT solve buffers)."""
+        key = (n_contacts, nc, derivatives)
+        arguments = self._contact_kkt_arguments.get(key)
         if arguments is None:
             tree, work, k = self.tree, self.contact_work, n_contacts
-            arguments = self._contact_kkt_arguments[(n_contacts, nc)] = (
+            buffers = self.kkt_buffers(nc)
+            arguments = self._contact_kkt_arguments[key] = (
                 self.tau, self.zero_acceleration, tree.parents, tree.placement_rotation, tree.placement_translation,
                 tree.axes, tree.idx_q, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, work.oRf[:k], work.opf[:k],
                 work.fJf[:k], work.velocity[:k], work.acceleration[:k], self.Jc_all[:nc], self.a0_all[:nc], self.xout,
-                self.force_all[:nc], *self.kkt_buffers(nc).dynamics_buffers())
+                self.force_all[:nc],
+                *(buffers.dynamics_buffers() if derivatives else (self.velocity_parents, *buffers.solve_buffers())))
         return arguments
 
     def kkt_buffers(self, nc: int) -> KKTBuffers:
