@@ -2,7 +2,8 @@
 separate calls (the actuation, the contact set's calc, the damped KKT solve): the same
 accelerations, forces and KKT factors to the last bit. The rollouts' solve by triangular solves
 (``calc_dynamics(..., derivatives=False)``, :func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`) against
-the explicit-inverse one: the same accelerations and forces to rounding."""
+the explicit-inverse one: the same accelerations and forces to rounding, also with M and b compiled on the
+contacts' tree (no Pinocchio kinematics, :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_solve`)."""
 
 from __future__ import annotations
 
@@ -83,6 +84,17 @@ def _assert_rollout_solve_is_the_explicit_inverse(ocp, robot, seed: int) -> int:
             _assert_close(ddata.force_all[:dam.nc], forces)
         for name, rows in dam._active_rows:
             assert np.array_equal(ddata.contacts[name].force, ddata.force_all[rows])
+        if dam.nc and not dam.contact_set.has_positioned_soles:  # M and b compiled, no Pinocchio kinematics
+            M, nle = np.triu(ddata.pinocchio.M), ddata.pinocchio.nle.copy()
+            ddata.kinematics_for_costs = False
+            ddata.xout[:] = np.nan
+            dam.calc_dynamics(ddata, x, u, derivatives=False)
+            ddata.kinematics_for_costs = True
+            _assert_close(np.triu(ddata.M), M)
+            _assert_close(ddata.nle, nle)
+            assert np.array_equal(np.triu(ddata.pinocchio.M), M)  # Pinocchio's data not touched
+            _assert_close(ddata.xout, a)
+            _assert_close(ddata.force_all[:dam.nc], forces)
         # the derivatives' factors are left alone, and the derivatives refuse to read them
         assert all(np.array_equal(f, g) for f, g in zip(factors, (buffers.Minv, buffers.A, buffers.Y,
                                                                   buffers.J_scaled)))

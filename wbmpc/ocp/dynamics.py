@@ -45,8 +45,9 @@ Two interchangeable backends compute it (they agree to ~1e-13, see the tests):
   drift derivatives from one pass over the kinematic tree (:class:`~wbmpc.ocp.contacts.ContactSet`,
   :mod:`wbmpc.ocp.kernels.tree`), the damped KKT solve and its derivatives without forming the
   KKT inverse (:mod:`wbmpc.ocp.kernels.kkt`); Pinocchio gives M and b (``computeAllTerms``, or
-  ``crba`` and ``nonLinearEffects`` where the costs read other kinematics) and the RNEA
-  derivatives with the contact forces as external forces. Also the path for nodes without
+  ``crba`` and ``nonLinearEffects`` where the costs read other kinematics; a rollout's nodes whose
+  costs read none compute them on the same tree, :mod:`wbmpc.ocp.kernels.joint_space`) and the
+  RNEA derivatives with the contact forces as external forces. Also the path for nodes without
   contacts. Models: a free flyer followed by revolute joints.
 """
 
@@ -59,7 +60,8 @@ from wbmpc.errors import ParameterError
 from wbmpc.ocp.actuation import ActuationFloatingBase
 from wbmpc.ocp.contacts import ContactModel6D, ContactSet, ContactSetWork, SoleCorners
 from wbmpc.ocp.costs import CostModelSum
-from wbmpc.ocp.kernels.contact_dynamics import contact_kkt_dynamics, contact_kkt_solve
+from wbmpc.ocp.kernels.contact_dynamics import contact_kkt_dynamics, contact_kkt_solve, contact_kkt_tree_solve
+from wbmpc.ocp.kernels.joint_space import LinkInertias
 from wbmpc.ocp.kernels.kkt import (
     KKTBuffers,
     damped_kkt_derivatives,
@@ -246,7 +248,10 @@ class DifferentialActionModelContactFwdDynamics:
         tree-sparse Lᵀ D L factors (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`, the same numbers
         to rounding), leaving nothing for :meth:`calc_diff_dynamics`, which then refuses to run until
         a calc with derivatives (``constraintDynamics``, the "pinocchio" backend's nodes with contacts,
-        ignores the flag).
+        ignores the flag). With contacts and without ``data.kinematics_for_costs`` (the batched
+        problem) M and b are then the compiled ones of the contacts' tree
+        (:func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_solve`, the same numbers to
+        rounding; Pinocchio's data is not touched).
         """
         model = self.state.pinocchio
         nq = self.state.nq
@@ -254,20 +259,27 @@ class DifferentialActionModelContactFwdDynamics:
         if self.nc and self.backend == "pinocchio":
             self._calc_constraint_dynamics(data, q, v, u)
             return
+        nc = self.nc
+        contact_set = self.contact_set
+        one_call = nc and not contact_set.has_positioned_soles  # contacts and KKT solve in one compiled call
+        # a rollout node whose caller needs no Pinocchio kinematics: M and b compiled in that call too
+        tree_terms = one_call and not derivatives and not data.kinematics_for_costs
         pdata = data.select_pinocchio(None)
         if data.kinematics_for_costs:
             pin.computeAllTerms(model, pdata, q, v)
-        else:  # M (upper triangle) and b only, the same numbers
+        elif not tree_terms:  # M (upper triangle) and b only, the same numbers
             pin.crba(model, pdata, q, pin.Convention.WORLD)
             pin.nonLinearEffects(model, pdata, q, v)
-        nc = self.nc
         if data.active_contacts is not self.active_contacts:
             data.active_contacts = self.active_contacts
             data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
-        contact_set = self.contact_set
         self.actuation.calc(data.tau, u)
         data.kkt_for_derivatives = derivatives
-        if nc and not contact_set.has_positioned_soles:  # contacts and KKT solve in one compiled call
+        if tree_terms:
+            contact_set.refresh_references()
+            solved = contact_kkt_tree_solve(x, self.contact_damping, self.row_scales, *contact_set.kernel_arguments,
+                                            *data.contact_kkt_tree_arguments(contact_set.kinds.size, nc))
+        elif one_call:
             contact_set.refresh_references()
             solved = (contact_kkt_dynamics if derivatives else contact_kkt_solve)(
                 x, pdata.M, pdata.nle, self.contact_damping, self.row_scales, *contact_set.kernel_arguments,
@@ -427,6 +439,11 @@ class DifferentialActionDataContactFwdDynamics:
         # pinocchio backend)
         self.tree = KinematicTree(state.pinocchio) if model.backend == "kkt" and nc_max else None
         self.contact_work = ContactSetWork(len(model.contacts), nv) if self.tree is not None else None
+        #: the link inertias of the compiled M and b (a rollout's nodes without Pinocchio kinematics), M (nv, nv)
+        #: (upper triangle) and b (nv,) they leave
+        self.links = LinkInertias(state.pinocchio) if self.tree is not None else None
+        self.M = np.zeros((nv, nv))
+        self.nle = np.zeros(nv)
         self.zero_acceleration = np.zeros(nv)
         #: the "kkt" backend's calc leaves Pinocchio's kinematics, CoM and Jacobians for the costs
         #: (``computeAllTerms``); False: only what the dynamics need (M, b), for a caller that evaluates
@@ -463,6 +480,23 @@ class DifferentialActionDataContactFwdDynamics:
                 work.fJf[:k], work.velocity[:k], work.acceleration[:k], self.Jc_all[:nc], self.a0_all[:nc], self.xout,
                 self.force_all[:nc],
                 *(buffers.dynamics_buffers() if derivatives else (self.velocity_parents, *buffers.solve_buffers())))
+        return arguments
+
+    def contact_kkt_tree_arguments(self, n_contacts: int, nc: int) -> tuple:
+        """The buffers :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_solve` takes after the
+        contact set's arrays, for ``n_contacts`` active contacts of ``nc`` stacked rows (tau ... J, the link
+        inertias, M, b, the contacts' frame kinematics, Jc, a0, xout, the forces, the KKT solve buffers), made
+        once per size."""
+        key = (n_contacts, nc, "tree")
+        arguments = self._contact_kkt_arguments.get(key)
+        if arguments is None:
+            tree, work, k = self.tree, self.contact_work, n_contacts
+            arguments = self._contact_kkt_arguments[key] = (
+                self.tau, self.zero_acceleration, tree.parents, tree.placement_rotation, tree.placement_translation,
+                tree.axes, tree.idx_q, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, *self.links.arguments(),
+                self.M, self.nle, work.oRf[:k], work.opf[:k], work.fJf[:k], work.velocity[:k], work.acceleration[:k],
+                self.Jc_all[:nc], self.a0_all[:nc], self.xout, self.force_all[:nc], self.velocity_parents,
+                *self.kkt_buffers(nc).solve_buffers())
         return arguments
 
     def kkt_buffers(self, nc: int) -> KKTBuffers:

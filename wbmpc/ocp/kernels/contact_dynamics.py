@@ -5,7 +5,9 @@ torques the actuation model wrote, the same kernels in the same order as two sep
 same numbers to the last bit; one Python-to-compiled crossing per node instead of two, and none of
 the Python between them. :func:`contact_kkt_solve` is the same with the rollout's solve
 (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`: triangular solves, the same numbers to rounding, nothing
-left for the derivatives).
+left for the derivatives); :func:`contact_kkt_tree_solve` is that solve with M and b computed on the tree
+the contacts' kinematics just evaluated (:func:`~wbmpc.ocp.kernels.joint_space.joint_space_terms`) instead
+of given by Pinocchio: a rollout node without a binding call.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from __future__ import annotations
 from numba import njit
 
 from wbmpc.ocp.kernels.contact import contact_set_calc
+from wbmpc.ocp.kernels.joint_space import joint_space_terms
 from wbmpc.ocp.kernels.kkt import damped_kkt_dynamics, damped_kkt_solve
 
 
@@ -65,5 +68,29 @@ def contact_kkt_solve(x, M, nle, mu, scales, kinds, joints, frame_rotations, fra
     contact_set_calc(x[:nq], x[nq:], zero_acceleration, parents, placement_rotation, placement_translation, axes,
                      idx_q, idx_v, R, p, ov, oa, J, kinds, joints, frame_rotations, frame_translations, kp, kd,
                      references, corners, spreads, inverse_arms, oRf, opf, fJf, velocity, acceleration, Jc, a0)
+    return damped_kkt_solve(M, nle, tau, Jc, a0, scales, mu, velocity_parents, a, force, factor, W, U, G_factor, w,
+                            y)
+
+
+@njit(cache=True)
+def contact_kkt_tree_solve(x, mu, scales, kinds, joints, frame_rotations, frame_translations, kp, kd, references,
+                           corners, spreads, inverse_arms, tau, zero_acceleration, parents, placement_rotation,
+                           placement_translation, axes, idx_q, idx_v, R, p, ov, oa, J, mass, lever, rotational,
+                           armature, gravity, body, composite, body_force, M, nle, oRf, opf, fJf, velocity,
+                           acceleration, Jc, a0, a, force, velocity_parents, factor, W, U, G_factor, w, y):
+    """:func:`contact_kkt_solve` with M (nv, nv) and nle (nv,) outputs: computed from the tree kinematics the
+    contacts' pass leaves at (q, v, 0) (:func:`~wbmpc.ocp.kernels.joint_space.joint_space_terms`, the link
+    inertias mass ... body_force of :class:`~wbmpc.ocp.kernels.joint_space.LinkInertias`), not Pinocchio's;
+    the other arguments as :func:`contact_kkt_solve`'s, in its order.
+
+    Returns:
+        True, or False when M or the contacts' damped Delassus matrix is not positive definite.
+    """
+    nq = x.size - a.size
+    contact_set_calc(x[:nq], x[nq:], zero_acceleration, parents, placement_rotation, placement_translation, axes,
+                     idx_q, idx_v, R, p, ov, oa, J, kinds, joints, frame_rotations, frame_translations, kp, kd,
+                     references, corners, spreads, inverse_arms, oRf, opf, fJf, velocity, acceleration, Jc, a0)
+    joint_space_terms(parents, idx_v, R, p, ov, oa, J, mass, lever, rotational, armature, gravity, body, composite,
+                      body_force, M, nle)
     return damped_kkt_solve(M, nle, tau, Jc, a0, scales, mu, velocity_parents, a, force, factor, W, U, G_factor, w,
                             y)
