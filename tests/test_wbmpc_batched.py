@@ -585,3 +585,47 @@ def test_h1_preset_with_a_crossing_is_batched_and_matches_the_node_pipeline():
     terms = batched.term_costs()
     assert terms["com_path"] > 0 and terms["right_clearance_sole0"] > 0 and terms["left_clearance_sole0"] > 0
     _assert_same_half_step_rollout(nodes, batched, xs, us)
+
+
+@needs_h1_extra
+@pytest.mark.parametrize("python_node", [None, 5])
+def test_h1_compiled_rollout_is_the_node_by_node_one(python_node):
+    """The H1 preset ("kkt" soles): the rollout's nodes in one compiled call (kernels/rollout.py) give the node-by-node
+    rollout's states, controls, forces and cost to the last bit (the same kernels), and the node-wise pipeline's
+    (Pinocchio's M and b, the explicit-inverse KKT solve) to 1e-12 relative; a node handed back to Python in the
+    middle (as one the compiled call cannot run) is run there, the compiled call resuming after it."""
+    h1 = load_robot("h1")
+    n_nodes = 12
+    ocp = _batched_walking_ocp(h1, load_walking_preset("h1").ocp, n_nodes)
+    ocp.update(standing_state(h1), alternating_schedule(0.0, 0.02, n_nodes, step_duration=0.1, foot_y=(0.2, -0.2),
+                                                        t_start=0.07), np.array([0.1, 0.0, 0.97]))
+    nodes, batched = _twin_problems(ocp)
+    assert all(batched._kkt_rollout.compiled(k) for k in range(n_nodes)) and batched._keep_forces
+    if python_node is not None:
+        batched._kkt_rollout.contacts[python_node] = -1
+    xs, us = _small_random_trajectory(h1, n_nodes, ocp.nu, seed=6, q_scale=0.02, v_scale=0.1)
+    solver = SolverFDDP(nodes)
+    solver._set_candidate(xs, us, False)
+    solver._calc_diff()
+    solver._backward_pass()
+    for alpha in (1.0, 0.5):
+        outputs = []
+        for problem, use_compiled in ((nodes, None), (batched, False), (batched, True)):
+            if use_compiled is not None:
+                problem.use_compiled_rollout = use_compiled
+            xs_try, us_try, dx = np.zeros_like(xs), np.zeros_like(us), np.zeros((n_nodes, problem.ndx))
+            python_nodes = []  # the nodes run from Python
+            if problem is batched:
+                problem._kkt_dynamics = lambda *args, seen=python_nodes: (
+                    seen.append(1) or BatchedShootingProblem._kkt_dynamics(*args))
+            cost = problem.forward_rollout(solver.xs, solver.us, solver._k, solver._K, solver.fs, alpha, xs_try,
+                                           us_try, dx)
+            if use_compiled is not None:
+                assert len(python_nodes) == (n_nodes if not use_compiled else python_node is not None)
+            forces = batched._forces.copy() if problem is batched else None
+            outputs.append((cost, xs_try, us_try, dx, forces))
+        (c0, x0, u0, d0, _), python, (c2, x2, u2, d2, f2) = outputs
+        assert c2 == python[0] and all(np.array_equal(a, b) for a, b in zip((x2, u2, d2, f2), python[1:]))
+        assert c2 == pytest.approx(c0, rel=1e-12)
+        for ours, theirs in ((x2, x0), (u2, u0)):
+            assert np.max(np.abs(ours - theirs)) <= 1e-12 * np.max(np.abs(theirs))

@@ -65,6 +65,7 @@ from wbmpc.ocp.kernels.feedback import rollout_node_start
 from wbmpc.ocp.kernels.frames import FrameKinematics
 from wbmpc.ocp.kernels.integration import euler_transition_jacobians, free_flyer_euler_step
 from wbmpc.ocp.kernels.lie import free_flyer_dintegrate
+from wbmpc.ocp.kernels.rollout import KKTRollout
 from wbmpc.ocp.kernels.tree import tree_support
 from wbmpc.ocp.problem import RolloutError, ShootingProblem
 from wbmpc.ocp.residuals.base import BatchedResidual, HorizonData
@@ -235,6 +236,14 @@ class BatchedShootingProblem(ShootingProblem):
         self._prepared_da_du = np.zeros((N, nv, nu))
         self._prepared_forces = np.zeros_like(self._forces)
         self._prepared_force_jacobians = np.zeros_like(self._force_jacobians)
+        # the rollout of the "kkt" nodes in one compiled call (kernels/rollout.py), when a node may take it
+        kkt = [model.differential for model in self.running_models
+               if model.differential.backend == "kkt" and model.differential.contacts]
+        self._kkt_rollout = KKTRollout(self._pin_model, N, max((len(dam.contacts) for dam in kkt), default=0),
+                                       nc_max) if kkt else None
+        #: the rollouts run their "kkt" nodes in one compiled call (:mod:`wbmpc.ocp.kernels.rollout`); False:
+        #: node by node from Python (the same kernels but M and b: the same numbers to rounding)
+        self.use_compiled_rollout = True
         self.prepared_used = 0  # nodes the last calcDiff took from the preparation
         self._detached = False
         # (residual, active mask (N,), references, residual rows (N, nr), Jacobian nonzeros) of
@@ -267,6 +276,8 @@ class BatchedShootingProblem(ShootingProblem):
             dam = model.differential
             if dam.active_key != keys[k] or dam._moving_references:
                 self._node_dynamics[k] = self._dynamics_of(dam)
+                if self._kkt_rollout is not None:
+                    self._kkt_rollout.set_node(k, dam)
                 if dam.active_key != keys[k]:
                     for rows in h.contact_row.values():
                         rows[k] = -1
@@ -559,7 +570,9 @@ class BatchedShootingProblem(ShootingProblem):
         return self.calcDiff(xs, us)
 
     def forward_rollout(self, xs, us, k, K, fs, alpha, xs_try, us_try, dx) -> float:
-        """The FDDP rollout of :meth:`ShootingProblem.forward_rollout`, node costs batched."""
+        """The FDDP rollout of :meth:`ShootingProblem.forward_rollout`, node costs batched; the "kkt" nodes
+        with contacts (but positioned soles) in one compiled call (:mod:`wbmpc.ocp.kernels.rollout`), the
+        others, and a node the compiled call hands back (a half turn), node by node."""
         self._check_attached()
         N = self.T
         closing = not (alpha == 1.0 or fs is None)
@@ -568,8 +581,17 @@ class BatchedShootingProblem(ShootingProblem):
         constraint_dynamics = pin.constraintDynamics
         dynamics, dts, euler_dx, xnexts, tau = self._node_dynamics, self._dt, self._euler_dx, self.xnext, self._tau
         forces = self._forces if self._keep_forces else None
+        compiled = self._kkt_rollout if self.use_compiled_rollout else None
         xnext = self.x0
-        for t in range(N):
+        t = 0
+        while t < N:
+            if compiled is not None and compiled.compiled(t):  # from node t, as far as the compiled nodes go
+                t = compiled.run(t, self.x0, gaps, alpha, closing, xs, us, k, K, xs_try, us_try, dx, tau, dts, euler_dx,
+                                 xnexts, self._keep_forces, self._forces)
+                if t == N:
+                    xnext = xnexts[N - 1]
+                    break
+                xnext = self.x0 if t == 0 else xnexts[t - 1]
             x_try = xs_try[t]
             code = rollout_node_start(t, xnext, gaps, alpha, closing, xs, us, k, K, x_try, dx, us_try, tau)
             if code == 1:  # relative half turn: Pinocchio's difference
@@ -590,6 +612,7 @@ class BatchedShootingProblem(ShootingProblem):
                     _copy_forces(pdata.lambda_c, force_map, forces[t])
                 free_flyer_euler_step(x_try, a, dts[t], euler_dx[t], xnexts[t])
             xnext = xnexts[t]
+            t += 1
         if closing:
             self.state.integrate(xnext, fs[N] * (alpha - 1.0), out=xs_try[N])
         else:
