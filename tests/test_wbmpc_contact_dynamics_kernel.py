@@ -1,7 +1,7 @@
 """The one-call KKT contact dynamics of a node (wbmpc/ocp/kernels/contact_dynamics.py) against the
 separate calls (the actuation, the contact set's calc, the damped KKT solve): the same
 accelerations, forces and KKT factors to the last bit. The rollouts' solve by triangular solves
-(``calc_dynamics(..., derivatives=False)``, :func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`) against
+(``calc_dynamics(..., rollout_dynamics="compiled")``, :func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`) against
 the explicit-inverse one: the same accelerations and forces to rounding, also with M and b compiled on the
 contacts' tree (no Pinocchio kinematics, :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_solve`)."""
 
@@ -78,7 +78,7 @@ def _assert_rollout_solve_is_the_explicit_inverse(ocp, robot, seed: int) -> int:
         factors = buffers.Minv.copy(), buffers.A.copy(), buffers.Y.copy(), buffers.J_scaled.copy()
         ddata.xout[:] = np.nan
         ddata.force_all[:] = np.nan
-        dam.calc_dynamics(ddata, x, u, derivatives=False)
+        dam.calc_dynamics(ddata, x, u, rollout_dynamics="compiled")
         _assert_close(ddata.xout, a)
         if dam.nc:
             _assert_close(ddata.force_all[:dam.nc], forces)
@@ -88,7 +88,7 @@ def _assert_rollout_solve_is_the_explicit_inverse(ocp, robot, seed: int) -> int:
             M, nle = np.triu(ddata.pinocchio.M), ddata.pinocchio.nle.copy()
             ddata.kinematics_for_costs = False
             ddata.xout[:] = np.nan
-            dam.calc_dynamics(ddata, x, u, derivatives=False)
+            dam.calc_dynamics(ddata, x, u, rollout_dynamics="compiled")
             ddata.kinematics_for_costs = True
             _assert_close(np.triu(ddata.M), M)
             _assert_close(ddata.nle, nle)
@@ -98,7 +98,7 @@ def _assert_rollout_solve_is_the_explicit_inverse(ocp, robot, seed: int) -> int:
         # the derivatives' factors are left alone, and the derivatives refuse to read them
         assert all(np.array_equal(f, g) for f, g in zip(factors, (buffers.Minv, buffers.A, buffers.Y,
                                                                   buffers.J_scaled)))
-        with pytest.raises(ParameterError, match="derivatives=False"):
+        with pytest.raises(ParameterError, match="rollout_dynamics=.compiled."):
             dam.calc_diff_dynamics(ddata, x, u)
         dam.calc_dynamics(ddata, x, u)
         dam.calc_diff_dynamics(ddata, x, u)

@@ -52,7 +52,7 @@ import pinocchio as pin
 from numba import njit
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.dynamics import DifferentialActionModelContactFwdDynamics
+from wbmpc.ocp.dynamics import ROLLOUT_DYNAMICS, DifferentialActionModelContactFwdDynamics
 from wbmpc.ocp.integrator import IntegratedActionModelEuler
 from wbmpc.ocp.kernels.costs import (
     add_gauss_newton_rows,
@@ -117,18 +117,35 @@ def batched_evaluation_support(problem: ShootingProblem) -> str | None:
 class BatchedShootingProblem(ShootingProblem):
     """Drop-in :class:`~wbmpc.ocp.problem.ShootingProblem` with horizon-batched evaluation.
 
-    Same constructor; raises :class:`~wbmpc.errors.ParameterError` when the nodes are not
-    supported (see :func:`batched_evaluation_support`). References written into the node
-    residuals and the weights and activity set on the node cost items are seen at once; call
-    :meth:`sync` after changing the node models' contact sets, before the next evaluation
+    Same constructor, and ``rollout_dynamics``: the dynamics of the "kkt" backend's nodes with contacts
+    in :meth:`calc` and the rollouts (:meth:`forward_rollout`), one of
+    :data:`~wbmpc.ocp.dynamics.ROLLOUT_DYNAMICS`:
+
+    - "pinocchio" (default): each node's ``calc_dynamics`` as in its derivatives (Pinocchio's ``crba``
+      and ``nonLinearEffects``, the explicit-inverse KKT solve), node by node from Python;
+    - "compiled": M and b compiled on the contacts' tree and the KKT solve by triangular solves
+      (``calc_dynamics(..., rollout_dynamics="compiled")``), the rollout's run of such nodes in one
+      compiled call (:mod:`wbmpc.ocp.kernels.rollout`; ``use_compiled_rollout = False``: node by node,
+      the same kernels, the same numbers to the bit). A cheaper rollout (docs/benchmarks.md), the
+      same numbers as "pinocchio" to rounding (~1e-15), not to the bit: a closed loop's trajectory
+      changes.
+
+    The derivative pass (:meth:`calcDiff`, :meth:`prepare_dynamics`) is the same under both. Raises
+    :class:`~wbmpc.errors.ParameterError` when the nodes are not supported (see
+    :func:`batched_evaluation_support`) or ``rollout_dynamics`` is not one of the choices. References
+    written into the node residuals and the weights and activity set on the node cost items are seen at
+    once; call :meth:`sync` after changing the node models' contact sets, before the next evaluation
     (:meth:`~wbmpc.walking.WalkingOCP.update` does).
     """
 
-    def __init__(self, x0: np.ndarray, running_models: list, terminal_model):
+    def __init__(self, x0: np.ndarray, running_models: list, terminal_model, rollout_dynamics: str = "pinocchio"):
+        if rollout_dynamics not in ROLLOUT_DYNAMICS:
+            raise ParameterError(f"rollout_dynamics={rollout_dynamics!r} must be one of {ROLLOUT_DYNAMICS}")
         super().__init__(x0, running_models, terminal_model)
         reason = batched_evaluation_support(self)
         if reason is not None:
             raise ParameterError(f"running_models cannot be evaluated batched: {reason}")
+        self._rollout_dynamics = rollout_dynamics
         state = self.state
         N, nv, nx, ndx, nu = self.T, state.nv, state.nx, state.ndx, self.nu
         self._pin_model = state.pinocchio
@@ -236,13 +253,15 @@ class BatchedShootingProblem(ShootingProblem):
         self._prepared_da_du = np.zeros((N, nv, nu))
         self._prepared_forces = np.zeros_like(self._forces)
         self._prepared_force_jacobians = np.zeros_like(self._force_jacobians)
-        # the rollout of the "kkt" nodes in one compiled call (kernels/rollout.py), when a node may take it
+        # "compiled": the rollout of the "kkt" nodes in one compiled call (kernels/rollout.py), when a node may
+        # take it
         kkt = [model.differential for model in self.running_models
                if model.differential.backend == "kkt" and model.differential.contacts]
-        self._kkt_rollout = KKTRollout(self._pin_model, N, max((len(dam.contacts) for dam in kkt), default=0),
-                                       nc_max) if kkt else None
-        #: the rollouts run their "kkt" nodes in one compiled call (:mod:`wbmpc.ocp.kernels.rollout`); False:
-        #: node by node from Python (the same kernels but M and b: the same numbers to rounding)
+        self._kkt_rollout = (KKTRollout(self._pin_model, N, max(len(dam.contacts) for dam in kkt), nc_max)
+                             if kkt and rollout_dynamics == "compiled" else None)
+        #: with rollout_dynamics="compiled": the rollouts run their "kkt" nodes in one compiled call
+        #: (:mod:`wbmpc.ocp.kernels.rollout`); False: node by node from Python (the same kernels, the same
+        #: numbers to the bit). No effect with "pinocchio".
         self.use_compiled_rollout = True
         self.prepared_used = 0  # nodes the last calcDiff took from the preparation
         self._detached = False
@@ -254,6 +273,12 @@ class BatchedShootingProblem(ShootingProblem):
             for j, item in enumerate(model.differential.costs.costs.values()):
                 item.bind_scale(self, k * n_terms + j)
         self.sync()
+
+    @property
+    def rollout_dynamics(self) -> str:
+        """The dynamics of the "kkt" nodes in :meth:`calc` and the rollouts, "pinocchio" or "compiled"
+        (fixed at construction, see the class)."""
+        return self._rollout_dynamics
 
     def detach(self) -> None:
         """Called when another batched problem took over these node models' references and cost
@@ -420,7 +445,7 @@ class BatchedShootingProblem(ShootingProblem):
         tau = self._tau
         tau[6:] = u
         if kkt is not None:
-            a = self._kkt_dynamics(kkt, x, u, self._forces[k] if self._keep_forces else None)
+            a = self._kkt_dynamics(kkt, x, u, self._forces[k] if self._keep_forces else None, self._rollout_dynamics)
         elif constraints is not None:
             a = pin.constraintDynamics(model, pdata, q, v, tau, constraints, constraint_datas, settings)
             if self._keep_forces:
@@ -449,7 +474,7 @@ class BatchedShootingProblem(ShootingProblem):
         tau[6:] = u
         if kkt is not None:
             dam, data = kkt
-            a = self._kkt_dynamics(kkt, x, u, forces, derivatives=True)
+            a = self._kkt_dynamics(kkt, x, u, forces, "pinocchio")  # the solve the derivatives read
             free_flyer_euler_step(x, a, dt, euler_dx, xnext)
             dam.calc_diff_dynamics(data, x, u)
             da_dx[:] = data.Fx
@@ -487,13 +512,13 @@ class BatchedShootingProblem(ShootingProblem):
 
     @staticmethod
     def _kkt_dynamics(kkt: tuple, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None,
-                      derivatives: bool = False) -> np.ndarray:
+                      rollout_dynamics: str) -> np.ndarray:
         """Accelerations (nv,) of a "kkt" backend node, kkt = (dam, data), and its stacked contact
-        forces into ``forces`` (nc_max,) unless None; ``derivatives``: the solve that leaves the KKT
-        factors for ``calc_diff_dynamics`` (else triangular solves, the same numbers to rounding:
-        :meth:`calc` and the rollouts)."""
+        forces into ``forces`` (nc_max,) unless None; ``rollout_dynamics``: "pinocchio" (the solve that
+        leaves the KKT factors for ``calc_diff_dynamics``) or "compiled" (:meth:`calc` and the rollouts
+        under that choice: see ``calc_dynamics``)."""
         dam, data = kkt
-        dam.calc_dynamics(data, x, u, derivatives)
+        dam.calc_dynamics(data, x, u, rollout_dynamics)
         if forces is not None:  # the active contacts' rows, stacked in order
             forces[:dam.nc] = data.force_all[:dam.nc]
         return data.xout
@@ -570,9 +595,10 @@ class BatchedShootingProblem(ShootingProblem):
         return self.calcDiff(xs, us)
 
     def forward_rollout(self, xs, us, k, K, fs, alpha, xs_try, us_try, dx) -> float:
-        """The FDDP rollout of :meth:`ShootingProblem.forward_rollout`, node costs batched; the "kkt" nodes
-        with contacts (but positioned soles) in one compiled call (:mod:`wbmpc.ocp.kernels.rollout`), the
-        others, and a node the compiled call hands back (a half turn), node by node."""
+        """The FDDP rollout of :meth:`ShootingProblem.forward_rollout`, node costs batched, node by node; with
+        rollout_dynamics="compiled" the "kkt" nodes with contacts (but positioned soles) in one compiled call
+        (:mod:`wbmpc.ocp.kernels.rollout`), the others, and a node the compiled call hands back (a half
+        turn), node by node."""
         self._check_attached()
         N = self.T
         closing = not (alpha == 1.0 or fs is None)
@@ -581,7 +607,8 @@ class BatchedShootingProblem(ShootingProblem):
         constraint_dynamics = pin.constraintDynamics
         dynamics, dts, euler_dx, xnexts, tau = self._node_dynamics, self._dt, self._euler_dx, self.xnext, self._tau
         forces = self._forces if self._keep_forces else None
-        compiled = self._kkt_rollout if self.use_compiled_rollout else None
+        compiled = self._kkt_rollout if self.use_compiled_rollout else None  # None: "pinocchio"
+        rollout_dynamics = self._rollout_dynamics
         xnext = self.x0
         t = 0
         while t < N:
@@ -601,7 +628,7 @@ class BatchedShootingProblem(ShootingProblem):
                 raise RolloutError(f"control not finite at node {t}")
             constraints, pdata, constraint_datas, settings, force_map, kkt = dynamics[t]
             if kkt is not None:  # the node's own KKT dynamics (torques from us_try[t])
-                a = self._kkt_dynamics(kkt, x_try, us_try[t], None if forces is None else forces[t])
+                a = self._kkt_dynamics(kkt, x_try, us_try[t], None if forces is None else forces[t], rollout_dynamics)
                 free_flyer_euler_step(x_try, a, dts[t], euler_dx[t], xnexts[t])
             elif constraints is None:
                 self._node_dynamics_calc(t, x_try, us_try[t])

@@ -45,10 +45,16 @@ Two interchangeable backends compute it (they agree to ~1e-13, see the tests):
   drift derivatives from one pass over the kinematic tree (:class:`~wbmpc.ocp.contacts.ContactSet`,
   :mod:`wbmpc.ocp.kernels.tree`), the damped KKT solve and its derivatives without forming the
   KKT inverse (:mod:`wbmpc.ocp.kernels.kkt`); Pinocchio gives M and b (``computeAllTerms``, or
-  ``crba`` and ``nonLinearEffects`` where the costs read other kinematics; a rollout's nodes whose
-  costs read none compute them on the same tree, :mod:`wbmpc.ocp.kernels.joint_space`) and the
-  RNEA derivatives with the contact forces as external forces. Also the path for nodes without
+  ``crba`` and ``nonLinearEffects`` where the costs read other kinematics) and the RNEA
+  derivatives with the contact forces as external forces. Also the path for nodes without
   contacts. Models: a free flyer followed by revolute joints.
+
+The "kkt" backend's calc (no derivatives) takes ``rollout_dynamics`` (:data:`ROLLOUT_DYNAMICS`,
+:meth:`DifferentialActionModelContactFwdDynamics.calc_dynamics`): "pinocchio" (default) the path
+above, the one the derivatives need; "compiled" (a rollout's, opt-in) the KKT solve by triangular
+solves on M's tree-sparse Lᵀ D L factors (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`) and,
+where the costs read no Pinocchio kinematics, M and b on the contacts' tree
+(:mod:`wbmpc.ocp.kernels.joint_space`): the same numbers to rounding (~1e-15), not to the bit.
 """
 
 from __future__ import annotations
@@ -72,6 +78,11 @@ from wbmpc.ocp.kernels.kkt import (
 from wbmpc.ocp.kernels.tree import KinematicTree, tree_support
 from wbmpc.ocp.residuals.base import DataCollector
 from wbmpc.ocp.state import StateMultibody
+
+#: the dynamics of a "kkt" node's calc without derivatives (a rollout): "pinocchio" (Pinocchio's M and b,
+#: the explicit-inverse KKT solve the derivatives use) or "compiled" (M and b compiled on the contacts' tree,
+#: the KKT solve by triangular solves: the same numbers to rounding)
+ROLLOUT_DYNAMICS = ("pinocchio", "compiled")
 
 
 class DifferentialActionModelContactFwdDynamics:
@@ -241,18 +252,29 @@ class DifferentialActionModelContactFwdDynamics:
         self.calc_dynamics(data, x, u)
         data.cost = self.costs.calc(data.costs, x, u, data.shared)
 
-    def calc_dynamics(self, data, x: np.ndarray, u: np.ndarray, derivatives: bool = True) -> None:
+    def calc_dynamics(self, data, x: np.ndarray, u: np.ndarray, rollout_dynamics: str = "pinocchio") -> None:
         """The dynamics part of :meth:`calc` (no cost): data.xout (nv,) and the contact forces.
 
-        ``derivatives=False`` (a rollout, "kkt" backend): the KKT solve by triangular solves on M's
-        tree-sparse Lᵀ D L factors (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`, the same numbers
-        to rounding), leaving nothing for :meth:`calc_diff_dynamics`, which then refuses to run until
-        a calc with derivatives (``constraintDynamics``, the "pinocchio" backend's nodes with contacts,
-        ignores the flag). With contacts and without ``data.kinematics_for_costs`` (the batched
-        problem) M and b are then the compiled ones of the contacts' tree
-        (:func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_solve`, the same numbers to
-        rounding; Pinocchio's data is not touched).
+        ``rollout_dynamics`` (:data:`ROLLOUT_DYNAMICS`, the "kkt" backend; ``constraintDynamics``, the
+        "pinocchio" backend's nodes with contacts, ignores it):
+
+        - "pinocchio" (default): Pinocchio's M and b (``computeAllTerms``, or ``crba`` and
+          ``nonLinearEffects`` without ``data.kinematics_for_costs``) and the explicit-inverse KKT
+          solve (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_dynamics`), which leaves the factors
+          :meth:`calc_diff_dynamics` reads: every calc whose derivatives follow;
+        - "compiled" (a rollout, opt-in): the KKT solve by triangular solves on M's tree-sparse Lᵀ D L
+          factors (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`) and, with contacts and without
+          ``data.kinematics_for_costs`` (the batched problem), M and b compiled on the contacts' tree
+          (:func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_solve`; Pinocchio's data is not
+          touched): the same numbers to rounding (~1e-15), not to the bit. It leaves nothing for
+          :meth:`calc_diff_dynamics`, which then refuses to run until a "pinocchio" calc.
+
+        Raises:
+            ParameterError: ``rollout_dynamics`` is not one of :data:`ROLLOUT_DYNAMICS`.
         """
+        derivatives = rollout_dynamics == "pinocchio"  # the solve that leaves the factors of the derivatives
+        if not derivatives and rollout_dynamics != "compiled":
+            raise ParameterError(f"rollout_dynamics={rollout_dynamics!r} must be one of {ROLLOUT_DYNAMICS}")
         model = self.state.pinocchio
         nq = self.state.nq
         q, v = x[:nq], x[nq:]
@@ -262,7 +284,7 @@ class DifferentialActionModelContactFwdDynamics:
         nc = self.nc
         contact_set = self.contact_set
         one_call = nc and not contact_set.has_positioned_soles  # contacts and KKT solve in one compiled call
-        # a rollout node whose caller needs no Pinocchio kinematics: M and b compiled in that call too
+        # a compiled rollout node whose caller needs no Pinocchio kinematics: M and b compiled in that call too
         tree_terms = one_call and not derivatives and not data.kinematics_for_costs
         pdata = data.select_pinocchio(None)
         if data.kinematics_for_costs:
@@ -358,8 +380,9 @@ class DifferentialActionModelContactFwdDynamics:
             self._calc_diff_constraint_dynamics(data)
             return
         if not data.kkt_for_derivatives:
-            raise ParameterError("calc_diff_dynamics after calc_dynamics(..., derivatives=False): the KKT solve left "
-                                 "no factors for the derivatives; call calc_dynamics with derivatives=True first")
+            raise ParameterError("calc_diff_dynamics after calc_dynamics(..., rollout_dynamics='compiled'): the KKT "
+                                 "solve left no factors for the derivatives; call calc_dynamics with "
+                                 "rollout_dynamics='pinocchio' first")
         model = self.state.pinocchio
         pdata = data.pinocchio
         nq = self.state.nq
@@ -439,7 +462,7 @@ class DifferentialActionDataContactFwdDynamics:
         # pinocchio backend)
         self.tree = KinematicTree(state.pinocchio) if model.backend == "kkt" and nc_max else None
         self.contact_work = ContactSetWork(len(model.contacts), nv) if self.tree is not None else None
-        #: the link inertias of the compiled M and b (a rollout's nodes without Pinocchio kinematics), M (nv, nv)
+        #: the link inertias of the compiled M and b ("compiled" rollouts without Pinocchio kinematics), M (nv, nv)
         #: (upper triangle) and b (nv,) they leave
         self.links = LinkInertias(state.pinocchio) if self.tree is not None else None
         self.M = np.zeros((nv, nv))
@@ -449,7 +472,7 @@ class DifferentialActionDataContactFwdDynamics:
         #: (``computeAllTerms``); False: only what the dynamics need (M, b), for a caller that evaluates
         #: the costs from its own kinematics (the batched problem)
         self.kinematics_for_costs = True
-        #: the last "kkt" calc left M⁻¹, A, Y and J̃ for the derivatives (False: a rollout's solve)
+        #: the last "kkt" calc left M⁻¹, A, Y and J̃ for the derivatives (False: a "compiled" rollout's solve)
         self.kkt_for_derivatives = True
         self._ndx = ndx
         self.active_contacts = None
