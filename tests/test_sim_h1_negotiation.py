@@ -51,10 +51,7 @@ def test_h1_walks_up_to_the_box_with_every_foothold_before_it_and_without_touchi
     replans = log.replans
     landed = replans["stance_switched"] > 0
     stance_x = replans["stance_x"][landed]
-    # it walked towards the box (the furthest landing of the 3.6 s is chaotic in the last bits: 0.627 m at 0c48759,
-    # 0.598 m with the rollouts' KKT by triangular solves, session 22; 0.619-0.817 m with the box 2 mm nearer or
-    # further, either code)
-    assert stance_x.size >= 6 and stance_x.max() > 0.55
+    assert stance_x.size >= 6 and stance_x.max() > 0.6  # it walked towards the box
     # every foothold so far before the box: the whole sole (its toe) before the near edge by half the margin at
     # least (the closed loop lands short steps up to 6 cm beyond the plan)
     planner = preset.planner
