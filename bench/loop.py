@@ -19,6 +19,11 @@ at 50 Hz; 1 kHz Riccati feedback) for ``--duration`` simulated seconds and repor
   twin-able variant (:func:`bench.crocoddyl_loop.crocoddyl_twinnable_variant`, the fields it
   replaces are reported): the four runs are then all on the variant, after the headline run of
   ours on the preset.
+
+``--set NAME=VALUE`` (repeatable) overrides the walking preset for every run of the benchmark, in the
+form of :func:`wbmpc.walking.preset.load_walking_preset`'s overrides (``--set ocp.rollout_dynamics=compiled``:
+the H1's rollouts compiled; ``--set n_nodes=80``); the report names them. Alternate runs with and without
+an override to compare them on a shared machine.
 """
 
 from __future__ import annotations
@@ -42,6 +47,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--baseline", choices=("crocoddyl", "none"), default="crocoddyl",
         help="also run the loop with Crocoddyl's FDDP as the MPC solver (default; skipped if Crocoddyl is absent)",
     )
+    # --set NAME=VALUE (args.overrides, a list of (name, value)): wbmpc.cli.bench adds it, with the CLI's parser
+
+
+def preset_overrides(args: argparse.Namespace) -> dict:
+    """The walking-preset overrides of ``--set`` (``{}`` without; a Namespace built without the option too)."""
+    return dict(getattr(args, "overrides", None) or ())
 
 
 def _bare_step_time(robot_name: str = "bolt", n_steps: int = 3000) -> float:
@@ -141,14 +152,16 @@ def pinocchio_floor(mpc, rollouts_per_update: float, repeats: int = 10) -> dict:
 def _run_loop(args: argparse.Namespace, controller_class=None, overrides: dict | None = None):
     """One run of the benchmarked closed loop with a walking controller of ``controller_class``
     (default :class:`~wbmpc.walking.controller.WalkingController`) built as ``run_scenario`` builds its own
-    (the scenario's velocity command, ``--max-iterations``), on the robot's preset with ``overrides``
-    (``{"ocp.<field>": value}``, e.g. the Crocoddyl-twin-able variant's); returns (log, controller)."""
+    (the scenario's velocity command, ``--max-iterations``), on the robot's preset with ``--set``'s overrides,
+    then ``overrides`` (``{"ocp.<field>": value}``, e.g. the Crocoddyl-twin-able variant's); returns (log,
+    controller)."""
     from sim.runner import run_scenario
     from wbmpc.walking.controller import WalkingController
     from wbmpc.walking.preset import load_walking_preset
 
     robot = args.robot
     extra = {} if args.max_iterations is None else {"max_iterations": args.max_iterations}
+    extra.update(preset_overrides(args))
     extra.update(overrides or {})
     controller = (controller_class or WalkingController)(load_walking_preset(robot, extra))
     log = run_scenario(args.scenario, robot=robot, duration=args.duration, seed=args.seed, progress=False,
@@ -159,6 +172,9 @@ def _run_loop(args: argparse.Namespace, controller_class=None, overrides: dict |
 def run(args: argparse.Namespace) -> dict:
     import numpy as np
 
+    from wbmpc.walking.preset import load_walking_preset
+
+    load_walking_preset(args.robot, preset_overrides(args))  # a bad --set is refused before any run
     bare = _bare_step_time(args.robot)
     log, controller = _run_loop(args)
     timing = dict(log.timing)
@@ -193,6 +209,7 @@ def run(args: argparse.Namespace) -> dict:
         "baseline": baseline,
         "scenario": args.scenario,
         "robot": args.robot,
+        "preset_overrides": preset_overrides(args),
         "max_iterations": controller.config.max_iterations,
         "status": log.status,
         "simulated_time": simulated,
@@ -311,8 +328,10 @@ def _runs_text(runs: list) -> str:
 
 
 def format_report(result: dict) -> str:
+    overrides = result.get("preset_overrides")
     lines = [
-        f"closed loop '{result['scenario']}' on the {result['robot']} preset ({result['status']}, "
+        f"closed loop '{result['scenario']}' on the {result['robot']} preset"
+        + (f" with {_overrides_text(overrides)}" if overrides else "") + f" ({result['status']}, "
         f"{result['max_iterations']} FDDP iteration(s) per "
         f"update): {result['simulated_time']:.2f} s simulated "
         f"in {result['wall_time']:.2f} s wall",

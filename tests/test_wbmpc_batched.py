@@ -585,3 +585,130 @@ def test_h1_preset_with_a_crossing_is_batched_and_matches_the_node_pipeline():
     terms = batched.term_costs()
     assert terms["com_path"] > 0 and terms["right_clearance_sole0"] > 0 and terms["left_clearance_sole0"] > 0
     _assert_same_half_step_rollout(nodes, batched, xs, us)
+
+
+def test_rollout_dynamics_is_checked_naming_the_choices(bolt):
+    """rollout_dynamics: a one-line ParameterError naming the field, its value and what is allowed (the
+    config, the problem, calc_dynamics); "compiled" needs the "kkt" backend and the batched evaluation."""
+    with pytest.raises(ParameterError, match=r"^rollout_dynamics='fast' must be 'pinocchio' or 'compiled'$"):
+        WalkingOCPConfig(rollout_dynamics="fast")
+    with pytest.raises(ParameterError, match=r"^rollout_dynamics='compiled' needs dynamics_backend='kkt'.*got "
+                                             r"'pinocchio'$"):
+        WalkingOCPConfig(rollout_dynamics="compiled")
+    with pytest.raises(ParameterError, match=r"^rollout_dynamics='compiled' needs the batched evaluation.*got "
+                                             r"evaluation='nodes'$"):
+        WalkingOCPConfig(rollout_dynamics="compiled", dynamics_backend="kkt", evaluation="nodes")
+    assert WalkingOCPConfig().rollout_dynamics == "pinocchio"
+    config = WalkingOCPConfig(dynamics_backend="kkt", rollout_dynamics="compiled")
+    with pytest.raises(ParameterError, match=r"^rollout_dynamics='compiled' needs the batched evaluation, not "
+                                             r"possible for this problem: .*ResidualFrameVelocity"):
+        WalkingOCP(bolt, dataclasses.replace(config, touchdown_velocity_weight=1.0), 5, 0.01)
+    ocp = WalkingOCP(bolt, config, 5, 0.01)
+    assert ocp.problem.rollout_dynamics == "compiled"
+    p = ocp.problem
+    with pytest.raises(ParameterError, match=r"^rollout_dynamics='Compiled' must be one of \('pinocchio', "
+                                             r"'compiled'\)$"):
+        BatchedShootingProblem(p.x0, p.running_models, p.terminal_model, rollout_dynamics="Compiled")
+    assert BatchedShootingProblem(p.x0, p.running_models, p.terminal_model).rollout_dynamics == "pinocchio"
+    dam, data = p.running_models[0].differential, p.running_datas[0].differential
+    with pytest.raises(ParameterError, match=r"^rollout_dynamics=None must be one of"):
+        dam.calc_dynamics(data, p.x0, np.zeros(ocp.nu), None)
+
+
+def _h1_rollouts(ocp: WalkingOCP, n_nodes: int, seed: int, python_node: int | None = None):
+    """The H1 OCP's batched problem after an update, its node-wise twin, and an FDDP step's
+    (solver, xs, us) from the twin's Riccati gains at a small random trajectory."""
+    h1 = ocp.robot
+    ocp.update(standing_state(h1), alternating_schedule(0.0, 0.02, n_nodes, step_duration=0.1, foot_y=(0.2, -0.2),
+                                                        t_start=0.07), np.array([0.1, 0.0, 0.97]))
+    nodes, batched = _twin_problems(ocp)
+    xs, us = _small_random_trajectory(h1, n_nodes, ocp.nu, seed=seed, q_scale=0.02, v_scale=0.1)
+    solver = SolverFDDP(nodes)
+    solver._set_candidate(xs, us, False)
+    solver._calc_diff()
+    solver._backward_pass()
+    return nodes, batched, solver
+
+
+def _rollout(problem, solver, alpha: float, calls: list | None = None) -> tuple:
+    """(cost, xs_try, us_try, dx, the batched problem's kept forces) of ``problem``'s rollout; ``calls``:
+    the rollout_dynamics of each node a batched problem runs from Python."""
+    xs_try, us_try = np.zeros_like(solver.xs), np.zeros_like(solver.us)
+    dx = np.zeros((problem.T, problem.ndx))
+    if calls is not None:
+        problem._kkt_dynamics = lambda *args, seen=calls: (seen.append(args[-1]) or
+                                                          BatchedShootingProblem._kkt_dynamics(*args))
+    cost = problem.forward_rollout(solver.xs, solver.us, solver._k, solver._K, solver.fs, alpha, xs_try, us_try, dx)
+    forces = problem._forces.copy() if isinstance(problem, BatchedShootingProblem) else None
+    return cost, xs_try, us_try, dx, forces
+
+
+@needs_h1_extra
+def test_h1_rollout_dynamics_pinocchio_is_mains_node_by_node_rollout():
+    """The default rollout_dynamics="pinocchio" (the H1 preset's): every "kkt" node of the rollout is its own
+    calc_dynamics as before the option (Pinocchio's crba and nonLinearEffects, the explicit-inverse KKT
+    solve, node by node from Python), so each transition is, to the last bit, the default calc_dynamics and
+    Euler step at the rollout's (x, u); the compiled rollout is not built."""
+    from wbmpc.ocp.kernels.integration import free_flyer_euler_step
+
+    h1 = load_robot("h1")
+    n_nodes = 12
+    preset = load_walking_preset("h1").ocp
+    assert preset.rollout_dynamics == "pinocchio"
+    ocp = _batched_walking_ocp(h1, preset, n_nodes)
+    nodes, batched, solver = _h1_rollouts(ocp, n_nodes, seed=6)
+    assert batched.rollout_dynamics == "pinocchio" and batched._kkt_rollout is None and batched._keep_forces
+    for alpha in (1.0, 0.5):
+        calls = []
+        cost, xs_try, us_try, _, forces = _rollout(batched, solver, alpha, calls)
+        assert calls == ["pinocchio"] * n_nodes
+        for t, (model, entry) in enumerate(zip(batched.running_models, batched._node_dynamics)):
+            dam, data = entry[-1]
+            assert dam is model.differential and not data.kinematics_for_costs
+            fresh = dam.createData()
+            fresh.kinematics_for_costs = False
+            dam.calc_dynamics(fresh, xs_try[t], us_try[t])
+            xnext, euler_dx = np.zeros(batched.state.nx), np.zeros(batched.ndx)
+            free_flyer_euler_step(xs_try[t], fresh.xout, model.dt, euler_dx, xnext)
+            assert np.array_equal(xnext, batched.xnext[t])
+            assert np.array_equal(forces[t, :dam.nc], fresh.force_all[:dam.nc])
+        reference = _rollout(nodes, solver, alpha)
+        assert cost == pytest.approx(reference[0], rel=1e-12)
+
+
+@needs_h1_extra
+@pytest.mark.parametrize("python_node", [None, 5])
+def test_h1_rollout_dynamics_compiled_agrees_with_pinocchio(python_node):
+    """rollout_dynamics="compiled" on the H1 preset ("kkt" soles): the rollout's nodes in one compiled call
+    (kernels/rollout.py) give the node-by-node rollout's states, controls, forces and cost to the last bit
+    (the same kernels), and the "pinocchio" rollout's (Pinocchio's M and b, the explicit-inverse KKT solve)
+    and the node-wise pipeline's to 1e-12 relative; a node handed back to Python in the middle (as one the
+    compiled call cannot run) is run there, the compiled call resuming after it."""
+    h1 = load_robot("h1")
+    n_nodes = 12
+    preset = load_walking_preset("h1").ocp
+    ocp = _batched_walking_ocp(h1, dataclasses.replace(preset, rollout_dynamics="compiled"), n_nodes)
+    nodes, batched, solver = _h1_rollouts(ocp, n_nodes, seed=6)
+    assert batched.rollout_dynamics == "compiled"
+    assert all(batched._kkt_rollout.compiled(k) for k in range(n_nodes)) and batched._keep_forces
+    if python_node is not None:
+        batched._kkt_rollout.contacts[python_node] = -1
+    default = _batched_walking_ocp(h1, preset, n_nodes)  # the same OCP, rollout_dynamics="pinocchio"
+    _, default_problem, _ = _h1_rollouts(default, n_nodes, seed=6)
+    for alpha in (1.0, 0.5):
+        outputs = []
+        for use_compiled in (False, True):
+            batched.use_compiled_rollout = use_compiled
+            calls = []
+            outputs.append(_rollout(batched, solver, alpha, calls))
+            assert calls == ["compiled"] * (n_nodes if not use_compiled else python_node is not None)
+        python, (c2, x2, u2, d2, f2) = outputs
+        assert c2 == python[0] and all(np.array_equal(a, b) for a, b in zip((x2, u2, d2, f2), python[1:]))
+        for reference in (_rollout(default_problem, solver, alpha), _rollout(nodes, solver, alpha)):
+            c0, x0, u0 = reference[:3]
+            assert c2 == pytest.approx(c0, rel=1e-12)
+            for ours, theirs in ((x2, x0), (u2, u0)):
+                assert np.max(np.abs(ours - theirs)) <= 1e-12 * np.max(np.abs(theirs))
+            if reference[4] is not None:
+                assert np.max(np.abs(f2 - reference[4])) <= 1e-12 * np.max(np.abs(reference[4]))
+            assert not np.array_equal(x2, x0) or reference[4] is None  # not the same path: rounding differs

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+from robot_extras import needs_h1_extra
+
 from wbmpc.cli import main
 
 
@@ -49,3 +51,30 @@ def test_bench_loop_reports_the_real_time_factor_against_the_crocoddyl_loop(caps
     # cannot assert it)
     assert floor["mpc_per_update"] > 0 and floor["best_real_time_factor"] > 0
     assert report["setup_time"] > 0  # models and the cold first solve, outside the factor
+
+
+
+def test_bench_loop_takes_walking_preset_overrides(capsys):
+    """``wbmpc bench loop --set NAME=VALUE``: a walking-preset override for every run, named in the report; a
+    bad one is refused in one line before any run."""
+    assert main(["bench", "loop", "--baseline", "none", "--set", "ocp.rollout_dynamics=fast"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "rollout_dynamics='fast' must be 'pinocchio' or 'compiled'" in err
+    assert main(["bench", "loop", "--duration", "0.1", "--baseline", "none", "--set", "ocp.max_line_search_trials=5",
+                 "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["status"] == "completed" and report["preset_overrides"] == {"ocp.max_line_search_trials": 5}
+
+
+@needs_h1_extra
+def test_bench_loop_runs_the_h1_with_compiled_rollouts():
+    """``--set ocp.rollout_dynamics=compiled`` reaches the H1's MPC problem (the speed-up measured against the
+    default in alternated runs, docs/benchmarks.md "H1 loop, session 24")."""
+    import argparse
+
+    from bench.loop import _run_loop
+
+    args = argparse.Namespace(robot="h1", scenario="walk", duration=0.05, seed=0, max_iterations=None,
+                              overrides=[("ocp.rollout_dynamics", "compiled")])
+    log, controller = _run_loop(args)
+    assert log.status == "completed" and controller.mpc.problem.rollout_dynamics == "compiled"

@@ -9,7 +9,16 @@ from __future__ import annotations
 import argparse
 import importlib
 
-from wbmpc.cli.arguments import COUNT, DURATION, NON_NEGATIVE_INT, POSITIVE, SEED, NumberType, restrict_numbers
+from wbmpc.cli.arguments import (
+    COUNT,
+    DURATION,
+    NON_NEGATIVE_INT,
+    POSITIVE,
+    SEED,
+    NumberType,
+    parse_assignment,
+    restrict_numbers,
+)
 from wbmpc.cli.output import add_output_arguments, print_json
 
 # target name -> module path (each module: add_arguments, run, format_report)
@@ -31,6 +40,9 @@ BENCH_NUMBERS: dict[str, dict[str, NumberType]] = {
     "planner": {"repeats": COUNT, "seed": SEED},
 }
 
+# The targets that take ``--set NAME=VALUE`` walking-preset overrides (``args.overrides``, (name, value) pairs).
+BENCH_PRESET_OVERRIDES = {"loop"}
+
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser("bench", help="run a benchmark (ratios against an in-run baseline)")
@@ -40,6 +52,11 @@ def register(subparsers) -> None:
         sub = targets.add_parser(name, help=(module.__doc__ or "").strip().splitlines()[0])
         module.add_arguments(sub)
         restrict_numbers(sub, BENCH_NUMBERS.get(name, {}))
+        if name in BENCH_PRESET_OVERRIDES:
+            sub.add_argument(
+                "--set", dest="overrides", action="append", type=parse_assignment, default=[], metavar="NAME=VALUE",
+                help="a walking-preset override for every run (repeatable), e.g. ocp.rollout_dynamics=compiled",
+            )
         add_output_arguments(sub, plot=False)
         sub.set_defaults(func=_runner(module))
 

@@ -52,7 +52,7 @@ import pinocchio as pin
 from numba import njit
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.dynamics import DifferentialActionModelContactFwdDynamics
+from wbmpc.ocp.dynamics import ROLLOUT_DYNAMICS, DifferentialActionModelContactFwdDynamics
 from wbmpc.ocp.integrator import IntegratedActionModelEuler
 from wbmpc.ocp.kernels.costs import (
     add_gauss_newton_rows,
@@ -65,6 +65,7 @@ from wbmpc.ocp.kernels.feedback import rollout_node_start
 from wbmpc.ocp.kernels.frames import FrameKinematics
 from wbmpc.ocp.kernels.integration import euler_transition_jacobians, free_flyer_euler_step
 from wbmpc.ocp.kernels.lie import free_flyer_dintegrate
+from wbmpc.ocp.kernels.rollout import KKTRollout
 from wbmpc.ocp.kernels.tree import tree_support
 from wbmpc.ocp.problem import RolloutError, ShootingProblem
 from wbmpc.ocp.residuals.base import BatchedResidual, HorizonData
@@ -116,18 +117,35 @@ def batched_evaluation_support(problem: ShootingProblem) -> str | None:
 class BatchedShootingProblem(ShootingProblem):
     """Drop-in :class:`~wbmpc.ocp.problem.ShootingProblem` with horizon-batched evaluation.
 
-    Same constructor; raises :class:`~wbmpc.errors.ParameterError` when the nodes are not
-    supported (see :func:`batched_evaluation_support`). References written into the node
-    residuals and the weights and activity set on the node cost items are seen at once; call
-    :meth:`sync` after changing the node models' contact sets, before the next evaluation
+    Same constructor, and ``rollout_dynamics``: the dynamics of the "kkt" backend's nodes with contacts
+    in :meth:`calc` and the rollouts (:meth:`forward_rollout`), one of
+    :data:`~wbmpc.ocp.dynamics.ROLLOUT_DYNAMICS`:
+
+    - "pinocchio" (default): each node's ``calc_dynamics`` as in its derivatives (Pinocchio's ``crba``
+      and ``nonLinearEffects``, the explicit-inverse KKT solve), node by node from Python;
+    - "compiled": M and b compiled on the contacts' tree and the KKT solve by triangular solves
+      (``calc_dynamics(..., rollout_dynamics="compiled")``), the rollout's run of such nodes in one
+      compiled call (:mod:`wbmpc.ocp.kernels.rollout`; ``use_compiled_rollout = False``: node by node,
+      the same kernels, the same numbers to the bit). A cheaper rollout (docs/benchmarks.md), the
+      same numbers as "pinocchio" to rounding (~1e-15), not to the bit: a closed loop's trajectory
+      changes.
+
+    The derivative pass (:meth:`calcDiff`, :meth:`prepare_dynamics`) is the same under both. Raises
+    :class:`~wbmpc.errors.ParameterError` when the nodes are not supported (see
+    :func:`batched_evaluation_support`) or ``rollout_dynamics`` is not one of the choices. References
+    written into the node residuals and the weights and activity set on the node cost items are seen at
+    once; call :meth:`sync` after changing the node models' contact sets, before the next evaluation
     (:meth:`~wbmpc.walking.WalkingOCP.update` does).
     """
 
-    def __init__(self, x0: np.ndarray, running_models: list, terminal_model):
+    def __init__(self, x0: np.ndarray, running_models: list, terminal_model, rollout_dynamics: str = "pinocchio"):
+        if rollout_dynamics not in ROLLOUT_DYNAMICS:
+            raise ParameterError(f"rollout_dynamics={rollout_dynamics!r} must be one of {ROLLOUT_DYNAMICS}")
         super().__init__(x0, running_models, terminal_model)
         reason = batched_evaluation_support(self)
         if reason is not None:
             raise ParameterError(f"running_models cannot be evaluated batched: {reason}")
+        self._rollout_dynamics = rollout_dynamics
         state = self.state
         N, nv, nx, ndx, nu = self.T, state.nv, state.nx, state.ndx, self.nu
         self._pin_model = state.pinocchio
@@ -235,6 +253,16 @@ class BatchedShootingProblem(ShootingProblem):
         self._prepared_da_du = np.zeros((N, nv, nu))
         self._prepared_forces = np.zeros_like(self._forces)
         self._prepared_force_jacobians = np.zeros_like(self._force_jacobians)
+        # "compiled": the rollout of the "kkt" nodes in one compiled call (kernels/rollout.py), when a node may
+        # take it
+        kkt = [model.differential for model in self.running_models
+               if model.differential.backend == "kkt" and model.differential.contacts]
+        self._kkt_rollout = (KKTRollout(self._pin_model, N, max(len(dam.contacts) for dam in kkt), nc_max)
+                             if kkt and rollout_dynamics == "compiled" else None)
+        #: with rollout_dynamics="compiled": the rollouts run their "kkt" nodes in one compiled call
+        #: (:mod:`wbmpc.ocp.kernels.rollout`); False: node by node from Python (the same kernels, the same
+        #: numbers to the bit). No effect with "pinocchio".
+        self.use_compiled_rollout = True
         self.prepared_used = 0  # nodes the last calcDiff took from the preparation
         self._detached = False
         # (residual, active mask (N,), references, residual rows (N, nr), Jacobian nonzeros) of
@@ -245,6 +273,12 @@ class BatchedShootingProblem(ShootingProblem):
             for j, item in enumerate(model.differential.costs.costs.values()):
                 item.bind_scale(self, k * n_terms + j)
         self.sync()
+
+    @property
+    def rollout_dynamics(self) -> str:
+        """The dynamics of the "kkt" nodes in :meth:`calc` and the rollouts, "pinocchio" or "compiled"
+        (fixed at construction, see the class)."""
+        return self._rollout_dynamics
 
     def detach(self) -> None:
         """Called when another batched problem took over these node models' references and cost
@@ -267,6 +301,8 @@ class BatchedShootingProblem(ShootingProblem):
             dam = model.differential
             if dam.active_key != keys[k] or dam._moving_references:
                 self._node_dynamics[k] = self._dynamics_of(dam)
+                if self._kkt_rollout is not None:
+                    self._kkt_rollout.set_node(k, dam)
                 if dam.active_key != keys[k]:
                     for rows in h.contact_row.values():
                         rows[k] = -1
@@ -409,7 +445,7 @@ class BatchedShootingProblem(ShootingProblem):
         tau = self._tau
         tau[6:] = u
         if kkt is not None:
-            a = self._kkt_dynamics(kkt, x, u, self._forces[k] if self._keep_forces else None)
+            a = self._kkt_dynamics(kkt, x, u, self._forces[k] if self._keep_forces else None, self._rollout_dynamics)
         elif constraints is not None:
             a = pin.constraintDynamics(model, pdata, q, v, tau, constraints, constraint_datas, settings)
             if self._keep_forces:
@@ -438,7 +474,7 @@ class BatchedShootingProblem(ShootingProblem):
         tau[6:] = u
         if kkt is not None:
             dam, data = kkt
-            a = self._kkt_dynamics(kkt, x, u, forces)
+            a = self._kkt_dynamics(kkt, x, u, forces, "pinocchio")  # the solve the derivatives read
             free_flyer_euler_step(x, a, dt, euler_dx, xnext)
             dam.calc_diff_dynamics(data, x, u)
             da_dx[:] = data.Fx
@@ -475,11 +511,14 @@ class BatchedShootingProblem(ShootingProblem):
         da_du[:] = da_dtau[:, 6:]
 
     @staticmethod
-    def _kkt_dynamics(kkt: tuple, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None) -> np.ndarray:
+    def _kkt_dynamics(kkt: tuple, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None,
+                      rollout_dynamics: str) -> np.ndarray:
         """Accelerations (nv,) of a "kkt" backend node, kkt = (dam, data), and its stacked contact
-        forces into ``forces`` (nc_max,) unless None."""
+        forces into ``forces`` (nc_max,) unless None; ``rollout_dynamics``: "pinocchio" (the solve that
+        leaves the KKT factors for ``calc_diff_dynamics``) or "compiled" (:meth:`calc` and the rollouts
+        under that choice: see ``calc_dynamics``)."""
         dam, data = kkt
-        dam.calc_dynamics(data, x, u)
+        dam.calc_dynamics(data, x, u, rollout_dynamics)
         if forces is not None:  # the active contacts' rows, stacked in order
             forces[:dam.nc] = data.force_all[:dam.nc]
         return data.xout
@@ -556,7 +595,10 @@ class BatchedShootingProblem(ShootingProblem):
         return self.calcDiff(xs, us)
 
     def forward_rollout(self, xs, us, k, K, fs, alpha, xs_try, us_try, dx) -> float:
-        """The FDDP rollout of :meth:`ShootingProblem.forward_rollout`, node costs batched."""
+        """The FDDP rollout of :meth:`ShootingProblem.forward_rollout`, node costs batched, node by node; with
+        rollout_dynamics="compiled" the "kkt" nodes with contacts (but positioned soles) in one compiled call
+        (:mod:`wbmpc.ocp.kernels.rollout`), the others, and a node the compiled call hands back (a half
+        turn), node by node."""
         self._check_attached()
         N = self.T
         closing = not (alpha == 1.0 or fs is None)
@@ -565,8 +607,18 @@ class BatchedShootingProblem(ShootingProblem):
         constraint_dynamics = pin.constraintDynamics
         dynamics, dts, euler_dx, xnexts, tau = self._node_dynamics, self._dt, self._euler_dx, self.xnext, self._tau
         forces = self._forces if self._keep_forces else None
+        compiled = self._kkt_rollout if self.use_compiled_rollout else None  # None: "pinocchio"
+        rollout_dynamics = self._rollout_dynamics
         xnext = self.x0
-        for t in range(N):
+        t = 0
+        while t < N:
+            if compiled is not None and compiled.compiled(t):  # from node t, as far as the compiled nodes go
+                t = compiled.run(t, self.x0, gaps, alpha, closing, xs, us, k, K, xs_try, us_try, dx, tau, dts, euler_dx,
+                                 xnexts, self._keep_forces, self._forces)
+                if t == N:
+                    xnext = xnexts[N - 1]
+                    break
+                xnext = self.x0 if t == 0 else xnexts[t - 1]
             x_try = xs_try[t]
             code = rollout_node_start(t, xnext, gaps, alpha, closing, xs, us, k, K, x_try, dx, us_try, tau)
             if code == 1:  # relative half turn: Pinocchio's difference
@@ -576,7 +628,7 @@ class BatchedShootingProblem(ShootingProblem):
                 raise RolloutError(f"control not finite at node {t}")
             constraints, pdata, constraint_datas, settings, force_map, kkt = dynamics[t]
             if kkt is not None:  # the node's own KKT dynamics (torques from us_try[t])
-                a = self._kkt_dynamics(kkt, x_try, us_try[t], None if forces is None else forces[t])
+                a = self._kkt_dynamics(kkt, x_try, us_try[t], None if forces is None else forces[t], rollout_dynamics)
                 free_flyer_euler_step(x_try, a, dts[t], euler_dx[t], xnexts[t])
             elif constraints is None:
                 self._node_dynamics_calc(t, x_try, us_try[t])
@@ -587,6 +639,7 @@ class BatchedShootingProblem(ShootingProblem):
                     _copy_forces(pdata.lambda_c, force_map, forces[t])
                 free_flyer_euler_step(x_try, a, dts[t], euler_dx[t], xnexts[t])
             xnext = xnexts[t]
+            t += 1
         if closing:
             self.state.integrate(xnext, fs[N] * (alpha - 1.0), out=xs_try[N])
         else:

@@ -235,6 +235,8 @@ class ContactSet:
         #: True when a 6D contact has Kp > 0: its Kp term is added between the contacts' calc and the
         #: KKT solve, so the node cannot take the one-call :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_dynamics`
         self.has_positioned_soles = bool(self._positioned_soles)
+        #: True when a point contact has Kp > 0: :meth:`refresh_references` has something to read
+        self.has_moving_references = bool(self._moving_points)
         #: the contact arrays of the kernels (kinds ... inverse_arms), in their argument order
         self.kernel_arguments = (self.kinds, self.joints, self.frame_rotations, self.frame_translations, self.kp,
                                  self.kd, self.references, self.corners, self.spreads, self.inverse_arms)

@@ -48,6 +48,13 @@ Two interchangeable backends compute it (they agree to ~1e-13, see the tests):
   ``crba`` and ``nonLinearEffects`` where the costs read other kinematics) and the RNEA
   derivatives with the contact forces as external forces. Also the path for nodes without
   contacts. Models: a free flyer followed by revolute joints.
+
+The "kkt" backend's calc (no derivatives) takes ``rollout_dynamics`` (:data:`ROLLOUT_DYNAMICS`,
+:meth:`DifferentialActionModelContactFwdDynamics.calc_dynamics`): "pinocchio" (default) the path
+above, the one the derivatives need; "compiled" (a rollout's, opt-in) the KKT solve by triangular
+solves on M's tree-sparse Lᵀ D L factors (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`) and,
+where the costs read no Pinocchio kinematics, M and b on the contacts' tree
+(:mod:`wbmpc.ocp.kernels.joint_space`): the same numbers to rounding (~1e-15), not to the bit.
 """
 
 from __future__ import annotations
@@ -59,11 +66,23 @@ from wbmpc.errors import ParameterError
 from wbmpc.ocp.actuation import ActuationFloatingBase
 from wbmpc.ocp.contacts import ContactModel6D, ContactSet, ContactSetWork, SoleCorners
 from wbmpc.ocp.costs import CostModelSum
-from wbmpc.ocp.kernels.contact_dynamics import contact_kkt_dynamics
-from wbmpc.ocp.kernels.kkt import KKTBuffers, damped_kkt_derivatives, damped_kkt_dynamics
+from wbmpc.ocp.kernels.contact_dynamics import contact_kkt_dynamics, contact_kkt_solve, contact_kkt_tree_solve
+from wbmpc.ocp.kernels.joint_space import LinkInertias
+from wbmpc.ocp.kernels.kkt import (
+    KKTBuffers,
+    damped_kkt_derivatives,
+    damped_kkt_dynamics,
+    damped_kkt_solve,
+    velocity_parents,
+)
 from wbmpc.ocp.kernels.tree import KinematicTree, tree_support
 from wbmpc.ocp.residuals.base import DataCollector
 from wbmpc.ocp.state import StateMultibody
+
+#: the dynamics of a "kkt" node's calc without derivatives (a rollout): "pinocchio" (Pinocchio's M and b,
+#: the explicit-inverse KKT solve the derivatives use) or "compiled" (M and b compiled on the contacts' tree,
+#: the KKT solve by triangular solves: the same numbers to rounding)
+ROLLOUT_DYNAMICS = ("pinocchio", "compiled")
 
 
 class DifferentialActionModelContactFwdDynamics:
@@ -133,6 +152,8 @@ class DifferentialActionModelContactFwdDynamics:
                 raise ParameterError(f"backend='kkt' with contacts needs the compiled tree kinematics: {reason}; "
                                      "use backend='pinocchio'")
         self.state = state
+        #: the parent of each velocity row (the sparsity of M the rollouts' KKT solve keeps)
+        self.velocity_parents = velocity_parents(state.pinocchio)
         self.actuation = actuation
         self.nu = actuation.nu
         self.contacts = dict(sorted(contacts.items()))
@@ -231,37 +252,70 @@ class DifferentialActionModelContactFwdDynamics:
         self.calc_dynamics(data, x, u)
         data.cost = self.costs.calc(data.costs, x, u, data.shared)
 
-    def calc_dynamics(self, data, x: np.ndarray, u: np.ndarray) -> None:
-        """The dynamics part of :meth:`calc` (no cost): data.xout (nv,) and the contact forces."""
+    def calc_dynamics(self, data, x: np.ndarray, u: np.ndarray, rollout_dynamics: str = "pinocchio") -> None:
+        """The dynamics part of :meth:`calc` (no cost): data.xout (nv,) and the contact forces.
+
+        ``rollout_dynamics`` (:data:`ROLLOUT_DYNAMICS`, the "kkt" backend; ``constraintDynamics``, the
+        "pinocchio" backend's nodes with contacts, ignores it):
+
+        - "pinocchio" (default): Pinocchio's M and b (``computeAllTerms``, or ``crba`` and
+          ``nonLinearEffects`` without ``data.kinematics_for_costs``) and the explicit-inverse KKT
+          solve (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_dynamics`), which leaves the factors
+          :meth:`calc_diff_dynamics` reads: every calc whose derivatives follow;
+        - "compiled" (a rollout, opt-in): the KKT solve by triangular solves on M's tree-sparse Lᵀ D L
+          factors (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`) and, with contacts and without
+          ``data.kinematics_for_costs`` (the batched problem), M and b compiled on the contacts' tree
+          (:func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_solve`; Pinocchio's data is not
+          touched): the same numbers to rounding (~1e-15), not to the bit. It leaves nothing for
+          :meth:`calc_diff_dynamics`, which then refuses to run until a "pinocchio" calc.
+
+        Raises:
+            ParameterError: ``rollout_dynamics`` is not one of :data:`ROLLOUT_DYNAMICS`.
+        """
+        derivatives = rollout_dynamics == "pinocchio"  # the solve that leaves the factors of the derivatives
+        if not derivatives and rollout_dynamics != "compiled":
+            raise ParameterError(f"rollout_dynamics={rollout_dynamics!r} must be one of {ROLLOUT_DYNAMICS}")
         model = self.state.pinocchio
         nq = self.state.nq
         q, v = x[:nq], x[nq:]
         if self.nc and self.backend == "pinocchio":
             self._calc_constraint_dynamics(data, q, v, u)
             return
+        nc = self.nc
+        contact_set = self.contact_set
+        one_call = nc and not contact_set.has_positioned_soles  # contacts and KKT solve in one compiled call
+        # a compiled rollout node whose caller needs no Pinocchio kinematics: M and b compiled in that call too
+        tree_terms = one_call and not derivatives and not data.kinematics_for_costs
         pdata = data.select_pinocchio(None)
         if data.kinematics_for_costs:
             pin.computeAllTerms(model, pdata, q, v)
-        else:  # M (upper triangle) and b only, the same numbers
+        elif not tree_terms:  # M (upper triangle) and b only, the same numbers
             pin.crba(model, pdata, q, pin.Convention.WORLD)
             pin.nonLinearEffects(model, pdata, q, v)
-        nc = self.nc
         if data.active_contacts is not self.active_contacts:
             data.active_contacts = self.active_contacts
             data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
-        contact_set = self.contact_set
         self.actuation.calc(data.tau, u)
-        if nc and not contact_set.has_positioned_soles:  # contacts and KKT solve in one compiled call
+        data.kkt_for_derivatives = derivatives
+        if tree_terms:
             contact_set.refresh_references()
-            solved = contact_kkt_dynamics(x, pdata.M, pdata.nle, self.contact_damping, self.row_scales,
-                                          *contact_set.kernel_arguments,
-                                          *data.contact_kkt_arguments(contact_set.kinds.size, nc))
+            solved = contact_kkt_tree_solve(x, self.contact_damping, self.row_scales, *contact_set.kernel_arguments,
+                                            *data.contact_kkt_tree_arguments(contact_set.kinds.size, nc))
+        elif one_call:
+            contact_set.refresh_references()
+            solved = (contact_kkt_dynamics if derivatives else contact_kkt_solve)(
+                x, pdata.M, pdata.nle, self.contact_damping, self.row_scales, *contact_set.kernel_arguments,
+                *data.contact_kkt_arguments(contact_set.kinds.size, nc, derivatives))
         else:
             Jc, a0 = data.Jc_all[:nc], data.a0_all[:nc]
             if nc:  # the contacts' Jacobians and drifts (zero joint accelerations), compiled
                 contact_set.calc(data.tree, data.contact_work, q, v, data.zero_acceleration, Jc, a0)
-            solved = damped_kkt_dynamics(pdata.M, pdata.nle, data.tau, Jc, a0, self.row_scales, self.contact_damping,
-                                         data.xout, data.force_all[:nc], *data.kkt_buffers(nc).dynamics_buffers())
+            buffers = data.kkt_buffers(nc)
+            solved = (damped_kkt_dynamics(pdata.M, pdata.nle, data.tau, Jc, a0, self.row_scales, self.contact_damping,
+                                          data.xout, data.force_all[:nc], *buffers.dynamics_buffers()) if derivatives
+                      else damped_kkt_solve(pdata.M, pdata.nle, data.tau, Jc, a0, self.row_scales,
+                                            self.contact_damping, self.velocity_parents, data.xout,
+                                            data.force_all[:nc], *buffers.solve_buffers()))
         if not solved:
             data.xout[:] = np.nan  # M or the contacts' Delassus matrix is not positive definite: the rollout fails
         forces = data.force_all
@@ -325,6 +379,10 @@ class DifferentialActionModelContactFwdDynamics:
         if self.nc and self.backend == "pinocchio":
             self._calc_diff_constraint_dynamics(data)
             return
+        if not data.kkt_for_derivatives:
+            raise ParameterError("calc_diff_dynamics after calc_dynamics(..., rollout_dynamics='compiled'): the KKT "
+                                 "solve left no factors for the derivatives; call calc_dynamics with "
+                                 "rollout_dynamics='pinocchio' first")
         model = self.state.pinocchio
         pdata = data.pinocchio
         nq = self.state.nq
@@ -380,6 +438,7 @@ class DifferentialActionDataContactFwdDynamics:
         nv, ndx, nu = state.nv, state.ndx, model.nu
         nc_max = sum(c.nc for c in model.contacts.values())
         self._model = state.pinocchio
+        self.velocity_parents = model.velocity_parents
         self._plain_pinocchio = state.pinocchio.createData()
         self._constraint_pinocchio = None  # created on the first constraint-dynamics evaluation
         self.pinocchio = self._plain_pinocchio
@@ -398,16 +457,23 @@ class DifferentialActionDataContactFwdDynamics:
         self.df_du_all = np.zeros((nc_max, nu))
         self.dtau_dq = np.zeros((nv, nv))  # RNEA derivative with the point forces' rotation terms
         self._kkt_buffers: dict[int, KKTBuffers] = {}  # contact rows -> the KKT kernels' buffers
-        self._contact_kkt_arguments: dict[tuple, tuple] = {}  # (contacts, rows) -> contact_kkt_arguments
+        self._contact_kkt_arguments: dict[tuple, tuple] = {}  # (contacts, rows, derivatives) -> its arguments
         # the compiled tree kinematics the contacts of the kkt backend read, and their buffers (None: the
         # pinocchio backend)
         self.tree = KinematicTree(state.pinocchio) if model.backend == "kkt" and nc_max else None
         self.contact_work = ContactSetWork(len(model.contacts), nv) if self.tree is not None else None
+        #: the link inertias of the compiled M and b ("compiled" rollouts without Pinocchio kinematics), M (nv, nv)
+        #: (upper triangle) and b (nv,) they leave
+        self.links = LinkInertias(state.pinocchio) if self.tree is not None else None
+        self.M = np.zeros((nv, nv))
+        self.nle = np.zeros(nv)
         self.zero_acceleration = np.zeros(nv)
         #: the "kkt" backend's calc leaves Pinocchio's kinematics, CoM and Jacobians for the costs
         #: (``computeAllTerms``); False: only what the dynamics need (M, b), for a caller that evaluates
         #: the costs from its own kinematics (the batched problem)
         self.kinematics_for_costs = True
+        #: the last "kkt" calc left M⁻¹, A, Y and J̃ for the derivatives (False: a "compiled" rollout's solve)
+        self.kkt_for_derivatives = True
         self._ndx = ndx
         self.active_contacts = None
         self.fext_joints: list[int] = []
@@ -420,18 +486,40 @@ class DifferentialActionDataContactFwdDynamics:
         c = self.costs
         self.Lx, self.Lu, self.Lxx, self.Lxu, self.Luu = c.Lx, c.Lu, c.Lxx, c.Lxu, c.Luu
 
-    def contact_kkt_arguments(self, n_contacts: int, nc: int) -> tuple:
+    def contact_kkt_arguments(self, n_contacts: int, nc: int, derivatives: bool = True) -> tuple:
         """The buffers :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_dynamics` takes after the
         contact set's arrays, for ``n_contacts`` active contacts of ``nc`` stacked rows (tau ... a0, xout,
-        the forces, the KKT buffers), made once per size."""
-        arguments = self._contact_kkt_arguments.get((n_contacts, nc))
+        the forces, the KKT buffers), made once per size; ``derivatives=False``: those of
+        :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_solve` (the velocity rows' parents, the
+        KKT solve buffers)."""
+        key = (n_contacts, nc, derivatives)
+        arguments = self._contact_kkt_arguments.get(key)
         if arguments is None:
             tree, work, k = self.tree, self.contact_work, n_contacts
-            arguments = self._contact_kkt_arguments[(n_contacts, nc)] = (
+            buffers = self.kkt_buffers(nc)
+            arguments = self._contact_kkt_arguments[key] = (
                 self.tau, self.zero_acceleration, tree.parents, tree.placement_rotation, tree.placement_translation,
                 tree.axes, tree.idx_q, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, work.oRf[:k], work.opf[:k],
                 work.fJf[:k], work.velocity[:k], work.acceleration[:k], self.Jc_all[:nc], self.a0_all[:nc], self.xout,
-                self.force_all[:nc], *self.kkt_buffers(nc).dynamics_buffers())
+                self.force_all[:nc],
+                *(buffers.dynamics_buffers() if derivatives else (self.velocity_parents, *buffers.solve_buffers())))
+        return arguments
+
+    def contact_kkt_tree_arguments(self, n_contacts: int, nc: int) -> tuple:
+        """The buffers :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_solve` takes after the
+        contact set's arrays, for ``n_contacts`` active contacts of ``nc`` stacked rows (tau ... J, the link
+        inertias, M, b, the contacts' frame kinematics, Jc, a0, xout, the forces, the KKT solve buffers), made
+        once per size."""
+        key = (n_contacts, nc, "tree")
+        arguments = self._contact_kkt_arguments.get(key)
+        if arguments is None:
+            tree, work, k = self.tree, self.contact_work, n_contacts
+            arguments = self._contact_kkt_arguments[key] = (
+                self.tau, self.zero_acceleration, tree.parents, tree.placement_rotation, tree.placement_translation,
+                tree.axes, tree.idx_q, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, *self.links.arguments(),
+                self.M, self.nle, work.oRf[:k], work.opf[:k], work.fJf[:k], work.velocity[:k], work.acceleration[:k],
+                self.Jc_all[:nc], self.a0_all[:nc], self.xout, self.force_all[:nc], self.velocity_parents,
+                *self.kkt_buffers(nc).solve_buffers())
         return arguments
 
     def kkt_buffers(self, nc: int) -> KKTBuffers:

@@ -60,7 +60,7 @@ from wbmpc.ocp.actuation import ActuationFloatingBase
 from wbmpc.ocp.batched_problem import BatchedShootingProblem, batched_evaluation_support
 from wbmpc.ocp.contacts import ContactModel3D, ContactModel6D, sole_lever_arms
 from wbmpc.ocp.costs import CostModelResidual, CostModelSum
-from wbmpc.ocp.dynamics import DifferentialActionModelContactFwdDynamics
+from wbmpc.ocp.dynamics import ROLLOUT_DYNAMICS, DifferentialActionModelContactFwdDynamics
 from wbmpc.ocp.integrator import IntegratedActionModelEuler
 from wbmpc.ocp.problem import ShootingProblem
 from wbmpc.ocp.residuals import (
@@ -215,6 +215,17 @@ class WalkingOCPConfig:
             "nodes" (every node model's calc/calcDiff, the reference pipeline), or "auto"
             (default: batched when the problem's terms allow it, else nodes with a
             :class:`SlowPathWarning` naming the term that cannot be batched).
+        rollout_dynamics: the contact dynamics of the FDDP rollouts (and of the batched ``calc``) at the
+            "kkt" backend's nodes with contacts, a choice of code path, no unit: "pinocchio" (default:
+            Pinocchio's ``crba`` and ``nonLinearEffects``, the explicit-inverse damped KKT solve the
+            derivatives use, node by node) or "compiled" (M and b compiled on the contacts' tree, the KKT
+            solve by triangular solves on M = Lᵀ D L, the horizon's rollout in one compiled call:
+            :class:`~wbmpc.ocp.batched_problem.BatchedShootingProblem`). The same dynamics to rounding
+            (~1e-15 relative), a rollout cheaper (docs/benchmarks.md "H1 loop, session 24"), but the
+            closed loop is chaotic in the last bits: the H1's 20 s walk at 0.5 m/s falls at 8.76 s with
+            "compiled" and completes with "pinocchio". "compiled" needs dynamics_backend "kkt" and the
+            batched evaluation (the node-wise one and the "pinocchio" backend's ``constraintDynamics`` do
+            not read it).
         obstacle_clearance_weight: weight of the one-sided clearance barriers of a crossing swing
             (``{foot}_clearance_sole{i}``, ``{foot}_clearance_shank``); 0 = the terms are absent (the
             problem is the one without obstacles).
@@ -298,6 +309,7 @@ class WalkingOCPConfig:
     contact_damping_moments: str = "uniform"
     dynamics_backend: str = "pinocchio"
     evaluation: str = "auto"
+    rollout_dynamics: str = "pinocchio"
     obstacle_clearance_weight: float = 0.0
     obstacle_sole_points: tuple[tuple[float, float, float], ...] = ()
     obstacle_shank_frames: tuple[tuple[str, str], ...] = ()
@@ -411,6 +423,14 @@ class WalkingOCPConfig:
             raise ParameterError(f"dynamics_backend={self.dynamics_backend!r} must be 'pinocchio' or 'kkt'")
         if self.evaluation not in ("auto", "batched", "nodes"):
             raise ParameterError(f"evaluation={self.evaluation!r} must be 'auto', 'batched' or 'nodes'")
+        if self.rollout_dynamics not in ROLLOUT_DYNAMICS:
+            raise ParameterError(f"rollout_dynamics={self.rollout_dynamics!r} must be 'pinocchio' or 'compiled'")
+        if self.rollout_dynamics == "compiled" and self.dynamics_backend != "kkt":
+            raise ParameterError(f"rollout_dynamics='compiled' needs dynamics_backend='kkt' (the 'pinocchio' "
+                                 f"backend's rollouts are constraintDynamics), got {self.dynamics_backend!r}")
+        if self.rollout_dynamics == "compiled" and self.evaluation == "nodes":
+            raise ParameterError("rollout_dynamics='compiled' needs the batched evaluation (evaluation 'auto' or "
+                                 "'batched'), got evaluation='nodes'")
         if self.base_yaw_reference not in BASE_YAW_REFERENCES:
             raise ParameterError(f"base_yaw_reference={self.base_yaw_reference!r} must be one of {BASE_YAW_REFERENCES}")
         if not (0 < self.reg_min <= self.reg_max):
@@ -614,10 +634,14 @@ class WalkingOCP:
         if config.evaluation != "nodes":
             reason = batched_evaluation_support(self.problem)
             if reason is None:
-                self.problem = BatchedShootingProblem(self.x_reference, running, terminal)
+                self.problem = BatchedShootingProblem(self.x_reference, running, terminal,
+                                                      rollout_dynamics=config.rollout_dynamics)
                 self.evaluation = "batched"
             elif config.evaluation == "batched":
                 raise ParameterError(f"evaluation='batched' is not possible for this problem: {reason}")
+            elif config.rollout_dynamics == "compiled":
+                raise ParameterError(f"rollout_dynamics='compiled' needs the batched evaluation, not possible for "
+                                     f"this problem: {reason}")
             else:  # said, not silent: the node-wise path is several times slower
                 self.evaluation_note = f"node-wise evaluation: {reason}"
                 warnings.warn(f"WalkingOCP: {self.evaluation_note} (evaluation='auto'; set evaluation='nodes' to "
