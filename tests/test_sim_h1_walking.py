@@ -94,6 +94,30 @@ def test_a_walk_at_speed_tracks_the_swing_path_of_fast_swing_path_weight():
                            "fast_speed": 0.2}) == set()
 
 
+def test_negotiation_swing_path_weight_applies_while_negotiating_only():
+    """``negotiation_swing_path_weight``: the OCP's swing path weight of a replan in negotiation mode (before the fast
+    gait's), the OCP's own (None) while walking; refused when negative, not finite, or without swing path terms."""
+    from wbmpc.errors import ParameterError
+    from wbmpc.walking.controller import WalkingController
+    from wbmpc.walking.controller_config import WalkingControllerConfig
+    from wbmpc.walking.negotiation import NEGOTIATION, WALKING
+    from wbmpc.walking.preset import load_walking_preset
+
+    weight = WalkingController(load_walking_preset("h1", {"negotiation_swing_path_weight": 3e3}))._swing_path_weight
+    assert weight({"negotiation_mode": float(NEGOTIATION), "sequencer_v_x": 0.3}) == 3e3
+    assert weight({"negotiation_mode": float(WALKING), "sequencer_v_x": 0.3}) is None
+    assert weight({"negotiation_mode": float(WALKING), "sequencer_v_x": 1.0}) == 3e3  # the preset's fast gait's
+    assert WalkingController(load_walking_preset("h1"))._swing_path_weight(
+        {"negotiation_mode": float(NEGOTIATION), "sequencer_v_x": 0.3}) is None  # off in the preset
+    for value in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(ParameterError, match=r"negotiation_swing_path_weight=.* must be finite and >= 0"):
+            WalkingControllerConfig(negotiation_swing_path_weight=value)
+    with pytest.raises(ParameterError, match=r"negotiation_swing_path_weight=1000.0 needs the OCP's swing path terms"):
+        WalkingController(load_walking_preset("h1", {"negotiation_swing_path_weight": 1e3, "fast_swing_path_weight": 0.0,
+                                                     "fast_swing_path_speed": 0.0,
+                                                     "ocp.obstacle_swing_path_weight": 0.0}))
+
+
 def test_fast_swing_path_speed_sets_the_swing_path_threshold_apart_from_fast_speed():
     """``fast_swing_path_speed``: the planned |v_x| from which ``fast_swing_path_weight`` applies (0: ``fast_speed``);
     the FDDP iterations keep ``fast_speed``; without ``fast_max_iterations`` ``fast_speed`` may stay 0."""

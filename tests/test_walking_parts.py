@@ -305,7 +305,8 @@ OBSTACLE_FIELDS = {
             "obstacle_swing_path_weight", "obstacle_foothold_weight", "obstacle_clearance_gating",
             "obstacle_profile_transition", "obstacle_com_weight", "obstacle_leg_posture_scale"},
     "controller": {"negotiation_lookahead", "negotiation_corridor", "negotiation_release", "negotiation_speed_max",
-                   "negotiation_max_iterations", "crossing_max_iterations", "crossing_iterations_hold"},
+                   "negotiation_max_iterations", "negotiation_swing_path_weight", "crossing_max_iterations",
+                   "crossing_iterations_hold"},
 }
 
 # the speed schedule (SequencerParams.fast_*, WalkingControllerConfig.fast_max_iterations / fast_speed): off unless a

@@ -79,6 +79,11 @@ class WalkingController:
     def __init__(self, preset: WalkingPreset | None = None, mpc_solver=None, planner=None) -> None:
         self.preset = load_walking_preset("bolt") if preset is None else preset
         self.config: WalkingControllerConfig = self.preset.controller
+        ocp = self.preset.ocp
+        for name in ("fast_swing_path_weight", "negotiation_swing_path_weight"):
+            if getattr(self.config, name) and not (ocp.swing_path_weight or ocp.obstacle_swing_path_weight):
+                raise ParameterError(f"{name}={getattr(self.config, name)} needs the OCP's swing path terms: "
+                                     f"[ocp] swing_path_weight or obstacle_swing_path_weight > 0 (both are 0)")
         self._last_crossing_update: float | None = None  # [s], the last update whose horizon held a crossing
         self.replan_period = self.config.replan_period
         self.mpc_solver = mpc_solver
@@ -119,9 +124,6 @@ class WalkingController:
         self.mpc = WalkingMPC(robot, preset.ocp, n_nodes=cfg.n_nodes, dt=cfg.node_dt, max_iterations=cfg.max_iterations,
                               horizon_end=cfg.mpc_horizon_end, time_budget=cfg.mpc_time_budget, solver=self.mpc_solver,
                               restart_after_failures=cfg.mpc_restart_after_failures)
-        if cfg.fast_swing_path_weight and not (preset.ocp.swing_path_weight or preset.ocp.obstacle_swing_path_weight):
-            raise ParameterError(f"fast_swing_path_weight={cfg.fast_swing_path_weight} needs the OCP's swing path terms: "
-                                 f"[ocp] swing_path_weight or obstacle_swing_path_weight > 0 (both are 0)")
         self.feedback = FeedbackLaw(self.mpc.ocp.state, cfg.node_dt, cfg.delay_nodes, cfg.interpolate, cfg.feedback,
                                     cfg.computation_delay)
         self.planning.reset(x0, t0, self.command)
@@ -251,9 +253,12 @@ class WalkingController:
         return None
 
     def _swing_path_weight(self, record: dict[str, float]) -> float | None:
-        """The OCP's swing path weight of this replan: ``fast_swing_path_weight`` at a planned |v_x| of
-        ``fast_swing_path_speed`` (0: ``fast_speed``) or more, else None (the OCP's own)."""
+        """The OCP's swing path weight of this replan: ``negotiation_swing_path_weight`` while negotiating, else
+        ``fast_swing_path_weight`` at a planned |v_x| of ``fast_swing_path_speed`` (0: ``fast_speed``) or more, else
+        None (the OCP's own)."""
         cfg = self.config
+        if cfg.negotiation_swing_path_weight and record.get("negotiation_mode") == NEGOTIATION:
+            return cfg.negotiation_swing_path_weight
         if cfg.fast_swing_path_weight and self._at_speed(record, cfg.fast_swing_path_speed or cfg.fast_speed):
             return cfg.fast_swing_path_weight
         return None

@@ -156,6 +156,12 @@ class WalkingControllerConfig:
             than walking does (a plateau, clearance barriers, a long step entering the horizon), and a
             warm-started update of a few iterations then stays far above the optimum (docs/ocp.md,
             "Solved to convergence, measured"); the budget goes where the problem changes.
+        negotiation_swing_path_weight: the OCP's ``swing_path_weight`` (every swing foot's (x, y) along the smooth path
+            from its lift-off to its foothold) while negotiating, finite and >= 0 (0: the OCP's own). Near an obstacle
+            a swing whose horizontal motion is free may move backwards into it (the H1's lead crossing foot and the
+            first step after a trailing crossing, docs/ocp.md "Every swing on its path"); applied to the walk as well,
+            the same term made the H1's steps in place drift twice as far. It needs the OCP's swing path terms
+            (``swing_path_weight`` or ``obstacle_swing_path_weight`` > 0).
         crossing_max_iterations: FDDP iterations per MPC update while the OCP's horizon holds a swing over an
             obstacle (``crossing_nodes`` > 0 in the replan record), an integer >= 1, or 0 (none: the negotiation's
             or ``max_iterations``). It takes precedence over ``negotiation_max_iterations``: the approach walks
@@ -217,6 +223,7 @@ class WalkingControllerConfig:
     negotiation_release: float = 0.05
     negotiation_speed_max: float = float("inf")
     negotiation_max_iterations: int = 0
+    negotiation_swing_path_weight: float = 0.0
     crossing_max_iterations: int = 0
     crossing_iterations_hold: float = 0.0
     fast_max_iterations: int = 0
@@ -296,6 +303,10 @@ class WalkingControllerConfig:
         fast = self.fast_max_iterations
         if isinstance(fast, bool) or not (isinstance(fast, int) and fast >= 0):
             raise ParameterError(f"fast_max_iterations={fast!r} must be 0 (max_iterations) or an integer >= 1")
+        negotiation_path = self.negotiation_swing_path_weight
+        if isinstance(negotiation_path, bool) or not (np.isfinite(negotiation_path) and negotiation_path >= 0.0):
+            raise ParameterError(f"negotiation_swing_path_weight={negotiation_path!r} must be finite and >= 0 "
+                                 f"(0: the OCP's own)")
         path = self.fast_swing_path_weight
         if isinstance(path, bool) or not (np.isfinite(path) and path >= 0.0):
             raise ParameterError(f"fast_swing_path_weight={path!r} must be finite and >= 0 (0: the OCP's own)")
