@@ -35,7 +35,9 @@ def test_h1_starts_from_standing_and_steps_in_place(in_place):
 
 def test_h1_stepping_in_place_stays_in_place(in_place):
     com = in_place.ticks["com"]
-    assert np.max(np.abs(com[-1, :2] - com[0, :2])) < 0.08
+    # every swing on its path (the preset's swing_path_weight, for the obstacle crossings) holds the swing foot back
+    # against the step QP's timing: 8.8 cm of drift in these 2 s (4.9 cm without; docs/ocp.md "Every swing on its path")
+    assert np.max(np.abs(com[-1, :2] - com[0, :2])) < 0.10
     pelvis_height = in_place.ticks["qpos"][:, 2]
     assert pelvis_height.min() > 0.85  # it stands at 1.00 m; the fall threshold is 0.60 m
 
@@ -78,7 +80,7 @@ def test_a_walk_at_speed_tracks_the_swing_path_of_fast_swing_path_weight():
     from wbmpc.walking.preset import load_walking_preset
 
     def active_weights(options):
-        controller = WalkingController(load_walking_preset("h1", {"negotiation_lookahead": 0.0,
+        controller = WalkingController(load_walking_preset("h1", {"negotiation_lookahead": 0.0, "ocp.swing_path_weight": 0.0,
                                                                   "perception.enabled": False, **options}))
         log = run_scenario("walk", robot="h1", duration=0.9, velocity_command=(0.3, 0.0, 0.0), ramp_time=0.0,
                            controller=controller, progress=False)
@@ -114,7 +116,7 @@ def test_negotiation_swing_path_weight_applies_while_negotiating_only():
             WalkingControllerConfig(negotiation_swing_path_weight=value)
     with pytest.raises(ParameterError, match=r"negotiation_swing_path_weight=1000.0 needs the OCP's swing path terms"):
         WalkingController(load_walking_preset("h1", {"negotiation_swing_path_weight": 1e3, "fast_swing_path_weight": 0.0,
-                                                     "fast_swing_path_speed": 0.0,
+                                                     "fast_swing_path_speed": 0.0, "ocp.swing_path_weight": 0.0,
                                                      "ocp.obstacle_swing_path_weight": 0.0}))
 
 

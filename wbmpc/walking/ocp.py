@@ -30,8 +30,8 @@ Per running node k (time t0 + k dt), with the feet in contact given by the sched
   lift-off to the planned foothold (:func:`swing_path`) at every swing node: without it the horizontal
   motion between lift-off and the last node's foothold term is free (the H1's crossing foot went 12 cm
   back while rising, docs/ocp.md "The lead swing traced"; a crossing swing's own path term is
-  ``obstacle_swing_path_weight``). Off in every preset: on the H1 at 3e3 the 10 cm obstacle campaign crossed 19 of
-  20 (18 of 20 off), but stepping in place drifted twice as far (docs/ocp.md "Every swing on its path").
+  ``obstacle_swing_path_weight``). 3e3 in the H1's preset (its obstacle crossings: docs/ocp.md "Every swing on its
+  path"), off in Bolt's and the G1's.
 
 - optional obstacle clearance (``obstacle_clearance_weight`` > 0): ``{foot}_clearance_sole{i}`` keeps
   the swing sole's points ``obstacle_sole_points`` (toe and heel) and ``{foot}_clearance_shank`` the
