@@ -497,15 +497,15 @@ def test_sole_corners_are_refused_where_they_cannot_apply():
 
 def _h1_crossing(n_nodes: int = 12):
     """The H1 preset's OCP (node-wise, KKT backend with a Baumgarte position gain) over a right swing that passes
-    over a 10 cm box, its sole clearance gated by a straight path, no path or CoM tracking (the tests turn those
-    on): (robot, ocp, schedule, crossings)."""
+    over a 10 cm box, its sole clearance gated by a straight path, no path (the walk's swings' included) or CoM
+    tracking (the tests turn those on): (robot, ocp, schedule, crossings)."""
     from wbmpc.walking.preset import load_walking_preset
 
     h1 = load_robot("h1")
     config = dataclasses.replace(load_walking_preset("h1").ocp, evaluation="nodes", dynamics_backend="kkt",
                                  baumgarte_gains=(10.0, 30.0), obstacle_clearance_gating="path",
                                  obstacle_swing_path_timing="straight", obstacle_swing_path_weight=0.0,
-                                 obstacle_com_weight=0.0)
+                                 swing_path_weight=0.0, obstacle_com_weight=0.0)
     ocp = WalkingOCP(h1, config, n_nodes=n_nodes, dt=0.02)
     schedule, crossings = crossing_schedule(n_nodes)
     return h1, ocp, schedule, crossings
