@@ -29,7 +29,7 @@ import pinocchio as pin
 from numba import njit
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.kernels.tree import KinematicTree, tree_support
+from wbmpc.ocp.kernels.tree import KinematicTree, require_tree_support
 
 
 class LinkInertias:
@@ -46,9 +46,7 @@ class LinkInertias:
     """
 
     def __init__(self, model: pin.Model):
-        reason = tree_support(model)
-        if reason is not None:
-            raise ParameterError(f"model {model.name!r} is not supported by the compiled joint-space terms: {reason}")
+        require_tree_support(model, "the compiled joint-space terms")
         n = model.njoints
         self.nv = model.nv
         self.mass = np.array([model.inertias[i].mass for i in range(n)])

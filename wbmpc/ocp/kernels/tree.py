@@ -55,6 +55,14 @@ def tree_support(model: pin.Model) -> str | None:
     return None
 
 
+def require_tree_support(model: pin.Model, user: str) -> None:
+    """Raise a ParameterError naming ``model`` and ``user`` (what needs the tree, e.g. "the compiled tree
+    kinematics") when :func:`tree_support` refuses the model."""
+    reason = tree_support(model)
+    if reason is not None:
+        raise ParameterError(f"model {model.name!r} is not supported by {user}: {reason}")
+
+
 class KinematicTree:
     """The kinematic tree of ``model`` as arrays for the kernels, and the state of one evaluation.
 
@@ -68,9 +76,7 @@ class KinematicTree:
     """
 
     def __init__(self, model: pin.Model):
-        reason = tree_support(model)
-        if reason is not None:
-            raise ParameterError(f"model {model.name!r} is not supported by the compiled tree kinematics: {reason}")
+        require_tree_support(model, "the compiled tree kinematics")
         n = model.njoints
         self.nv = model.nv
         self.parents = np.array([model.parents[i] for i in range(n)], dtype=np.int64)
