@@ -462,9 +462,9 @@ class DifferentialActionDataContactFwdDynamics:
         # pinocchio backend)
         self.tree = KinematicTree(state.pinocchio) if model.backend == "kkt" and nc_max else None
         self.contact_work = ContactSetWork(len(model.contacts), nv) if self.tree is not None else None
-        #: the link inertias of the compiled M and b ("compiled" rollouts without Pinocchio kinematics), M (nv, nv)
-        #: (upper triangle) and b (nv,) they leave
-        self.links = LinkInertias(state.pinocchio) if self.tree is not None else None
+        #: the link inertias of the compiled M and b ("compiled" rollouts without Pinocchio kinematics; built by
+        #: the first such calc), M (nv, nv) (upper triangle) and b (nv,) they leave
+        self.links: LinkInertias | None = None
         self.M = np.zeros((nv, nv))
         self.nle = np.zeros(nv)
         self.zero_acceleration = np.zeros(nv)
@@ -495,13 +495,9 @@ class DifferentialActionDataContactFwdDynamics:
         key = (n_contacts, nc, derivatives)
         arguments = self._contact_kkt_arguments.get(key)
         if arguments is None:
-            tree, work, k = self.tree, self.contact_work, n_contacts
             buffers = self.kkt_buffers(nc)
             arguments = self._contact_kkt_arguments[key] = (
-                self.tau, self.zero_acceleration, tree.parents, tree.placement_rotation, tree.placement_translation,
-                tree.axes, tree.idx_q, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, work.oRf[:k], work.opf[:k],
-                work.fJf[:k], work.velocity[:k], work.acceleration[:k], self.Jc_all[:nc], self.a0_all[:nc], self.xout,
-                self.force_all[:nc],
+                *self._tree_arguments(), *self._contact_frame_arguments(n_contacts, nc),
                 *(buffers.dynamics_buffers() if derivatives else (self.velocity_parents, *buffers.solve_buffers())))
         return arguments
 
@@ -513,14 +509,27 @@ class DifferentialActionDataContactFwdDynamics:
         key = (n_contacts, nc, "tree")
         arguments = self._contact_kkt_arguments.get(key)
         if arguments is None:
-            tree, work, k = self.tree, self.contact_work, n_contacts
+            if self.links is None:
+                self.links = LinkInertias(self._model)
             arguments = self._contact_kkt_arguments[key] = (
-                self.tau, self.zero_acceleration, tree.parents, tree.placement_rotation, tree.placement_translation,
-                tree.axes, tree.idx_q, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, *self.links.arguments(),
-                self.M, self.nle, work.oRf[:k], work.opf[:k], work.fJf[:k], work.velocity[:k], work.acceleration[:k],
-                self.Jc_all[:nc], self.a0_all[:nc], self.xout, self.force_all[:nc], self.velocity_parents,
+                *self._tree_arguments(), *self.links.arguments(), self.M, self.nle,
+                *self._contact_frame_arguments(n_contacts, nc), self.velocity_parents,
                 *self.kkt_buffers(nc).solve_buffers())
         return arguments
+
+    def _tree_arguments(self) -> tuple:
+        """The one-call contact kernels' arguments after the contact set's arrays, up to the tree's Jacobian
+        columns: tau, the zero accelerations and :class:`~wbmpc.ocp.kernels.tree.KinematicTree`'s arrays."""
+        tree = self.tree
+        return (self.tau, self.zero_acceleration, tree.parents, tree.placement_rotation, tree.placement_translation,
+                tree.axes, tree.idx_q, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J)
+
+    def _contact_frame_arguments(self, n_contacts: int, nc: int) -> tuple:
+        """The one-call contact kernels' contact frame kinematics of ``n_contacts`` contacts, Jc, a0 of ``nc``
+        rows, the accelerations and the forces (the arguments from oRf to force)."""
+        work, k = self.contact_work, n_contacts
+        return (work.oRf[:k], work.opf[:k], work.fJf[:k], work.velocity[:k], work.acceleration[:k], self.Jc_all[:nc],
+                self.a0_all[:nc], self.xout, self.force_all[:nc])
 
     def kkt_buffers(self, nc: int) -> KKTBuffers:
         """The buffers of the KKT kernels for ``nc`` contact rows (made on first use; the last

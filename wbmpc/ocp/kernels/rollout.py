@@ -63,8 +63,9 @@ class KKTRollout:
         self.spreads = np.zeros((N, k, 3))
         self.inverse_arms = np.zeros((N, k, 3))
         self._moving: dict = {}  # node -> its contact set, whose point references move (Kp > 0)
-        contact_arrays = (self.kinds, self.joints, self.frame_rotations, self.frame_translations, self.kp, self.kd,
-                          self.references, self.corners, self.spreads, self.inverse_arms)
+        # in the order of ContactSet.kernel_arguments
+        self._contact_arrays = (self.kinds, self.joints, self.frame_rotations, self.frame_translations, self.kp,
+                                self.kd, self.references, self.corners, self.spreads, self.inverse_arms)
         # the buffers, shared by the nodes: the tree, the link inertias, M, b, the contacts' frame kinematics,
         # Jc, a0, a, the forces and the KKT solve's (kernels/kkt.damped_kkt_solve)
         buffers = (np.zeros(nv), tree.parents, tree.placement_rotation, tree.placement_translation, tree.axes,
@@ -73,7 +74,7 @@ class KKTRollout:
                    np.zeros((k, 6)), np.zeros((k, 6)), np.zeros((nc, nv)), np.zeros(nc), np.zeros(nv), np.zeros(nc),
                    velocity_parents(model), np.zeros((nv, nv)), np.zeros((nv, nc)), np.zeros((nv, nc)),
                    np.zeros((nc, nc)), np.zeros(nv), np.zeros(nc))
-        self._arguments = (self.contacts, self.rows, self.mu, self.scales, *contact_arrays, *buffers)
+        self._arguments = (self.contacts, self.rows, self.mu, self.scales, *self._contact_arrays, *buffers)
 
     def set_node(self, k: int, dam) -> None:
         """Node k's dynamics are now ``dam``'s (a :class:`~wbmpc.ocp.dynamics.DifferentialActionModelContactFwdDynamics`
@@ -84,9 +85,7 @@ class KKTRollout:
             self.contacts[k] = -1
             return
         n, nc = contact_set.kinds.size, dam.nc
-        for array, value in zip((self.kinds, self.joints, self.frame_rotations, self.frame_translations, self.kp,
-                                 self.kd, self.references, self.corners, self.spreads, self.inverse_arms),
-                                contact_set.kernel_arguments):
+        for array, value in zip(self._contact_arrays, contact_set.kernel_arguments):
             array[k, :n] = value
         self.rows[k] = nc
         self.mu[k] = dam.contact_damping
