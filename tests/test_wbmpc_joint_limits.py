@@ -87,8 +87,10 @@ def test_the_barrier_is_zero_inside_the_narrowed_limits_and_quadratic_beyond():
 
 
 @needs_h1_extra
-def test_the_batched_barrier_matches_the_node_pipeline_beyond_the_limits():
-    h1, ocp = _h1_ocp(**LIMITS)
+@pytest.mark.parametrize("overrides", [LIMITS, {"joint_limit_weight": 1e5, "joint_limit_joints": ["knee"]}],
+                         ids=["every joint", "the knees"])
+def test_the_batched_barrier_matches_the_node_pipeline_beyond_the_limits(overrides):
+    h1, ocp = _h1_ocp(**overrides)
     assert ocp.evaluation == "batched"
     p = ocp.problem
     p.sync()
@@ -148,6 +150,36 @@ def test_a_margin_by_joint_name_narrows_only_the_joints_it_names():
         _h1_ocp(joint_limit_weight=1e5, joint_limit_margin_by_name=(("wrist", 0.1),))
 
 
+@needs_h1_extra
+def test_the_barrier_covers_only_the_joints_it_names():
+    """``joint_limit_joints = ["knee"]``: bounds at the knees' limits, none on the other joints (a hip far past its
+    stop costs nothing, a knee past its extension stop does)."""
+    h1, ocp = _h1_ocp(joint_limit_weight=1e5, joint_limit_joints=["knee"])
+    model = ocp.problem.running_models[0]
+    term = model.differential.costs.costs["joint_limits"].cost
+    limits = h1.pinocchio_model
+    knees = [i for i, name in enumerate(term.residual.joint_names) if "knee" in name]
+    others = [i for i in range(19) if i not in knees]
+    assert len(knees) == 2
+    np.testing.assert_allclose(term.activation.lower[knees], limits.lowerPositionLimit[7:][knees])
+    np.testing.assert_allclose(term.activation.upper[knees], limits.upperPositionLimit[7:][knees])
+    assert np.all(term.activation.lower[others] == -np.inf) and np.all(term.activation.upper[others] == np.inf)
+
+    def term_cost(xx):
+        data = model.createData()
+        model.calc(data, xx, np.zeros(ocp.nu))
+        return model.differential.costs.term_costs(data.differential.costs)["joint_limits"]
+
+    x = standing_state(h1)
+    hip, knee = _joint_q_index(h1, "left_hip_roll"), _joint_q_index(h1, "left_knee")
+    x[hip] = limits.upperPositionLimit[hip] + 0.3
+    assert term_cost(x) == 0.0
+    x[knee] = limits.lowerPositionLimit[knee] - 0.1
+    assert term_cost(x) == pytest.approx(1e5 * 0.5 * 0.1**2, rel=1e-12)
+    with pytest.raises(ParameterError, match="joint_limit_joints: 'wrist' matches no joint"):
+        _h1_ocp(joint_limit_weight=1e5, joint_limit_joints=["wrist"])
+
+
 def test_bad_joint_limit_settings_are_one_line_errors_naming_them():
     with pytest.raises(ParameterError, match="joint_limit_weight=-1.0 must be finite and >= 0"):
         WalkingOCPConfig(joint_limit_weight=-1.0)
@@ -157,6 +189,8 @@ def test_bad_joint_limit_settings_are_one_line_errors_naming_them():
         WalkingOCPConfig(joint_limit_margin_by_name=(("knee", -0.1),))
     with pytest.raises(ParameterError, match="joint_limit_margin_by_name=.* must be .joint name part, margin"):
         WalkingOCPConfig(joint_limit_margin_by_name=("knee",))
+    with pytest.raises(ParameterError, match="joint_limit_joints='knee' must be a list of joint name parts"):
+        WalkingOCPConfig(joint_limit_joints="knee")
     bolt = load_robot("bolt")  # placeholder limits of +-10 rad
     with pytest.raises(ParameterError, match="joint_limit_margin=11.0 rad leaves no range for joint 'FL_HAA'"):
         WalkingOCP(bolt, WalkingOCPConfig(joint_limit_weight=1.0, joint_limit_margin=11.0), 4, 0.01)

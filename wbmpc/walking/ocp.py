@@ -165,6 +165,10 @@ class WalkingOCPConfig:
         joint_limit_margin_by_name: (name part, margin [rad]) pairs: a joint whose name contains the part gets
             that margin instead of ``joint_limit_margin`` (the last pair that matches wins), e.g.
             ``(("knee", 0.05),)`` keeps the plan off the knees' stops and lets the other joints use their range.
+        joint_limit_joints: name parts of the joints the barrier covers (a joint whose name contains one of
+            them); empty = every joint. ``("knee",)`` keeps the plan off the knees' extension stops (a swing
+            planned through a straight knee's stop) and leaves the hips the range beyond their stops that
+            MuJoCo's soft limits give.
         com_terminal_weight: w_CoM of eq. (23) (terminal node).
         foothold_weight: planned-foothold xy tracking at the last swing node; 0 = footholds
             emerge (the paper's choice).
@@ -294,6 +298,7 @@ class WalkingOCPConfig:
     joint_limit_weight: float = 0.0
     joint_limit_margin: float = 0.0
     joint_limit_margin_by_name: tuple[tuple[str, float], ...] = ()
+    joint_limit_joints: tuple[str, ...] = ()
     com_terminal_weight: float = 1e3
     foothold_weight: float = 0.0
     contact_force_weight: float = 0.0
@@ -395,6 +400,11 @@ class WalkingOCPConfig:
                 raise ParameterError(f"joint_limit_margin_by_name: {part!r} has margin={margin} rad, must be finite "
                                      "and >= 0")
         object.__setattr__(self, "joint_limit_margin_by_name", pairs)
+        if isinstance(self.joint_limit_joints, str) or not all(isinstance(part, str) and part
+                                                               for part in self.joint_limit_joints):
+            raise ParameterError(f"joint_limit_joints={self.joint_limit_joints!r} must be a list of joint name parts "
+                                 "(non-empty strings; empty list = every joint)")
+        object.__setattr__(self, "joint_limit_joints", tuple(self.joint_limit_joints))
         if not (0 < self.control_bound_fraction <= 1):
             raise ParameterError(f"control_bound_fraction={self.control_bound_fraction} must be in (0, 1]")
         if not (0 < self.cop_sole_fraction <= 1):
@@ -663,13 +673,20 @@ class WalkingOCP:
 
     def _joint_bounds(self, residual: ResidualJointPosition) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) (n_j,) of the joint-limit barrier: the model's position limits of ``residual``'s joints
-        narrowed by ``joint_limit_margin`` or the joint's ``joint_limit_margin_by_name`` [rad]."""
+        narrowed by ``joint_limit_margin`` or the joint's ``joint_limit_margin_by_name`` [rad]; (-inf, inf) for a
+        joint outside ``joint_limit_joints`` (when it is not empty)."""
         model = self.robot.pinocchio_model
         margin = np.full(residual.nr, self.config.joint_limit_margin)
         set_by_name_part(margin, self.config.joint_limit_margin_by_name, residual.joint_names,
                          "joint_limit_margin_by_name")
         lower = model.lowerPositionLimit[residual.q_rows] + margin
         upper = model.upperPositionLimit[residual.q_rows] - margin
+        if self.config.joint_limit_joints:
+            covered = np.zeros(residual.nr)
+            set_by_name_part(covered, [(part, 1.0) for part in self.config.joint_limit_joints], residual.joint_names,
+                             "joint_limit_joints")
+            lower[covered == 0] = -np.inf
+            upper[covered == 0] = np.inf
         narrow = np.flatnonzero(lower >= upper)
         if narrow.size:
             j = narrow[0]
