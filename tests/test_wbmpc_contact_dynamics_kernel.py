@@ -111,7 +111,8 @@ def _assert_rollout_solve_is_the_explicit_inverse(ocp, robot, seed: int) -> int:
 def _assert_compiled_derivatives_are_pinocchios(ocp, robot, seed: int) -> int:
     """calc_dynamics and calc_diff_dynamics with derivative_dynamics="compiled" (with and without Pinocchio kinematics
     for the costs: Pinocchio's M and b, or the compiled ones) against the default, node by node: accelerations,
-    forces, Fx, Fu and the forces' derivatives to ~1e-15 relative (1e-12 allowed)."""
+    forces, Fx, Fu and the forces' derivatives to ~1e-15 relative (1e-12 allowed); calc_and_diff_dynamics's one call
+    (no Pinocchio kinematics, no positioned soles) the two calls' to the bit."""
     rng = np.random.default_rng(seed)
     checked = 0
     for model, data in zip(ocp.problem.running_models, ocp.problem.running_datas):
@@ -128,6 +129,15 @@ def _assert_compiled_derivatives_are_pinocchios(ocp, robot, seed: int) -> int:
             outputs.append([ddata.xout.copy(), ddata.force_all[:dam.nc].copy(), ddata.Fx.copy(), ddata.Fu.copy()]
                            + [np.hstack([ddata.contacts[name].df_dx, ddata.contacts[name].df_du])
                               for name in dam.active_contacts])
+        if not dam.contact_set.has_positioned_soles:  # the two calls in one: the same numbers to the bit
+            for array in (ddata.xout, ddata.force_all, ddata.Fx, ddata.Fu):
+                array[:] = np.nan
+            dam.calc_and_diff_dynamics(ddata, x, u, "compiled")
+            fused = [ddata.xout, ddata.force_all[:dam.nc], ddata.Fx, ddata.Fu] + [
+                np.hstack([ddata.contacts[name].df_dx, ddata.contacts[name].df_du]) for name in dam.active_contacts]
+            assert all(np.array_equal(new, old) for new, old in zip(fused, outputs[2]))
+            for name, rows in dam._active_rows:
+                assert np.array_equal(ddata.contacts[name].force, outputs[2][1][rows])
         ddata.kinematics_for_costs = True
         for compiled in outputs[1:]:
             for new, old in zip(compiled, outputs[0]):

@@ -494,10 +494,11 @@ class BatchedShootingProblem(ShootingProblem):
         tau[6:] = u
         if kkt is not None:
             dam, data = kkt
-            derivative_dynamics = self._derivative_dynamics
-            a = self._kkt_dynamics(kkt, x, u, forces, "pinocchio", derivative_dynamics)  # the solve the derivatives read
-            free_flyer_euler_step(x, a, dt, euler_dx, xnext)
-            dam.calc_diff_dynamics(data, x, u, derivative_dynamics)
+            # the solve the derivatives read, then the derivatives (one compiled call with "compiled")
+            dam.calc_and_diff_dynamics(data, x, u, self._derivative_dynamics)
+            if forces is not None:  # the active contacts' rows, stacked in order
+                forces[:dam.nc] = data.force_all[:dam.nc]
+            free_flyer_euler_step(x, data.xout, dt, euler_dx, xnext)
             da_dx[:] = data.Fx
             da_du[:] = data.Fu
             if forces is not None:

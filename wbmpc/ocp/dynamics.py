@@ -80,6 +80,7 @@ from wbmpc.ocp.kernels.contact_dynamics import (
     contact_kkt_dynamics,
     contact_kkt_solve,
     contact_kkt_tree_dynamics,
+    contact_kkt_tree_dynamics_derivatives,
     contact_kkt_tree_solve,
     kkt_rnea_derivatives,
 )
@@ -455,6 +456,41 @@ class DifferentialActionModelContactFwdDynamics:
                                *data.kkt_buffers(nc).derivative_buffers())
         self._copy_force_derivatives(data, df_dx, df_du)
 
+    def calc_and_diff_dynamics(self, data, x: np.ndarray, u: np.ndarray, derivative_dynamics: str = "pinocchio") -> None:
+        """:meth:`calc_dynamics` (``rollout_dynamics="pinocchio"``) then :meth:`calc_diff_dynamics` at (x, u) with
+        ``derivative_dynamics``; with "compiled" at a node whose calc takes M and b compiled (contacts, no positioned
+        soles, no ``data.kinematics_for_costs``) in one compiled call
+        (:func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_dynamics_derivatives`): the same numbers to the
+        bit as the two calls.
+
+        Raises:
+            ParameterError: ``derivative_dynamics`` is not one of :data:`DERIVATIVE_DYNAMICS`.
+        """
+        nc = self.nc
+        if (derivative_dynamics != "compiled" or not nc or self.backend != "kkt" or data.kinematics_for_costs
+                or self.contact_set.has_positioned_soles):
+            self.calc_dynamics(data, x, u, "pinocchio", derivative_dynamics)
+            self.calc_diff_dynamics(data, x, u, derivative_dynamics)
+            return
+        data.select_pinocchio(None)
+        if data.active_contacts is not self.active_contacts:
+            data.active_contacts = self.active_contacts
+            data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
+        self.actuation.calc(data.tau, u)
+        data.kkt_for_derivatives = True
+        contact_set = self.contact_set
+        contact_set.refresh_references()
+        contact_kkt_tree_dynamics_derivatives(x, self.contact_damping, self.row_scales, *contact_set.kernel_arguments,
+                                              *data.contact_kkt_tree_derivative_arguments(contact_set.kinds.size, nc))
+        forces = data.force_all
+        contacts = data.contacts
+        df_dx, df_du = data.df_dx_all, data.df_du_all
+        for name, rows in self._active_rows:
+            cdata = contacts[name]
+            cdata.force[:] = forces[rows]
+            cdata.df_dx[:] = df_dx[rows]
+            cdata.df_du[:] = df_du[rows]
+
     def _calc_diff_compiled(self, data, x: np.ndarray) -> None:
         """calc_diff_dynamics with derivative_dynamics="compiled" at a node with contacts (the module's docstring)."""
         nc = self.nc
@@ -603,6 +639,21 @@ class DifferentialActionDataContactFwdDynamics:
         if self.rnea is None:
             self.rnea = RNEADerivatives(self._model)
         return self.links, self.rnea
+
+    def contact_kkt_tree_derivative_arguments(self, n_contacts: int, nc: int) -> tuple:
+        """The buffers :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_dynamics_derivatives` takes after
+        the contact set's arrays, for ``n_contacts`` active contacts of ``nc`` stacked rows, made once per size."""
+        key = (n_contacts, nc, "tree derivatives")
+        arguments = self._contact_kkt_arguments.get(key)
+        if arguments is None:
+            links, rnea = self.derivative_terms()
+            work, k = self.contact_work, n_contacts
+            Minv, A, Y, J_scaled, *rest = self.kkt_buffers(nc).derivative_buffers()
+            arguments = self._contact_kkt_arguments[key] = (
+                *self.contact_kkt_tree_arguments(n_contacts, nc, True), work.v_dq[:k], work.a_dq[:k], work.a_dv[:k],
+                self.da0_dx_all[:nc], work.fext[:k], work.dtau_dq_extra, rnea.variation, rnea.motions, self.dtau_dq,
+                self.dtau_dv, self.Fx, self.Fu, self.df_dx_all[:nc], self.df_du_all[:nc], *rest)
+        return arguments
 
     def contact_kkt_derivative_arguments(self, n_contacts: int, nc: int) -> tuple:
         """The buffers :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_derivatives` takes after the contact

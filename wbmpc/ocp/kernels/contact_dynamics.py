@@ -13,11 +13,13 @@ derivatives read), and :func:`contact_kkt_derivatives` the node's derivatives af
 contacts' drift derivatives and forces on their joints (:func:`~wbmpc.ocp.kernels.contact.contact_set_derivatives`),
 the RNEA derivatives with those forces (:func:`~wbmpc.ocp.kernels.rnea_derivatives.rnea_derivatives`, not
 Pinocchio's ``computeRNEADerivatives``) and the KKT derivatives (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_derivatives`):
-the derivative pass of a node without a binding call.
+the derivative pass of a node without a binding call; :func:`contact_kkt_tree_dynamics_derivatives` is the two
+in one call (the same kernels in the same order: the same numbers to the bit).
 """
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 from wbmpc.ocp.kernels.contact import contact_set_calc, contact_set_derivatives
@@ -167,3 +169,42 @@ def contact_kkt_derivatives(x, scales, kinds, joints, frame_rotations, frame_tra
     kkt_rnea_derivatives(parents, idx_v, R, p, ov, oa, J, mass, lever, rotational, gravity, body, joints, fext, extra,
                          dtau_dq_extra, composite, variation, body_force, motions, dtau_dq, dtau_dv, da0_dx, scales, Fx,
                          Fu, df_dx, df_du, Minv, A, Y, J_scaled, D, P, C, W, YA, AtW, AtYA)
+
+
+@njit(cache=True)
+def contact_kkt_tree_dynamics_derivatives(x, mu, scales, kinds, joints, frame_rotations, frame_translations, kp, kd,
+                                          references, corners, spreads, inverse_arms, tau, zero_acceleration, parents,
+                                          placement_rotation, placement_translation, axes, idx_q, idx_v, R, p, ov, oa,
+                                          J, mass, lever, rotational, armature, gravity, body, composite, body_force,
+                                          M, nle, oRf, opf, fJf, velocity, acceleration, Jc, a0, a, force, Minv,
+                                          factor, factor_inverse, A, Y, G, G_factor, G_factor_inverse, J_scaled,
+                                          a_free, tau_residual, residual, force_scaled, v_dq, a_dq, a_dv, da0_dx,
+                                          fext, dtau_dq_extra, variation, motions, dtau_dq, dtau_dv, Fx, Fu, df_dx,
+                                          df_du, D, P, C, W, YA, AtW, AtYA):
+    """:func:`contact_kkt_tree_dynamics` then :func:`contact_kkt_derivatives` at the state x in one call: a node's
+    dynamics and derivatives with M, b and the RNEA derivatives compiled. The arguments are
+    :func:`contact_kkt_tree_dynamics`'s, then the derivatives' buffers (v_dq ... AtYA: the contacts' scratch and
+    outputs, the RNEA derivatives' variation and motions (their composite and force scratch are the link
+    inertias' composite, body_force), dtau_dq, dtau_dv, the outputs Fx ... df_du and the rest of
+    :meth:`~wbmpc.ocp.kernels.kkt.KKTBuffers.derivative_buffers`). When the solve fails (M or the damped Delassus
+    matrix not positive definite) the accelerations are NaN and the derivatives computed from them, as the two
+    calls with the calc's NaN between them.
+
+    Returns:
+        True, or False when the solve failed.
+    """
+    solved = contact_kkt_tree_dynamics(x, mu, scales, kinds, joints, frame_rotations, frame_translations, kp, kd,
+                                       references, corners, spreads, inverse_arms, tau, zero_acceleration, parents,
+                                       placement_rotation, placement_translation, axes, idx_q, idx_v, R, p, ov, oa, J,
+                                       mass, lever, rotational, armature, gravity, body, composite, body_force, M, nle,
+                                       oRf, opf, fJf, velocity, acceleration, Jc, a0, a, force, Minv, factor,
+                                       factor_inverse, A, Y, G, G_factor, G_factor_inverse, J_scaled, a_free,
+                                       tau_residual, residual, force_scaled)
+    if not solved:
+        a[:] = np.nan
+    contact_kkt_derivatives(x, scales, kinds, joints, frame_rotations, frame_translations, kp, kd, references, corners,
+                            spreads, inverse_arms, a, force, parents, idx_v, R, p, ov, oa, J, oRf, opf, fJf, velocity,
+                            v_dq, a_dq, a_dv, da0_dx, fext, dtau_dq_extra, mass, lever, rotational, gravity, body,
+                            composite, variation, body_force, motions, dtau_dq, dtau_dv, Fx, Fu, df_dx, df_du, Minv, A,
+                            Y, J_scaled, D, P, C, W, YA, AtW, AtYA)
+    return solved
