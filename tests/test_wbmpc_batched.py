@@ -712,3 +712,77 @@ def test_h1_rollout_dynamics_compiled_agrees_with_pinocchio(python_node):
             if reference[4] is not None:
                 assert np.max(np.abs(f2 - reference[4])) <= 1e-12 * np.max(np.abs(reference[4]))
             assert not np.array_equal(x2, x0) or reference[4] is None  # not the same path: rounding differs
+
+
+def test_derivative_dynamics_is_checked_naming_the_choices(bolt):
+    """derivative_dynamics: a one-line ParameterError naming the field, its value and what is allowed (the
+    config, the problem, calc_dynamics, calc_diff_dynamics); "compiled" needs the "kkt" backend and the batched
+    evaluation, as rollout_dynamics."""
+    with pytest.raises(ParameterError, match=r"^derivative_dynamics='fast' must be 'pinocchio' or 'compiled'$"):
+        WalkingOCPConfig(derivative_dynamics="fast")
+    with pytest.raises(ParameterError, match=r"^derivative_dynamics='compiled' needs dynamics_backend='kkt'.*got "
+                                             r"'pinocchio'$"):
+        WalkingOCPConfig(derivative_dynamics="compiled")
+    with pytest.raises(ParameterError, match=r"^derivative_dynamics='compiled' needs the batched evaluation.*got "
+                                             r"evaluation='nodes'$"):
+        WalkingOCPConfig(derivative_dynamics="compiled", dynamics_backend="kkt", evaluation="nodes")
+    assert WalkingOCPConfig().derivative_dynamics == "pinocchio"
+    config = WalkingOCPConfig(dynamics_backend="kkt", derivative_dynamics="compiled")
+    with pytest.raises(ParameterError, match=r"^derivative_dynamics='compiled' needs the batched evaluation, not "
+                                             r"possible for this problem: .*ResidualFrameVelocity"):
+        WalkingOCP(bolt, dataclasses.replace(config, touchdown_velocity_weight=1.0), 5, 0.01)
+    ocp = WalkingOCP(bolt, config, 5, 0.01)
+    p = ocp.problem
+    assert p.derivative_dynamics == "compiled" and p.rollout_dynamics == "pinocchio"
+    with pytest.raises(ParameterError, match=r"^derivative_dynamics='Compiled' must be one of \('pinocchio', "
+                                             r"'compiled'\)$"):
+        BatchedShootingProblem(p.x0, p.running_models, p.terminal_model, derivative_dynamics="Compiled")
+    assert BatchedShootingProblem(p.x0, p.running_models, p.terminal_model).derivative_dynamics == "pinocchio"
+    dam, data = p.running_models[0].differential, p.running_datas[0].differential
+    with pytest.raises(ParameterError, match=r"^derivative_dynamics=None must be one of"):
+        dam.calc_dynamics(data, p.x0, np.zeros(ocp.nu), "pinocchio", None)
+    dam.calc_dynamics(data, p.x0, np.zeros(ocp.nu))
+    with pytest.raises(ParameterError, match=r"^derivative_dynamics='rnea' must be one of"):
+        dam.calc_diff_dynamics(data, p.x0, np.zeros(ocp.nu), "rnea")
+
+
+@needs_h1_extra
+def test_h1_derivative_dynamics_compiled_agrees_with_pinocchio(monkeypatch):
+    """derivative_dynamics="compiled" on the H1 preset ("kkt" soles, single and double support): calcDiff's
+    next states, Fx, Fu, cost derivatives and kept contact forces and their derivatives equal the default's
+    (Pinocchio's crba, nonLinearEffects and computeRNEADerivatives) to 1e-10 relative (~1e-15 measured), not to
+    the bit, without any of those binding calls; prepare_dynamics too; the rollouts are the default's."""
+    h1 = load_robot("h1")
+    n_nodes = 12
+    preset = load_walking_preset("h1").ocp
+    assert preset.derivative_dynamics == "pinocchio"
+    default = _batched_walking_ocp(h1, preset, n_nodes)
+    compiled = _batched_walking_ocp(h1, dataclasses.replace(preset, derivative_dynamics="compiled"), n_nodes)
+    problems = []
+    for ocp in (default, compiled):
+        _, batched, solver = _h1_rollouts(ocp, n_nodes, seed=6)
+        problems.append(batched)
+    reference, batched = problems
+    assert batched.derivative_dynamics == "compiled" and reference.derivative_dynamics == "pinocchio"
+    assert {len(key) for key in batched._node_contact_keys} == {1, 2}  # single and double support
+    xs, us = solver.xs, solver.us
+    reference.calcDiff(xs, us)
+
+    def refused(*args, **kwargs):
+        raise AssertionError("a Pinocchio dynamics call under derivative_dynamics='compiled'")
+
+    for name in ("crba", "nonLinearEffects", "computeRNEADerivatives"):  # (the terminal node: computeAllTerms)
+        monkeypatch.setattr(pin, name, refused)
+    batched.calcDiff(xs, us)
+    assert batched.cost == pytest.approx(reference.cost, rel=1e-12)
+    names = STACKED + ("_forces", "_force_jacobians")
+    for name in names:
+        expected, actual = getattr(reference, name), getattr(batched, name)
+        assert np.max(np.abs(actual - expected)) <= 1e-10 * np.max(np.abs(expected)), name
+    assert not np.array_equal(batched.Fx, reference.Fx)  # the compiled path: rounding differs
+    # prepared ahead (every node but the first), then taken by calcDiff: the same numbers
+    keys = list(batched._node_contact_keys)
+    assert batched.prepare_dynamics(xs[:-1], us, [None] + keys[1:]) == n_nodes - 1
+    Fx = batched.Fx.copy()
+    batched.calcDiff(xs, us)
+    assert batched.prepared_used == n_nodes - 1 and np.array_equal(batched.Fx, Fx)

@@ -78,3 +78,21 @@ def test_bench_loop_runs_the_h1_with_compiled_rollouts():
                               overrides=[("ocp.rollout_dynamics", "compiled")])
     log, controller = _run_loop(args)
     assert log.status == "completed" and controller.mpc.problem.rollout_dynamics == "compiled"
+
+
+@needs_h1_extra
+def test_bench_loop_runs_the_h1_with_compiled_derivatives(capsys):
+    """``--set ocp.derivative_dynamics=compiled`` reaches the H1's MPC problem (docs/benchmarks.md "H1 loop, session
+    25"), with compiled rollouts too; a bad value is refused in one line before any run."""
+    import argparse
+
+    from bench.loop import _run_loop
+
+    assert main(["bench", "loop", "--baseline", "none", "--set", "ocp.derivative_dynamics=rnea"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "derivative_dynamics='rnea' must be 'pinocchio' or 'compiled'" in err
+    args = argparse.Namespace(robot="h1", scenario="walk", duration=0.05, seed=0, max_iterations=None,
+                              overrides=[("ocp.derivative_dynamics", "compiled"), ("ocp.rollout_dynamics", "compiled")])
+    log, controller = _run_loop(args)
+    problem = controller.mpc.problem
+    assert log.status == "completed" and (problem.derivative_dynamics, problem.rollout_dynamics) == ("compiled",) * 2

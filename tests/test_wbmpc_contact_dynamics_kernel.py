@@ -3,7 +3,9 @@ separate calls (the actuation, the contact set's calc, the damped KKT solve): th
 accelerations, forces and KKT factors to the last bit. The rollouts' solve by triangular solves
 (``calc_dynamics(..., rollout_dynamics="compiled")``, :func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`) against
 the explicit-inverse one: the same accelerations and forces to rounding, also with M and b compiled on the
-contacts' tree (no Pinocchio kinematics, :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_solve`)."""
+contacts' tree (no Pinocchio kinematics, :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_solve`). The
+derivative pass with ``derivative_dynamics="compiled"`` (the RNEA derivatives compiled, with M and b where the costs
+read no Pinocchio kinematics) against the default: the same accelerations and derivatives to rounding."""
 
 from __future__ import annotations
 
@@ -106,6 +108,44 @@ def _assert_rollout_solve_is_the_explicit_inverse(ocp, robot, seed: int) -> int:
     return checked
 
 
+def _assert_compiled_derivatives_are_pinocchios(ocp, robot, seed: int) -> int:
+    """calc_dynamics and calc_diff_dynamics with derivative_dynamics="compiled" (with and without Pinocchio kinematics
+    for the costs: Pinocchio's M and b, or the compiled ones) against the default, node by node: accelerations,
+    forces, Fx, Fu and the forces' derivatives to ~1e-15 relative (1e-12 allowed); calc_and_diff_dynamics's one call
+    (no Pinocchio kinematics, no positioned soles) the two calls' to the bit."""
+    rng = np.random.default_rng(seed)
+    checked = 0
+    for model, data in zip(ocp.problem.running_models, ocp.problem.running_datas):
+        dam, ddata = model.differential, data.differential
+        if not dam.nc:
+            continue
+        x = random_state(robot, rng, 0.02, 0.2)
+        u = rng.standard_normal(dam.nu)
+        outputs = []
+        for kinematics_for_costs, derivative_dynamics in ((True, "pinocchio"), (True, "compiled"), (False, "compiled")):
+            ddata.kinematics_for_costs = kinematics_for_costs
+            dam.calc_dynamics(ddata, x, u, derivative_dynamics=derivative_dynamics)
+            dam.calc_diff_dynamics(ddata, x, u, derivative_dynamics)
+            outputs.append([ddata.xout.copy(), ddata.force_all[:dam.nc].copy(), ddata.Fx.copy(), ddata.Fu.copy()]
+                           + [np.hstack([ddata.contacts[name].df_dx, ddata.contacts[name].df_du])
+                              for name in dam.active_contacts])
+        if not dam.contact_set.has_positioned_soles:  # the two calls in one: the same numbers to the bit
+            for array in (ddata.xout, ddata.force_all, ddata.Fx, ddata.Fu):
+                array[:] = np.nan
+            dam.calc_and_diff_dynamics(ddata, x, u, "compiled")
+            fused = [ddata.xout, ddata.force_all[:dam.nc], ddata.Fx, ddata.Fu] + [
+                np.hstack([ddata.contacts[name].df_dx, ddata.contacts[name].df_du]) for name in dam.active_contacts]
+            assert all(np.array_equal(new, old) for new, old in zip(fused, outputs[2]))
+            for name, rows in dam._active_rows:
+                assert np.array_equal(ddata.contacts[name].force, outputs[2][1][rows])
+        ddata.kinematics_for_costs = True
+        for compiled in outputs[1:]:
+            for new, old in zip(compiled, outputs[0]):
+                _assert_close(new, old)
+        checked += 1
+    return checked
+
+
 def _tree_inertia(rng, parents: np.ndarray) -> np.ndarray:
     """A random positive definite M (nv, nv) nonzero only between a row and its ancestors along
     ``parents`` (a joint-space inertia's sparsity), as M = Lᵀ D L."""
@@ -191,6 +231,7 @@ def test_bolt_point_contacts_with_moving_references():
     ocp.update(standing_state(bolt), alternating_schedule(0.0, 0.01, 8, step_duration=0.05), np.array([0.0, 0.0, 0.3]))
     assert _assert_one_call_is_the_separate_calls(ocp, bolt, seed=1) >= 4
     assert _assert_rollout_solve_is_the_explicit_inverse(ocp, bolt, seed=3) == 8
+    assert _assert_compiled_derivatives_are_pinocchios(ocp, bolt, seed=4) >= 4  # the point forces' rotation term
 
 
 @needs_h1_extra
@@ -204,12 +245,13 @@ def test_h1_soles(moments):
                                                         t_start=0.07), np.array([0.0, 0.0, 0.97]))
     assert _assert_one_call_is_the_separate_calls(ocp, h1, seed=2) == 10
     assert _assert_rollout_solve_is_the_explicit_inverse(ocp, h1, seed=4) == 10
+    assert _assert_compiled_derivatives_are_pinocchios(ocp, h1, seed=6) == 10
 
 
 @needs_h1_extra
 def test_h1_soles_with_baumgarte_position_gains_take_the_separate_calls():
     """6D soles with Kp > 0 (positioned soles: the contacts and the KKT solve as separate calls): the
-    rollouts' solve there too."""
+    rollouts' solve there too, and the compiled derivatives (the contacts' derivatives apart)."""
     h1 = load_robot("h1")
     config = dataclasses.replace(load_walking_preset("h1").ocp, evaluation="nodes", baumgarte_gains=(10.0, 20.0))
     ocp = WalkingOCP(h1, config, n_nodes=6, dt=0.02)
@@ -218,3 +260,4 @@ def test_h1_soles_with_baumgarte_position_gains_take_the_separate_calls():
     assert any(m.differential.nc and m.differential.contact_set.has_positioned_soles
                for m in ocp.problem.running_models)
     assert _assert_rollout_solve_is_the_explicit_inverse(ocp, h1, seed=5) == 6
+    assert _assert_compiled_derivatives_are_pinocchios(ocp, h1, seed=7) == 6  # the soles' Kp term apart

@@ -52,7 +52,7 @@ import pinocchio as pin
 from numba import njit
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.dynamics import ROLLOUT_DYNAMICS, DifferentialActionModelContactFwdDynamics
+from wbmpc.ocp.dynamics import DERIVATIVE_DYNAMICS, ROLLOUT_DYNAMICS, DifferentialActionModelContactFwdDynamics
 from wbmpc.ocp.integrator import IntegratedActionModelEuler
 from wbmpc.ocp.kernels.costs import (
     add_gauss_newton_rows,
@@ -130,22 +130,36 @@ class BatchedShootingProblem(ShootingProblem):
       same numbers as "pinocchio" to rounding (~1e-15), not to the bit: a closed loop's trajectory
       changes.
 
-    The derivative pass (:meth:`calcDiff`, :meth:`prepare_dynamics`) is the same under both. Raises
-    :class:`~wbmpc.errors.ParameterError` when the nodes are not supported (see
-    :func:`batched_evaluation_support`) or ``rollout_dynamics`` is not one of the choices. References
+    The derivative pass (:meth:`calcDiff`, :meth:`prepare_dynamics`) is the same under both; it takes
+    ``derivative_dynamics`` instead, one of :data:`~wbmpc.ocp.dynamics.DERIVATIVE_DYNAMICS`, for the same nodes:
+
+    - "pinocchio" (default): each node's ``calc_dynamics`` with Pinocchio's ``crba`` and ``nonLinearEffects``,
+      then ``calc_diff_dynamics`` with Pinocchio's ``computeRNEADerivatives``;
+    - "compiled": M and b compiled on the contacts' tree (the same explicit-inverse KKT solve), then the contacts',
+      RNEA and KKT derivatives in one compiled call (``calc_dynamics``/``calc_diff_dynamics(...,
+      derivative_dynamics="compiled")``): no binding call at such a node; the same values and derivatives as
+      "pinocchio" to rounding (~1e-15), not to the bit.
+
+    Raises :class:`~wbmpc.errors.ParameterError` when the nodes are not supported (see
+    :func:`batched_evaluation_support`) or ``rollout_dynamics`` or ``derivative_dynamics`` is not one of the
+    choices. References
     written into the node residuals and the weights and activity set on the node cost items are seen at
     once; call :meth:`sync` after changing the node models' contact sets, before the next evaluation
     (:meth:`~wbmpc.walking.WalkingOCP.update` does).
     """
 
-    def __init__(self, x0: np.ndarray, running_models: list, terminal_model, rollout_dynamics: str = "pinocchio"):
+    def __init__(self, x0: np.ndarray, running_models: list, terminal_model, rollout_dynamics: str = "pinocchio",
+                 derivative_dynamics: str = "pinocchio"):
         if rollout_dynamics not in ROLLOUT_DYNAMICS:
             raise ParameterError(f"rollout_dynamics={rollout_dynamics!r} must be one of {ROLLOUT_DYNAMICS}")
+        if derivative_dynamics not in DERIVATIVE_DYNAMICS:
+            raise ParameterError(f"derivative_dynamics={derivative_dynamics!r} must be one of {DERIVATIVE_DYNAMICS}")
         super().__init__(x0, running_models, terminal_model)
         reason = batched_evaluation_support(self)
         if reason is not None:
             raise ParameterError(f"running_models cannot be evaluated batched: {reason}")
         self._rollout_dynamics = rollout_dynamics
+        self._derivative_dynamics = derivative_dynamics
         state = self.state
         N, nv, nx, ndx, nu = self.T, state.nv, state.nx, state.ndx, self.nu
         self._pin_model = state.pinocchio
@@ -279,6 +293,12 @@ class BatchedShootingProblem(ShootingProblem):
         """The dynamics of the "kkt" nodes in :meth:`calc` and the rollouts, "pinocchio" or "compiled"
         (fixed at construction, see the class)."""
         return self._rollout_dynamics
+
+    @property
+    def derivative_dynamics(self) -> str:
+        """The dynamics of the "kkt" nodes in :meth:`calcDiff` and :meth:`prepare_dynamics`, "pinocchio" or
+        "compiled" (fixed at construction, see the class)."""
+        return self._derivative_dynamics
 
     def detach(self) -> None:
         """Called when another batched problem took over these node models' references and cost
@@ -474,9 +494,11 @@ class BatchedShootingProblem(ShootingProblem):
         tau[6:] = u
         if kkt is not None:
             dam, data = kkt
-            a = self._kkt_dynamics(kkt, x, u, forces, "pinocchio")  # the solve the derivatives read
-            free_flyer_euler_step(x, a, dt, euler_dx, xnext)
-            dam.calc_diff_dynamics(data, x, u)
+            # the solve the derivatives read, then the derivatives (one compiled call with "compiled")
+            dam.calc_and_diff_dynamics(data, x, u, self._derivative_dynamics)
+            if forces is not None:  # the active contacts' rows, stacked in order
+                forces[:dam.nc] = data.force_all[:dam.nc]
+            free_flyer_euler_step(x, data.xout, dt, euler_dx, xnext)
             da_dx[:] = data.Fx
             da_du[:] = data.Fu
             if forces is not None:
@@ -512,13 +534,13 @@ class BatchedShootingProblem(ShootingProblem):
 
     @staticmethod
     def _kkt_dynamics(kkt: tuple, x: np.ndarray, u: np.ndarray, forces: np.ndarray | None,
-                      rollout_dynamics: str) -> np.ndarray:
+                      rollout_dynamics: str, derivative_dynamics: str = "pinocchio") -> np.ndarray:
         """Accelerations (nv,) of a "kkt" backend node, kkt = (dam, data), and its stacked contact
         forces into ``forces`` (nc_max,) unless None; ``rollout_dynamics``: "pinocchio" (the solve that
-        leaves the KKT factors for ``calc_diff_dynamics``) or "compiled" (:meth:`calc` and the rollouts
-        under that choice: see ``calc_dynamics``)."""
+        leaves the KKT factors for ``calc_diff_dynamics``, its M and b by ``derivative_dynamics``) or
+        "compiled" (:meth:`calc` and the rollouts under that choice: see ``calc_dynamics``)."""
         dam, data = kkt
-        dam.calc_dynamics(data, x, u, rollout_dynamics)
+        dam.calc_dynamics(data, x, u, rollout_dynamics, derivative_dynamics)
         if forces is not None:  # the active contacts' rows, stacked in order
             forces[:dam.nc] = data.force_all[:dam.nc]
         return data.xout

@@ -55,6 +55,15 @@ above, the one the derivatives need; "compiled" (a rollout's, opt-in) the KKT so
 solves on M's tree-sparse Lᵀ D L factors (:func:`~wbmpc.ocp.kernels.kkt.damped_kkt_solve`) and,
 where the costs read no Pinocchio kinematics, M and b on the contacts' tree
 (:mod:`wbmpc.ocp.kernels.joint_space`): the same numbers to rounding (~1e-15), not to the bit.
+
+The "kkt" backend's derivative pass (the calc whose derivatives follow, then
+:meth:`~DifferentialActionModelContactFwdDynamics.calc_diff_dynamics`) takes ``derivative_dynamics``
+(:data:`DERIVATIVE_DYNAMICS`) at a node with contacts: "pinocchio" (default) the path above (Pinocchio's M and
+b, ``computeRNEADerivatives``); "compiled" (opt-in) the RNEA derivatives with the contact forces compiled on the
+contacts' tree (:mod:`wbmpc.ocp.kernels.rnea_derivatives`), in one compiled call with the contacts' derivatives and
+the KKT derivatives (:func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_derivatives`), and, where the costs read
+no Pinocchio kinematics, M and b compiled too (:func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_dynamics`,
+the same explicit-inverse solve): the same numbers to rounding (~1e-15), not to the bit.
 """
 
 from __future__ import annotations
@@ -66,7 +75,15 @@ from wbmpc.errors import ParameterError
 from wbmpc.ocp.actuation import ActuationFloatingBase
 from wbmpc.ocp.contacts import ContactModel6D, ContactSet, ContactSetWork, SoleCorners
 from wbmpc.ocp.costs import CostModelSum
-from wbmpc.ocp.kernels.contact_dynamics import contact_kkt_dynamics, contact_kkt_solve, contact_kkt_tree_solve
+from wbmpc.ocp.kernels.contact_dynamics import (
+    contact_kkt_derivatives,
+    contact_kkt_dynamics,
+    contact_kkt_solve,
+    contact_kkt_tree_dynamics,
+    contact_kkt_tree_dynamics_derivatives,
+    contact_kkt_tree_solve,
+    kkt_rnea_derivatives,
+)
 from wbmpc.ocp.kernels.joint_space import LinkInertias
 from wbmpc.ocp.kernels.kkt import (
     KKTBuffers,
@@ -75,6 +92,7 @@ from wbmpc.ocp.kernels.kkt import (
     damped_kkt_solve,
     velocity_parents,
 )
+from wbmpc.ocp.kernels.rnea_derivatives import RNEADerivatives
 from wbmpc.ocp.kernels.tree import KinematicTree, tree_support
 from wbmpc.ocp.residuals.base import DataCollector
 from wbmpc.ocp.state import StateMultibody
@@ -83,6 +101,10 @@ from wbmpc.ocp.state import StateMultibody
 #: the explicit-inverse KKT solve the derivatives use) or "compiled" (M and b compiled on the contacts' tree,
 #: the KKT solve by triangular solves: the same numbers to rounding)
 ROLLOUT_DYNAMICS = ("pinocchio", "compiled")
+#: the dynamics of a "kkt" node's derivative pass (its calc with the explicit-inverse solve, then its derivatives):
+#: "pinocchio" (Pinocchio's M, b and RNEA derivatives) or "compiled" (the RNEA derivatives and, without Pinocchio
+#: kinematics for the costs, M and b compiled on the contacts' tree: the same numbers to rounding)
+DERIVATIVE_DYNAMICS = ("pinocchio", "compiled")
 
 
 class DifferentialActionModelContactFwdDynamics:
@@ -252,7 +274,8 @@ class DifferentialActionModelContactFwdDynamics:
         self.calc_dynamics(data, x, u)
         data.cost = self.costs.calc(data.costs, x, u, data.shared)
 
-    def calc_dynamics(self, data, x: np.ndarray, u: np.ndarray, rollout_dynamics: str = "pinocchio") -> None:
+    def calc_dynamics(self, data, x: np.ndarray, u: np.ndarray, rollout_dynamics: str = "pinocchio",
+                      derivative_dynamics: str = "pinocchio") -> None:
         """The dynamics part of :meth:`calc` (no cost): data.xout (nv,) and the contact forces.
 
         ``rollout_dynamics`` (:data:`ROLLOUT_DYNAMICS`, the "kkt" backend; ``constraintDynamics``, the
@@ -269,12 +292,20 @@ class DifferentialActionModelContactFwdDynamics:
           touched): the same numbers to rounding (~1e-15), not to the bit. It leaves nothing for
           :meth:`calc_diff_dynamics`, which then refuses to run until a "pinocchio" calc.
 
+        ``derivative_dynamics`` (:data:`DERIVATIVE_DYNAMICS`, with ``rollout_dynamics="pinocchio"``): "compiled" takes
+        M and b compiled on the contacts' tree where "compiled" rollouts do (contacts, no positioned soles, no
+        ``data.kinematics_for_costs``: :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_dynamics`), then
+        the same explicit-inverse solve; elsewhere, and with "pinocchio" (default), it changes nothing.
+
         Raises:
-            ParameterError: ``rollout_dynamics`` is not one of :data:`ROLLOUT_DYNAMICS`.
+            ParameterError: ``rollout_dynamics`` is not one of :data:`ROLLOUT_DYNAMICS`, or ``derivative_dynamics``
+                not one of :data:`DERIVATIVE_DYNAMICS`.
         """
         derivatives = rollout_dynamics == "pinocchio"  # the solve that leaves the factors of the derivatives
         if not derivatives and rollout_dynamics != "compiled":
             raise ParameterError(f"rollout_dynamics={rollout_dynamics!r} must be one of {ROLLOUT_DYNAMICS}")
+        if derivative_dynamics not in DERIVATIVE_DYNAMICS:
+            raise ParameterError(f"derivative_dynamics={derivative_dynamics!r} must be one of {DERIVATIVE_DYNAMICS}")
         model = self.state.pinocchio
         nq = self.state.nq
         q, v = x[:nq], x[nq:]
@@ -284,8 +315,9 @@ class DifferentialActionModelContactFwdDynamics:
         nc = self.nc
         contact_set = self.contact_set
         one_call = nc and not contact_set.has_positioned_soles  # contacts and KKT solve in one compiled call
-        # a compiled rollout node whose caller needs no Pinocchio kinematics: M and b compiled in that call too
-        tree_terms = one_call and not derivatives and not data.kinematics_for_costs
+        # a compiled rollout node (or a compiled derivative pass) whose caller needs no Pinocchio kinematics: M and b
+        # compiled in that call too
+        tree_terms = one_call and not data.kinematics_for_costs and (not derivatives or derivative_dynamics == "compiled")
         pdata = data.select_pinocchio(None)
         if data.kinematics_for_costs:
             pin.computeAllTerms(model, pdata, q, v)
@@ -299,8 +331,9 @@ class DifferentialActionModelContactFwdDynamics:
         data.kkt_for_derivatives = derivatives
         if tree_terms:
             contact_set.refresh_references()
-            solved = contact_kkt_tree_solve(x, self.contact_damping, self.row_scales, *contact_set.kernel_arguments,
-                                            *data.contact_kkt_tree_arguments(contact_set.kinds.size, nc))
+            solved = (contact_kkt_tree_dynamics if derivatives else contact_kkt_tree_solve)(
+                x, self.contact_damping, self.row_scales, *contact_set.kernel_arguments,
+                *data.contact_kkt_tree_arguments(contact_set.kinds.size, nc, derivatives))
         elif one_call:
             contact_set.refresh_references()
             solved = (contact_kkt_dynamics if derivatives else contact_kkt_solve)(
@@ -373,9 +406,22 @@ class DifferentialActionModelContactFwdDynamics:
         self.costs.calcDiff(data.costs, x, u, data.shared)
         self._copy_cost_derivatives(data)
 
-    def calc_diff_dynamics(self, data, x: np.ndarray, u: np.ndarray) -> None:
+    def calc_diff_dynamics(self, data, x: np.ndarray, u: np.ndarray, derivative_dynamics: str = "pinocchio") -> None:
         """The dynamics part of :meth:`calcDiff` (no cost): data.Fx (nv, ndx), data.Fu (nv, nu)
-        and the contact forces' derivatives; after :meth:`calc_dynamics` (or calc) at (x, u)."""
+        and the contact forces' derivatives; after :meth:`calc_dynamics` (or calc) at (x, u).
+
+        ``derivative_dynamics`` (:data:`DERIVATIVE_DYNAMICS`; the "kkt" backend's nodes with contacts): "pinocchio"
+        (default) Pinocchio's ``computeRNEADerivatives``; "compiled" the RNEA derivatives compiled on the tree the
+        calc left, in one compiled call with the contacts' and the KKT derivatives
+        (:func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_derivatives`; with positioned soles the contacts'
+        derivatives apart): the same numbers to rounding. Independent of the calc's ``derivative_dynamics``.
+
+        Raises:
+            ParameterError: ``derivative_dynamics`` is not one of :data:`DERIVATIVE_DYNAMICS`, or the last calc was a
+                "compiled" rollout's.
+        """
+        if derivative_dynamics not in DERIVATIVE_DYNAMICS:
+            raise ParameterError(f"derivative_dynamics={derivative_dynamics!r} must be one of {DERIVATIVE_DYNAMICS}")
         if self.nc and self.backend == "pinocchio":
             self._calc_diff_constraint_dynamics(data)
             return
@@ -383,11 +429,14 @@ class DifferentialActionModelContactFwdDynamics:
             raise ParameterError("calc_diff_dynamics after calc_dynamics(..., rollout_dynamics='compiled'): the KKT "
                                  "solve left no factors for the derivatives; call calc_dynamics with "
                                  "rollout_dynamics='pinocchio' first")
+        nc = self.nc
+        if nc and derivative_dynamics == "compiled":
+            self._calc_diff_compiled(data, x)
+            return
         model = self.state.pinocchio
         pdata = data.pinocchio
         nq = self.state.nq
         q, v = x[:nq], x[nq:]
-        nc = self.nc
         dtau_dq = pdata.dtau_dq
         da0_dx = data.da0_dx_all[:nc]
         for joint in data.fext_joints:
@@ -405,6 +454,67 @@ class DifferentialActionModelContactFwdDynamics:
         df_dx, df_du = data.df_dx_all[:nc], data.df_du_all[:nc]
         damped_kkt_derivatives(dtau_dq, pdata.dtau_dv, da0_dx, self.row_scales, data.Fx, data.Fu, df_dx, df_du,
                                *data.kkt_buffers(nc).derivative_buffers())
+        self._copy_force_derivatives(data, df_dx, df_du)
+
+    def calc_and_diff_dynamics(self, data, x: np.ndarray, u: np.ndarray, derivative_dynamics: str = "pinocchio") -> None:
+        """:meth:`calc_dynamics` (``rollout_dynamics="pinocchio"``) then :meth:`calc_diff_dynamics` at (x, u) with
+        ``derivative_dynamics``; with "compiled" at a node whose calc takes M and b compiled (contacts, no positioned
+        soles, no ``data.kinematics_for_costs``) in one compiled call
+        (:func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_dynamics_derivatives`): the same numbers to the
+        bit as the two calls.
+
+        Raises:
+            ParameterError: ``derivative_dynamics`` is not one of :data:`DERIVATIVE_DYNAMICS`.
+        """
+        nc = self.nc
+        if (derivative_dynamics != "compiled" or not nc or self.backend != "kkt" or data.kinematics_for_costs
+                or self.contact_set.has_positioned_soles):
+            self.calc_dynamics(data, x, u, "pinocchio", derivative_dynamics)
+            self.calc_diff_dynamics(data, x, u, derivative_dynamics)
+            return
+        data.select_pinocchio(None)
+        if data.active_contacts is not self.active_contacts:
+            data.active_contacts = self.active_contacts
+            data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
+        self.actuation.calc(data.tau, u)
+        data.kkt_for_derivatives = True
+        contact_set = self.contact_set
+        contact_set.refresh_references()
+        contact_kkt_tree_dynamics_derivatives(x, self.contact_damping, self.row_scales, *contact_set.kernel_arguments,
+                                              *data.contact_kkt_tree_derivative_arguments(contact_set.kinds.size, nc))
+        forces = data.force_all
+        contacts = data.contacts
+        df_dx, df_du = data.df_dx_all, data.df_du_all
+        for name, rows in self._active_rows:
+            cdata = contacts[name]
+            cdata.force[:] = forces[rows]
+            cdata.df_dx[:] = df_dx[rows]
+            cdata.df_du[:] = df_du[rows]
+
+    def _calc_diff_compiled(self, data, x: np.ndarray) -> None:
+        """calc_diff_dynamics with derivative_dynamics="compiled" at a node with contacts (the module's docstring)."""
+        nc = self.nc
+        contact_set = self.contact_set
+        k = contact_set.kinds.size
+        df_dx, df_du = data.df_dx_all[:nc], data.df_du_all[:nc]
+        if not contact_set.has_positioned_soles:
+            contact_kkt_derivatives(x, self.row_scales, *contact_set.kernel_arguments,
+                                    *data.contact_kkt_derivative_arguments(k, nc))
+        else:  # the soles' Kp term (Pinocchio's log6) in the drift derivatives, then the rest in one call
+            work = data.contact_work
+            v = x[self.state.nq:]
+            da0_dx = data.da0_dx_all[:nc]
+            extra = contact_set.derivatives(data.tree, work, v, data.xout, data.force_all[:nc], da0_dx)
+            tree, (links, rnea) = data.tree, data.derivative_terms()
+            kkt_rnea_derivatives(tree.parents, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J, links.mass,
+                                 links.lever, links.rotational, links.gravity, links.body, contact_set.joints,
+                                 work.fext[:k], extra, work.dtau_dq_extra, *rnea.arguments(), data.dtau_dq,
+                                 data.dtau_dv, da0_dx, self.row_scales, data.Fx, data.Fu, df_dx, df_du,
+                                 *data.kkt_buffers(nc).derivative_buffers())
+        self._copy_force_derivatives(data, df_dx, df_du)
+
+    def _copy_force_derivatives(self, data, df_dx: np.ndarray, df_du: np.ndarray) -> None:
+        """Each active contact's rows of the stacked force derivatives into its data."""
         for name, rows in self._active_rows:
             cdata = data.contacts[name]
             cdata.df_dx[:] = df_dx[rows]
@@ -456,6 +566,7 @@ class DifferentialActionDataContactFwdDynamics:
         self.df_dx_all = np.zeros((nc_max, ndx))
         self.df_du_all = np.zeros((nc_max, nu))
         self.dtau_dq = np.zeros((nv, nv))  # RNEA derivative with the point forces' rotation terms
+        self.dtau_dv = np.zeros((nv, nv))  # the compiled RNEA derivative's ∂τ/∂v
         self._kkt_buffers: dict[int, KKTBuffers] = {}  # contact rows -> the KKT kernels' buffers
         self._contact_kkt_arguments: dict[tuple, tuple] = {}  # (contacts, rows, derivatives) -> its arguments
         # the compiled tree kinematics the contacts of the kkt backend read, and their buffers (None: the
@@ -465,6 +576,8 @@ class DifferentialActionDataContactFwdDynamics:
         #: the link inertias of the compiled M and b ("compiled" rollouts without Pinocchio kinematics; built by
         #: the first such calc), M (nv, nv) (upper triangle) and b (nv,) they leave
         self.links: LinkInertias | None = None
+        #: the compiled RNEA derivatives' scratch (derivative_dynamics="compiled"; built by the first such calcDiff)
+        self.rnea: RNEADerivatives | None = None
         self.M = np.zeros((nv, nv))
         self.nle = np.zeros(nv)
         self.zero_acceleration = np.zeros(nv)
@@ -501,20 +614,61 @@ class DifferentialActionDataContactFwdDynamics:
                 *(buffers.dynamics_buffers() if derivatives else (self.velocity_parents, *buffers.solve_buffers())))
         return arguments
 
-    def contact_kkt_tree_arguments(self, n_contacts: int, nc: int) -> tuple:
+    def contact_kkt_tree_arguments(self, n_contacts: int, nc: int, derivatives: bool = False) -> tuple:
         """The buffers :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_solve` takes after the
         contact set's arrays, for ``n_contacts`` active contacts of ``nc`` stacked rows (tau ... J, the link
         inertias, M, b, the contacts' frame kinematics, Jc, a0, xout, the forces, the KKT solve buffers), made
-        once per size."""
-        key = (n_contacts, nc, "tree")
+        once per size; ``derivatives=True``: those of
+        :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_dynamics` (the KKT dynamics buffers last)."""
+        key = (n_contacts, nc, "tree", derivatives)
         arguments = self._contact_kkt_arguments.get(key)
         if arguments is None:
             if self.links is None:
                 self.links = LinkInertias(self._model)
+            buffers = self.kkt_buffers(nc)
             arguments = self._contact_kkt_arguments[key] = (
                 *self._tree_arguments(), *self.links.arguments(), self.M, self.nle,
-                *self._contact_frame_arguments(n_contacts, nc), self.velocity_parents,
-                *self.kkt_buffers(nc).solve_buffers())
+                *self._contact_frame_arguments(n_contacts, nc),
+                *(buffers.dynamics_buffers() if derivatives else (self.velocity_parents, *buffers.solve_buffers())))
+        return arguments
+
+    def derivative_terms(self) -> tuple[LinkInertias, RNEADerivatives]:
+        """The link inertias and the scratch of the compiled RNEA derivatives (made on first use)."""
+        if self.links is None:
+            self.links = LinkInertias(self._model)
+        if self.rnea is None:
+            self.rnea = RNEADerivatives(self._model)
+        return self.links, self.rnea
+
+    def contact_kkt_tree_derivative_arguments(self, n_contacts: int, nc: int) -> tuple:
+        """The buffers :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_tree_dynamics_derivatives` takes after
+        the contact set's arrays, for ``n_contacts`` active contacts of ``nc`` stacked rows, made once per size."""
+        key = (n_contacts, nc, "tree derivatives")
+        arguments = self._contact_kkt_arguments.get(key)
+        if arguments is None:
+            links, rnea = self.derivative_terms()
+            work, k = self.contact_work, n_contacts
+            Minv, A, Y, J_scaled, *rest = self.kkt_buffers(nc).derivative_buffers()
+            arguments = self._contact_kkt_arguments[key] = (
+                *self.contact_kkt_tree_arguments(n_contacts, nc, True), work.v_dq[:k], work.a_dq[:k], work.a_dv[:k],
+                self.da0_dx_all[:nc], work.fext[:k], work.dtau_dq_extra, rnea.variation, rnea.motions, self.dtau_dq,
+                self.dtau_dv, self.Fx, self.Fu, self.df_dx_all[:nc], self.df_du_all[:nc], *rest)
+        return arguments
+
+    def contact_kkt_derivative_arguments(self, n_contacts: int, nc: int) -> tuple:
+        """The buffers :func:`~wbmpc.ocp.kernels.contact_dynamics.contact_kkt_derivatives` takes after the contact
+        set's arrays, for ``n_contacts`` active contacts of ``nc`` stacked rows (xout ... AtYA), made once per size."""
+        key = (n_contacts, nc, "derivatives")
+        arguments = self._contact_kkt_arguments.get(key)
+        if arguments is None:
+            links, rnea = self.derivative_terms()
+            tree, work, k = self.tree, self.contact_work, n_contacts
+            arguments = self._contact_kkt_arguments[key] = (
+                self.xout, self.force_all[:nc], tree.parents, tree.idx_v, tree.R, tree.p, tree.ov, tree.oa, tree.J,
+                work.oRf[:k], work.opf[:k], work.fJf[:k], work.velocity[:k], work.v_dq[:k], work.a_dq[:k],
+                work.a_dv[:k], self.da0_dx_all[:nc], work.fext[:k], work.dtau_dq_extra, links.mass, links.lever,
+                links.rotational, links.gravity, links.body, *rnea.arguments(), self.dtau_dq, self.dtau_dv, self.Fx,
+                self.Fu, self.df_dx_all[:nc], self.df_du_all[:nc], *self.kkt_buffers(nc).derivative_buffers())
         return arguments
 
     def _tree_arguments(self) -> tuple:

@@ -61,7 +61,7 @@ from wbmpc.ocp.actuation import ActuationFloatingBase
 from wbmpc.ocp.batched_problem import BatchedShootingProblem, batched_evaluation_support
 from wbmpc.ocp.contacts import ContactModel3D, ContactModel6D, sole_lever_arms
 from wbmpc.ocp.costs import CostModelResidual, CostModelSum
-from wbmpc.ocp.dynamics import ROLLOUT_DYNAMICS, DifferentialActionModelContactFwdDynamics
+from wbmpc.ocp.dynamics import DERIVATIVE_DYNAMICS, ROLLOUT_DYNAMICS, DifferentialActionModelContactFwdDynamics
 from wbmpc.ocp.integrator import IntegratedActionModelEuler
 from wbmpc.ocp.problem import ShootingProblem
 from wbmpc.ocp.residuals import (
@@ -231,6 +231,15 @@ class WalkingOCPConfig:
             "compiled" and completes with "pinocchio". "compiled" needs dynamics_backend "kkt" and the
             batched evaluation (the node-wise one and the "pinocchio" backend's ``constraintDynamics`` do
             not read it).
+        derivative_dynamics: the contact dynamics of the derivative pass (the batched ``calcDiff`` and its
+            preparation) at the "kkt" backend's nodes with contacts, a choice of code path, no unit: "pinocchio"
+            (default: Pinocchio's ``crba``, ``nonLinearEffects`` and ``computeRNEADerivatives``) or "compiled"
+            (M and b compiled on the contacts' tree, the RNEA derivatives with the contact forces compiled too, in
+            one compiled call with the contacts' and the KKT derivatives:
+            :class:`~wbmpc.ocp.batched_problem.BatchedShootingProblem`). The same dynamics and derivatives to
+            rounding (~1e-15 relative), a derivative pass cheaper (docs/benchmarks.md "H1 loop, session 25"); the
+            closed loop's trajectory changes in the last bits. "compiled" needs dynamics_backend "kkt" and the
+            batched evaluation, as ``rollout_dynamics``; the two are independent.
         obstacle_clearance_weight: weight of the one-sided clearance barriers of a crossing swing
             (``{foot}_clearance_sole{i}``, ``{foot}_clearance_shank``); 0 = the terms are absent (the
             problem is the one without obstacles).
@@ -316,6 +325,7 @@ class WalkingOCPConfig:
     dynamics_backend: str = "pinocchio"
     evaluation: str = "auto"
     rollout_dynamics: str = "pinocchio"
+    derivative_dynamics: str = "pinocchio"
     obstacle_clearance_weight: float = 0.0
     obstacle_sole_points: tuple[tuple[float, float, float], ...] = ()
     obstacle_shank_frames: tuple[tuple[str, str], ...] = ()
@@ -441,6 +451,15 @@ class WalkingOCPConfig:
                                  f"backend's rollouts are constraintDynamics), got {self.dynamics_backend!r}")
         if self.rollout_dynamics == "compiled" and self.evaluation == "nodes":
             raise ParameterError("rollout_dynamics='compiled' needs the batched evaluation (evaluation 'auto' or "
+                                 "'batched'), got evaluation='nodes'")
+        if self.derivative_dynamics not in DERIVATIVE_DYNAMICS:
+            raise ParameterError(f"derivative_dynamics={self.derivative_dynamics!r} must be 'pinocchio' or 'compiled'")
+        if self.derivative_dynamics == "compiled" and self.dynamics_backend != "kkt":
+            raise ParameterError(f"derivative_dynamics='compiled' needs dynamics_backend='kkt' (the 'pinocchio' "
+                                 f"backend's derivatives are computeConstraintDynamicsDerivatives), got "
+                                 f"{self.dynamics_backend!r}")
+        if self.derivative_dynamics == "compiled" and self.evaluation == "nodes":
+            raise ParameterError("derivative_dynamics='compiled' needs the batched evaluation (evaluation 'auto' or "
                                  "'batched'), got evaluation='nodes'")
         if self.base_yaw_reference not in BASE_YAW_REFERENCES:
             raise ParameterError(f"base_yaw_reference={self.base_yaw_reference!r} must be one of {BASE_YAW_REFERENCES}")
@@ -646,12 +665,16 @@ class WalkingOCP:
             reason = batched_evaluation_support(self.problem)
             if reason is None:
                 self.problem = BatchedShootingProblem(self.x_reference, running, terminal,
-                                                      rollout_dynamics=config.rollout_dynamics)
+                                                      rollout_dynamics=config.rollout_dynamics,
+                                                      derivative_dynamics=config.derivative_dynamics)
                 self.evaluation = "batched"
             elif config.evaluation == "batched":
                 raise ParameterError(f"evaluation='batched' is not possible for this problem: {reason}")
             elif config.rollout_dynamics == "compiled":
                 raise ParameterError(f"rollout_dynamics='compiled' needs the batched evaluation, not possible for "
+                                     f"this problem: {reason}")
+            elif config.derivative_dynamics == "compiled":
+                raise ParameterError(f"derivative_dynamics='compiled' needs the batched evaluation, not possible for "
                                      f"this problem: {reason}")
             else:  # said, not silent: the node-wise path is several times slower
                 self.evaluation_note = f"node-wise evaluation: {reason}"

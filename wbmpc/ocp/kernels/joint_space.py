@@ -77,7 +77,7 @@ class LinkInertias:
 
 
 @njit(cache=True, inline="always")
-def _apply_inertia(Y, v0, v1, v2, w0, w1, w2, out):
+def apply_inertia(Y, v0, v1, v2, w0, w1, w2, out):
     """out (6,) = the force of the world spatial inertia Y (10,) applied to the motion (v, ω)."""
     m, h0, h1, h2 = Y[0], Y[1], Y[2], Y[3]
     out[0] = m * v0 + w1 * h2 - w2 * h1
@@ -133,7 +133,7 @@ def joint_space_inertia(parents, idx_v, J, armature, body, composite, M):
         first = idx_v[i]
         count = 6 if i == 1 else 1
         for c in range(first, first + count):
-            _apply_inertia(Y, J[0, c], J[1, c], J[2, c], J[3, c], J[4, c], J[5, c], F)
+            apply_inertia(Y, J[0, c], J[1, c], J[2, c], J[3, c], J[4, c], J[5, c], F)
             for k in range(first, c + 1):  # the joint's own columns up to c
                 M[k, c] += (J[0, k] * F[0] + J[1, k] * F[1] + J[2, k] * F[2] + J[3, k] * F[3] + J[4, k] * F[4]
                             + J[5, k] * F[5])
@@ -162,9 +162,9 @@ def nonlinear_effects(parents, idx_v, ov, oa, J, gravity, body, force, b):
     for i in range(1, n):
         Y = body[i]
         vi = ov[i]
-        _apply_inertia(Y, oa[i, 0] - gravity[0], oa[i, 1] - gravity[1], oa[i, 2] - gravity[2], oa[i, 3], oa[i, 4],
+        apply_inertia(Y, oa[i, 0] - gravity[0], oa[i, 1] - gravity[1], oa[i, 2] - gravity[2], oa[i, 3], oa[i, 4],
                        oa[i, 5], f)
-        _apply_inertia(Y, vi[0], vi[1], vi[2], vi[3], vi[4], vi[5], h)
+        apply_inertia(Y, vi[0], vi[1], vi[2], vi[3], vi[4], vi[5], h)
         v0, v1, v2, w0, w1, w2 = vi[0], vi[1], vi[2], vi[3], vi[4], vi[5]
         force[i, 0] = f[0] + w1 * h[2] - w2 * h[1]
         force[i, 1] = f[1] + w2 * h[0] - w0 * h[2]

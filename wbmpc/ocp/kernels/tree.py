@@ -102,7 +102,7 @@ class KinematicTree:
 
 
 @njit(cache=True, inline="always")
-def _cross_motion(m1, m2, out):
+def cross_motion(m1, m2, out):
     """out (6,) = m1 × m2, the cross product of motions (linear, angular)."""
     v0, v1, v2, w0, w1, w2 = m1[0], m1[1], m1[2], m1[3], m1[4], m1[5]
     u0, u1, u2, x0, x1, x2 = m2[0], m2[1], m2[2], m2[3], m2[4], m2[5]
@@ -216,7 +216,7 @@ def tree_accelerations(v, a, parents, idx_v, ov, J, oa):
         else:
             for b in range(6):
                 S[b] = J[b, col]
-            _cross_motion(ov[i], S, cross)
+            cross_motion(ov[i], S, cross)
             parent = parents[i]
             for b in range(6):
                 oa[i, b] = oa[parent, b] + S[b] * a[col] + cross[b] * v[col]
@@ -269,7 +269,7 @@ def frame_acceleration_derivatives(joint, oRf, opf, parents, idx_v, ov, oa, J, v
             for k in range(6):
                 for b in range(6):
                     S[b] = J[b, col + k]
-                _cross_motion(t1, S, t2)
+                cross_motion(t1, S, t2)
                 _act_inverse(oRf, opf, t2, out)
                 for b in range(6):
                     a_dv[b, col + k] = out[b]
@@ -277,14 +277,14 @@ def frame_acceleration_derivatives(joint, oRf, opf, parents, idx_v, ov, oa, J, v
             parent = parents[j]
             for b in range(6):
                 S[b] = J[b, col]
-            _cross_motion(ov[parent], S, t1)  # ov_p × S_k
+            cross_motion(ov[parent], S, t1)  # ov_p × S_k
             _act_inverse(oRf, opf, t1, out)
             for b in range(6):
                 v_dq[b, col] = out[b]
-            _cross_motion(oa[j], S, t2)  # oa_j × S_k + (ov_p × S_k) × (ov_L − ov_j)
+            cross_motion(oa[j], S, t2)  # oa_j × S_k + (ov_p × S_k) × (ov_L − ov_j)
             for b in range(6):
                 t3[b] = ovL[b] - ov[j, b]
-            _cross_motion(t1, t3, out)
+            cross_motion(t1, t3, out)
             for b in range(6):
                 t2[b] += out[b]
             _act_inverse(oRf, opf, t2, out)
@@ -292,7 +292,7 @@ def frame_acceleration_derivatives(joint, oRf, opf, parents, idx_v, ov, oa, J, v
                 a_dq[b, col] = out[b]
             for b in range(6):  # (2 ov_j − ov_L) × S_k
                 t3[b] = 2.0 * ov[j, b] - ovL[b]
-            _cross_motion(t3, S, t2)
+            cross_motion(t3, S, t2)
             _act_inverse(oRf, opf, t2, out)
             for b in range(6):
                 a_dv[b, col] = out[b]
