@@ -692,7 +692,7 @@ def test_h1_rollout_dynamics_compiled_agrees_with_pinocchio(python_node):
     assert batched.rollout_dynamics == "compiled"
     assert all(batched._kkt_rollout.compiled(k) for k in range(n_nodes)) and batched._keep_forces
     if python_node is not None:
-        batched._kkt_rollout.contacts[python_node] = -1
+        batched._horizon_contacts.contacts[python_node] = -1
     default = _batched_walking_ocp(h1, preset, n_nodes)  # the same OCP, rollout_dynamics="pinocchio"
     _, default_problem, _ = _h1_rollouts(default, n_nodes, seed=6)
     for alpha in (1.0, 0.5):
@@ -786,3 +786,4 @@ def test_h1_derivative_dynamics_compiled_agrees_with_pinocchio(monkeypatch):
     Fx = batched.Fx.copy()
     batched.calcDiff(xs, us)
     assert batched.prepared_used == n_nodes - 1 and np.array_equal(batched.Fx, Fx)
+

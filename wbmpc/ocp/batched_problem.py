@@ -63,6 +63,7 @@ from wbmpc.ocp.kernels.costs import (
 )
 from wbmpc.ocp.kernels.feedback import rollout_node_start
 from wbmpc.ocp.kernels.frames import FrameKinematics
+from wbmpc.ocp.kernels.horizon_contacts import HorizonContactSets
 from wbmpc.ocp.kernels.integration import euler_transition_jacobians, free_flyer_euler_step
 from wbmpc.ocp.kernels.lie import free_flyer_dintegrate
 from wbmpc.ocp.kernels.rollout import KKTRollout
@@ -268,11 +269,13 @@ class BatchedShootingProblem(ShootingProblem):
         self._prepared_forces = np.zeros_like(self._forces)
         self._prepared_force_jacobians = np.zeros_like(self._force_jacobians)
         # "compiled": the rollout of the "kkt" nodes in one compiled call (kernels/rollout.py), when a node may
-        # take it
+        # take it, over the nodes' contact sets as padded arrays (set by sync)
         kkt = [model.differential for model in self.running_models
                if model.differential.backend == "kkt" and model.differential.contacts]
-        self._kkt_rollout = (KKTRollout(self._pin_model, N, max(len(dam.contacts) for dam in kkt), nc_max)
-                             if kkt and rollout_dynamics == "compiled" else None)
+        compiled = kkt and rollout_dynamics == "compiled"
+        self._horizon_contacts = (HorizonContactSets(N, max(len(dam.contacts) for dam in kkt), nc_max) if compiled
+                                  else None)
+        self._kkt_rollout = KKTRollout(self._pin_model, self._horizon_contacts) if compiled else None
         #: with rollout_dynamics="compiled": the rollouts run their "kkt" nodes in one compiled call
         #: (:mod:`wbmpc.ocp.kernels.rollout`); False: node by node from Python (the same kernels, the same
         #: numbers to the bit). No effect with "pinocchio".
@@ -321,8 +324,8 @@ class BatchedShootingProblem(ShootingProblem):
             dam = model.differential
             if dam.active_key != keys[k] or dam._moving_references:
                 self._node_dynamics[k] = self._dynamics_of(dam)
-                if self._kkt_rollout is not None:
-                    self._kkt_rollout.set_node(k, dam)
+                if self._horizon_contacts is not None:
+                    self._horizon_contacts.set_node(k, dam)
                 if dam.active_key != keys[k]:
                     for rows in h.contact_row.values():
                         rows[k] = -1

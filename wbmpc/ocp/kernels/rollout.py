@@ -8,9 +8,10 @@ same numbers, without a Python-to-compiled crossing per node.
 
 A node is compiled when its dynamics are the "kkt" backend's with contacts whose 6D contacts have no
 Baumgarte position gain (no "positioned soles": their Kp term is Pinocchio's ``log6``); each such node's
-contact set is a row of padded arrays (:class:`KKTRollout`). The kernel stops at the first node it cannot
-run (not compiled, a relative half turn the feedback law hands to Pinocchio, a control not finite) and
-returns its index: the caller runs that node in Python and resumes after it.
+contact set is a row of padded arrays (:class:`~wbmpc.ocp.kernels.horizon_contacts.HorizonContactSets`).
+The kernel stops at the first node it cannot run (not compiled, a relative half turn the feedback law hands
+to Pinocchio, a control not finite) and returns its index: the caller runs that node in Python and resumes
+after it.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from numba import njit
 
 from wbmpc.ocp.kernels.contact_dynamics import contact_kkt_tree_solve
 from wbmpc.ocp.kernels.feedback import rollout_node_start
+from wbmpc.ocp.kernels.horizon_contacts import HorizonContactSets
 from wbmpc.ocp.kernels.integration import free_flyer_euler_step
 from wbmpc.ocp.kernels.joint_space import LinkInertias
 from wbmpc.ocp.kernels.kkt import velocity_parents
@@ -28,44 +30,21 @@ from wbmpc.ocp.kernels.tree import KinematicTree
 
 
 class KKTRollout:
-    """The contact sets of a horizon's nodes as padded arrays for :func:`kkt_rollout`, and its buffers.
+    """The buffers of :func:`kkt_rollout` for a horizon whose nodes' contact sets are ``sets``.
 
     Args:
         model: the robot (a free-flyer root followed by revolute joints).
-        n_nodes: N, the running nodes.
-        k_max: the most contacts a node can enforce at once.
-        nc_max: the most stacked contact rows a node can have.
-
-    Attributes (per node k): contacts (N,) int64, the active contacts of node k, −1 when node k is not
-    compiled (:meth:`set_node`); rows (N,) the stacked contact rows, mu (N,) the contact damping,
-    scales (N, nc_max) the row scales, and the contact arrays of
-    :attr:`wbmpc.ocp.contacts.ContactSet.kernel_arguments` with a leading (N, k_max) (kinds ... inverse_arms).
+        sets: the horizon's padded contact sets (:class:`~wbmpc.ocp.kernels.horizon_contacts.HorizonContactSets`,
+            set by their owner; shared with the derivative pass).
 
     Raises:
         ParameterError: the model is not a free-flyer root followed by revolute joints.
     """
 
-    def __init__(self, model: pin.Model, n_nodes: int, k_max: int, nc_max: int):
+    def __init__(self, model: pin.Model, sets: HorizonContactSets):
         tree, links = KinematicTree(model), LinkInertias(model)
-        N, k, nc, nv = n_nodes, max(k_max, 1), max(nc_max, 1), model.nv
-        self.contacts = np.full(N, -1, dtype=np.int64)
-        self.rows = np.zeros(N, dtype=np.int64)
-        self.mu = np.zeros(N)
-        self.scales = np.ones((N, nc))
-        self.kinds = np.zeros((N, k), dtype=np.int64)
-        self.joints = np.zeros((N, k), dtype=np.int64)
-        self.frame_rotations = np.zeros((N, k, 3, 3))
-        self.frame_translations = np.zeros((N, k, 3))
-        self.kp = np.zeros((N, k))
-        self.kd = np.zeros((N, k))
-        self.references = np.zeros((N, k, 3))
-        self.corners = np.zeros((N, k), dtype=np.bool_)
-        self.spreads = np.zeros((N, k, 3))
-        self.inverse_arms = np.zeros((N, k, 3))
-        self._moving: dict = {}  # node -> its contact set, whose point references move (Kp > 0)
-        # in the order of ContactSet.kernel_arguments
-        self._contact_arrays = (self.kinds, self.joints, self.frame_rotations, self.frame_translations, self.kp,
-                                self.kd, self.references, self.corners, self.spreads, self.inverse_arms)
+        k, nc, nv = sets.k_max, sets.nc_max, model.nv
+        self.sets = sets
         # the buffers, shared by the nodes: the tree, the link inertias, M, b, the contacts' frame kinematics,
         # Jc, a0, a, the forces and the KKT solve's (kernels/kkt.damped_kkt_solve)
         buffers = (np.zeros(nv), tree.parents, tree.placement_rotation, tree.placement_translation, tree.axes,
@@ -74,37 +53,17 @@ class KKTRollout:
                    np.zeros((k, 6)), np.zeros((k, 6)), np.zeros((nc, nv)), np.zeros(nc), np.zeros(nv), np.zeros(nc),
                    velocity_parents(model), np.zeros((nv, nv)), np.zeros((nv, nc)), np.zeros((nv, nc)),
                    np.zeros((nc, nc)), np.zeros(nv), np.zeros(nc))
-        self._arguments = (self.contacts, self.rows, self.mu, self.scales, *self._contact_arrays, *buffers)
-
-    def set_node(self, k: int, dam) -> None:
-        """Node k's dynamics are now ``dam``'s (a :class:`~wbmpc.ocp.dynamics.DifferentialActionModelContactFwdDynamics`
-        with its current contact set): its arrays copied, or the node marked as not compiled."""
-        self._moving.pop(k, None)
-        contact_set = dam.contact_set
-        if dam.backend != "kkt" or not dam.nc or contact_set.has_positioned_soles:
-            self.contacts[k] = -1
-            return
-        n, nc = contact_set.kinds.size, dam.nc
-        for array, value in zip(self._contact_arrays, contact_set.kernel_arguments):
-            array[k, :n] = value
-        self.rows[k] = nc
-        self.mu[k] = dam.contact_damping
-        self.scales[k, :nc] = dam.row_scales
-        self.contacts[k] = n
-        if contact_set.has_moving_references:
-            self._moving[k] = contact_set
+        self._arguments = (*sets.arguments, *buffers)
 
     def compiled(self, k: int) -> bool:
         """Node k runs in :func:`kkt_rollout`."""
-        return self.contacts[k] >= 0
+        return self.sets.compiled(k)
 
     def run(self, start: int, x0, fs, alpha: float, closing: bool, xs, us, k, K, xs_try, us_try, dx, tau, dt,
             euler_dx, xnext, keep_forces: bool, forces) -> int:
         """:func:`kkt_rollout` from node ``start``, the point contacts' moving references read first; returns
         the first node not run (N: all)."""
-        for node, contact_set in self._moving.items():
-            contact_set.refresh_references()
-            self.references[node, :contact_set.kinds.size] = contact_set.references
+        self.sets.refresh_references()
         return kkt_rollout(start, x0, fs, alpha, closing, xs, us, k, K, xs_try, us_try, dx, tau, dt, euler_dx, xnext,
                            keep_forces, forces, *self._arguments)
 
@@ -126,7 +85,8 @@ def kkt_rollout(start, x0, fs, alpha, closing, xs, us, k, K, xs_try, us_try, dx,
             us_try (N, nu), dx (N, ndx), the torques tau (nv,));
         dt (N,) [s]; outputs euler_dx (N, ndx) and xnext (N, nx) (:func:`~wbmpc.ocp.kernels.integration.free_flyer_euler_step`);
         keep_forces: write node t's stacked contact forces [N, N·m] into forces[t, :rows[t]];
-        contacts ... inverse_arms, then the buffers: :class:`KKTRollout`'s.
+        contacts ... inverse_arms: :attr:`~wbmpc.ocp.kernels.horizon_contacts.HorizonContactSets.arguments`,
+            then the buffers: :class:`KKTRollout`'s.
 
     A node whose KKT system is not positive definite gets NaN accelerations (its successors NaN states), as
     the node-by-node rollout.
