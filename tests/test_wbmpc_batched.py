@@ -787,3 +787,73 @@ def test_h1_derivative_dynamics_compiled_agrees_with_pinocchio(monkeypatch):
     batched.calcDiff(xs, us)
     assert batched.prepared_used == n_nodes - 1 and np.array_equal(batched.Fx, Fx)
 
+
+def _derivative_pass(problem: BatchedShootingProblem, xs, us, compiled: bool, prepare: list | None = None) -> tuple:
+    """The stacked arrays, kept forces and force derivatives of ``problem.calcDiff(xs, us)``, its derivative pass in
+    one compiled call or node by node; with ``prepare`` (the keys) the nodes prepared ahead first (at the same xs, us,
+    so calcDiff takes them), and the prepared arrays too."""
+    problem.use_compiled_derivatives = compiled
+    if prepare is not None:
+        assert problem.prepare_dynamics(xs[:-1], us, prepare) == sum(key is not None for key in prepare)
+        prepared = tuple(getattr(problem, f"_prepared_{name}").copy()
+                         for name in ("xnext", "euler_dx", "da_dx", "da_du", "forces", "force_jacobians"))
+    cost = problem.calcDiff(xs, us)  # takes the prepared nodes whose contact set is the node's
+    assert problem.prepared_used == (0 if prepare is None else
+                                     sum(key == own for key, own in zip(prepare, problem._node_contact_keys)))
+    arrays = tuple(getattr(problem, name).copy() for name in STACKED + ("_euler_dx", "_forces", "_force_jacobians"))
+    return (cost, *arrays) + (() if prepare is None else prepared)
+
+
+@needs_h1_extra
+@pytest.mark.parametrize("python_node", [None, 4])
+def test_h1_derivative_pass_in_one_compiled_call_is_the_node_by_node_pass(python_node):
+    """derivative_dynamics="compiled" on the H1 preset (single and double support, the costs reading the contact
+    forces): calcDiff's derivative pass in one compiled call (kernels/derivative_pass.py) gives the node-by-node
+    pass's next states, Euler steps, Fx, Fu, cost derivatives, kept forces and force derivatives to the last bit
+    (the same kernels in the same order), and so does prepare_dynamics (each node with the contact set of another
+    node: the horizon shifted), which calcDiff then takes; a node left to Python (as one the compiled call cannot
+    run) is computed there."""
+    h1 = load_robot("h1")
+    n_nodes = 12
+    preset = load_walking_preset("h1").ocp
+    ocp = _batched_walking_ocp(h1, dataclasses.replace(preset, derivative_dynamics="compiled"), n_nodes)
+    _, batched, solver = _h1_rollouts(ocp, n_nodes, seed=6)
+    assert batched._kkt_derivatives is not None and batched._kkt_rollout is None and batched._keep_forces
+    assert all(batched._horizon_contacts.compiled(k) for k in range(n_nodes))
+    assert {len(key) for key in batched._node_contact_keys} == {1, 2}  # single and double support
+    if python_node is not None:
+        batched._horizon_contacts.contacts[python_node] = -1
+    xs, us = solver.xs, solver.us
+    python, compiled = (_derivative_pass(batched, xs, us, use) for use in (False, True))
+    assert compiled[0] == python[0]
+    for name, ours, theirs in zip(STACKED + ("_euler_dx", "_forces", "_force_jacobians"), compiled[1:], python[1:]):
+        assert np.array_equal(ours, theirs), name
+    # prepared ahead with the next horizon's contact sets (node k the set of node k + 1), then taken
+    keys = list(batched._node_contact_keys)
+    shifted = [None] + keys[2:] + [keys[-1]]
+    assert 0 < sum(key == own for key, own in zip(shifted, keys)) < n_nodes - 1  # some taken, some not
+    python, compiled = (_derivative_pass(batched, xs, us, use, shifted) for use in (False, True))
+    assert compiled[0] == python[0]
+    for ours, theirs in zip(compiled[1:], python[1:]):
+        assert np.array_equal(ours, theirs)
+
+
+def test_bolt_derivative_pass_in_one_compiled_call_with_moving_references(bolt):
+    """The same on Bolt's point contacts with a Baumgarte position gain (their references move: read before the
+    compiled call) and a flight node (no contacts: left to the node-by-node path): to the last bit."""
+    config = dataclasses.replace(BATCHED_TERMS, dynamics_backend="kkt", derivative_dynamics="compiled")
+    ocp = WalkingOCP(bolt, config, n_nodes=40, dt=0.01)
+    ocp.update(standing_state(bolt), alternating_schedule(0.27, 0.01, 40), np.array([0.1, 0.0, 0.3]))
+    ocp.problem.running_models[7].differential.set_active_contacts([])  # a flight node
+    costs = ocp.problem.running_models[7].differential.costs.costs
+    for foot in ocp.feet:
+        costs[f"{foot}_contact_force"].active = costs[f"{foot}_friction_cone"].active = False  # no contact to read
+    _, batched = _twin_problems(ocp)
+    sets = batched._horizon_contacts
+    assert sets._moving and batched._keep_forces
+    assert [k for k in range(40) if not sets.compiled(k)] == [7]
+    xs, us = _random_trajectory(bolt, 40, ocp.nu, seed=3)
+    python, compiled = (_derivative_pass(batched, xs, us, use) for use in (False, True))
+    assert compiled[0] == python[0]
+    for name, ours, theirs in zip(STACKED + ("_euler_dx", "_forces", "_force_jacobians"), compiled[1:], python[1:]):
+        assert np.array_equal(ours, theirs), name

@@ -61,6 +61,7 @@ from wbmpc.ocp.kernels.costs import (
     hessian_entries,
     scale_cost_derivatives,
 )
+from wbmpc.ocp.kernels.derivative_pass import KKTDerivativePass
 from wbmpc.ocp.kernels.feedback import rollout_node_start
 from wbmpc.ocp.kernels.frames import FrameKinematics
 from wbmpc.ocp.kernels.horizon_contacts import HorizonContactSets
@@ -139,7 +140,9 @@ class BatchedShootingProblem(ShootingProblem):
     - "compiled": M and b compiled on the contacts' tree (the same explicit-inverse KKT solve), then the contacts',
       RNEA and KKT derivatives in one compiled call (``calc_dynamics``/``calc_diff_dynamics(...,
       derivative_dynamics="compiled")``): no binding call at such a node; the same values and derivatives as
-      "pinocchio" to rounding (~1e-15), not to the bit.
+      "pinocchio" to rounding (~1e-15), not to the bit. The pass runs such nodes in one compiled call over the
+      horizon (:mod:`wbmpc.ocp.kernels.derivative_pass`; ``use_compiled_derivatives = False``: node by node, the
+      same kernels, the same numbers to the bit).
 
     Raises :class:`~wbmpc.errors.ParameterError` when the nodes are not supported (see
     :func:`batched_evaluation_support`) or ``rollout_dynamics`` or ``derivative_dynamics`` is not one of the
@@ -268,18 +271,27 @@ class BatchedShootingProblem(ShootingProblem):
         self._prepared_da_du = np.zeros((N, nv, nu))
         self._prepared_forces = np.zeros_like(self._forces)
         self._prepared_force_jacobians = np.zeros_like(self._force_jacobians)
-        # "compiled": the rollout of the "kkt" nodes in one compiled call (kernels/rollout.py), when a node may
-        # take it, over the nodes' contact sets as padded arrays (set by sync)
+        # "compiled": the rollout (kernels/rollout.py) and the derivative pass (kernels/derivative_pass.py) of the
+        # "kkt" nodes in one compiled call each, when a node may take it, over the nodes' contact sets as padded
+        # arrays (one copy, set by sync)
         kkt = [model.differential for model in self.running_models
                if model.differential.backend == "kkt" and model.differential.contacts]
-        compiled = kkt and rollout_dynamics == "compiled"
+        compiled = kkt and "compiled" in (rollout_dynamics, derivative_dynamics)
         self._horizon_contacts = (HorizonContactSets(N, max(len(dam.contacts) for dam in kkt), nc_max) if compiled
                                   else None)
-        self._kkt_rollout = KKTRollout(self._pin_model, self._horizon_contacts) if compiled else None
+        self._kkt_rollout = (KKTRollout(self._pin_model, self._horizon_contacts)
+                             if compiled and rollout_dynamics == "compiled" else None)
+        self._kkt_derivatives = (KKTDerivativePass(self._pin_model, self._horizon_contacts, nu)
+                                 if compiled and derivative_dynamics == "compiled" else None)
         #: with rollout_dynamics="compiled": the rollouts run their "kkt" nodes in one compiled call
         #: (:mod:`wbmpc.ocp.kernels.rollout`); False: node by node from Python (the same kernels, the same
         #: numbers to the bit). No effect with "pinocchio".
         self.use_compiled_rollout = True
+        #: with derivative_dynamics="compiled": :meth:`calcDiff` and :meth:`prepare_dynamics` (without a deadline)
+        #: run their "kkt" nodes' dynamics and derivatives in one compiled call
+        #: (:mod:`wbmpc.ocp.kernels.derivative_pass`); False: node by node from Python (the same kernels, the same
+        #: numbers to the bit). No effect with "pinocchio".
+        self.use_compiled_derivatives = True
         self.prepared_used = 0  # nodes the last calcDiff took from the preparation
         self._detached = False
         # (residual, active mask (N,), references, residual rows (N, nr), Jacobian nonzeros) of
@@ -387,6 +399,9 @@ class BatchedShootingProblem(ShootingProblem):
         the others, then the preparation is spent. Contact sets with a moving Baumgarte position
         reference (Kp > 0) are not prepared (their constraint depends on the update).
 
+        With derivative_dynamics="compiled" and no ``deadline`` the "kkt" nodes are computed in one compiled
+        call (:mod:`wbmpc.ocp.kernels.derivative_pass`, the same numbers); with a deadline, node by node.
+
         Args:
             xs: (N, nx) states of the running nodes of the next evaluation (row 0 may be anything
                 when keys[0] is None).
@@ -404,10 +419,14 @@ class BatchedShootingProblem(ShootingProblem):
         if xs.shape != (N, self.nx) or us.shape != (N, self.nu) or len(keys) != N:
             raise ParameterError(f"prepare_dynamics: xs {xs.shape}, us {us.shape}, {len(keys)} keys; expected "
                                  f"({N}, {self.nx}), ({N}, {self.nu}), {N}")
-        entries = {}
+        entries, sources = {}, {}  # contact set -> the dynamics of the first node with it, that node
         for k, model in enumerate(self.running_models):
             if not model.differential._moving_references:
                 entries.setdefault(self._node_contact_keys[k], self._node_dynamics[k])
+                sources.setdefault(self._node_contact_keys[k], k)
+        # without a deadline, the "kkt" nodes in one compiled call after the loop (the same numbers)
+        compiled = (self._kkt_derivatives if self.use_compiled_derivatives and deadline is None else None)
+        nodes, rows = [], []
         self._prepared[:] = False
         count = 0
         for k in range(N):
@@ -416,14 +435,22 @@ class BatchedShootingProblem(ShootingProblem):
             entry = None if keys[k] is None else entries.get(keys[k])
             if entry is None:
                 continue
-            self._dynamics_and_derivatives(entry, self._dt[k], xs[k], us[k], self._prepared_xnext[k],
-                                           self._prepared_euler_dx[k], self._prepared_da_dx[k],
-                                           self._prepared_da_du[k], *self._force_buffers(k, prepared=True))
+            if compiled is not None and self._horizon_contacts.compiled(sources[keys[k]]):
+                nodes.append(k)
+                rows.append(sources[keys[k]])
+            else:
+                self._dynamics_and_derivatives(entry, self._dt[k], xs[k], us[k], self._prepared_xnext[k],
+                                               self._prepared_euler_dx[k], self._prepared_da_dx[k],
+                                               self._prepared_da_du[k], *self._force_buffers(k, prepared=True))
             self._prepared_x[k] = xs[k]
             self._prepared_u[k] = us[k]
             self._prepared_key[k] = keys[k]
             self._prepared[k] = True
             count += 1
+        if nodes:
+            compiled.run(np.array(nodes, dtype=np.int64), np.array(rows, dtype=np.int64), xs, us, self._dt,
+                         self._prepared_xnext, self._prepared_euler_dx, self._prepared_da_dx, self._prepared_da_du,
+                         self._keep_forces, self._prepared_forces, self._prepared_force_jacobians)
         return count
 
     def _take_prepared(self, xs: np.ndarray, us: np.ndarray) -> np.ndarray | None:
@@ -601,8 +628,15 @@ class BatchedShootingProblem(ShootingProblem):
         dynamics, dts, euler_dx, xnext, da_dx, da_du = (self._node_dynamics, self._dt, self._euler_dx, self.xnext,
                                                          self._da_dx, self._da_du)
         prepared = self._take_prepared(xs, us)
-        nodes = range(self.T) if prepared is None else np.flatnonzero(~prepared).tolist()
-        for k in nodes:
+        todo = np.ones(self.T, dtype=np.bool_) if prepared is None else ~prepared
+        if self._kkt_derivatives is not None and self.use_compiled_derivatives:  # the "kkt" nodes in one call
+            compiled = todo & (self._horizon_contacts.contacts >= 0)
+            nodes = np.flatnonzero(compiled)
+            if nodes.size:
+                self._kkt_derivatives.run(nodes, nodes, xs, us, dts, xnext, euler_dx, da_dx, da_du, self._keep_forces,
+                                          self._forces, self._force_jacobians)
+                todo &= ~compiled
+        for k in np.flatnonzero(todo).tolist():
             self._dynamics_and_derivatives(dynamics[k], dts[k], xs[k], us[k], xnext[k], euler_dx[k], da_dx[k], da_du[k],
                                            *self._force_buffers(k))
         self._residuals(xs, us, jacobians=True)
