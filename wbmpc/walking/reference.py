@@ -86,13 +86,18 @@ def swing_liftoffs(plan: Any, schedule: ContactSchedule, current_liftoff=None) -
     start = None if current_liftoff is None else np.asarray(current_liftoff, dtype=float)
     for j, foot in enumerate(schedule.feet):
         steps = [step for step in plan.steps if step.foot == foot]
+        swinging = np.flatnonzero(~np.asarray(schedule.in_contact[:, j], dtype=bool))
+        if not steps or not swinging.size:
+            continue
         previous = [np.asarray(plan.stance_position, dtype=float) if foot == plan.stance_foot else start]
         previous += [np.asarray(step.position, dtype=float) for step in steps[:-1]]
-        for k in np.flatnonzero(~np.asarray(schedule.in_contact[:, j], dtype=bool)).tolist():
-            touchdown = schedule.touchdown_position[k, j]
-            i = next((i for i, step in enumerate(steps)
-                      if np.allclose(step.position, touchdown, rtol=0.0, atol=1e-9)), None)
-            if i is not None and previous[i] is not None:
+        # the first step landing within 1e-9 m (per coordinate) of each swinging node's touchdown
+        positions = np.array([step.position for step in steps], dtype=float)  # (steps, 2)
+        touchdowns = np.asarray(schedule.touchdown_position, dtype=float)[swinging, j]  # (nodes, 2)
+        lands = np.all(np.abs(touchdowns[:, None, :] - positions[None, :, :]) <= 1e-9, axis=2)  # (nodes, steps)
+        first = np.argmax(lands, axis=1)
+        for k, i, found in zip(swinging.tolist(), first.tolist(), lands.any(axis=1).tolist()):
+            if found and previous[i] is not None:
                 liftoff[k, j] = previous[i]
     return liftoff
 
