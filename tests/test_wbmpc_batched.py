@@ -263,9 +263,11 @@ def test_weights_and_activity_set_on_the_node_items_are_seen_without_sync(bolt):
         costs[6]["control_bounds"].weight = -1.0
 
 
-def test_sparse_gauss_newton_writes_exactly_the_dense_result_on_its_hessian_entries():
+@pytest.mark.parametrize("density", [0.3, 1.0])
+def test_sparse_gauss_newton_writes_exactly_the_dense_result_on_its_hessian_entries(density):
     """The batched pass's Hessian over the entries of its Jacobian pattern equals the dense
-    Gauss-Newton Hessian, and reads and writes no other entry (NaN elsewhere stays NaN)."""
+    Gauss-Newton Hessian, and reads and writes no other entry (NaN elsewhere stays NaN); a dense
+    pattern (every entry listed: the lists' row-by-row branch) too."""
     from wbmpc.ocp.kernels.costs import (
         add_gauss_newton_rows,
         clear_hessian_entries,
@@ -276,7 +278,7 @@ def test_sparse_gauss_newton_writes_exactly_the_dense_result_on_its_hessian_entr
     rng = np.random.default_rng(1)
     ndx, nu, nr = 8, 3, 9
     n = ndx + nu
-    mask = rng.random((nr, n)) < 0.3
+    mask = rng.random((nr, n)) < density
     mask[0, [1, ndx + 1]] = True  # an Lxu entry
     mask[1, [ndx, ndx + 2]] = True  # an off-diagonal Luu entry
     R = np.where(mask, rng.standard_normal((nr, n)), 0.0)
@@ -304,7 +306,8 @@ def test_sparse_gauss_newton_writes_exactly_the_dense_result_on_its_hessian_entr
         assert np.array_equal(block[written], expected[written])
         assert not np.any(expected[~written])  # what is not written is structurally zero
     assert np.array_equal(Lx, 0.01 * gradient[:ndx]) and np.array_equal(Lu, 0.01 * gradient[ndx:])
-    assert not np.isnan(Lxu).all() and np.isnan(Luu).any()
+    assert not np.isnan(Lxu).all() and np.isnan(Luu).any() == (density < 1.0)
+    assert np.isnan(sparse_hessian[np.tril_indices(n, -1)]).all()  # the lower triangle neither read nor written
 
 
 def test_a_term_without_batched_evaluation_is_an_error_naming_it(bolt):

@@ -121,10 +121,30 @@ def hessian_entries(row_start: np.ndarray, cols: np.ndarray, ndx: int) -> tuple[
 @njit(cache=True)
 def clear_hessian_entries(hessian, xx, xu, uu):
     """Zero the listed entries (a, b) of hessian (n, n) (the ones :func:`add_gauss_newton_rows`
-    can write for the pattern of :func:`hessian_entries`)."""
+    can write for the pattern of :func:`hessian_entries`). When they are the whole upper triangle
+    (a dense pattern, the walking OCPs'), row by row without the lists: the same entries."""
+    n = hessian.shape[0]
+    if xx.shape[0] + xu.shape[0] + uu.shape[0] == n * (n + 1) // 2:  # the lists hold distinct entries
+        for a in range(n):
+            for b in range(a, n):
+                hessian[a, b] = 0.0
+        return
     for entries in (xx, xu, uu):
         for e in range(entries.shape[0]):
             hessian[entries[e, 0], entries[e, 1]] = 0.0
+
+
+@njit(cache=True)
+def _scale_symmetric_block(dt, hessian, start, out):
+    """out (m, m) = dt × the symmetric block of hessian whose upper triangle starts at (start, start): the
+    upper triangle row by row, then the lower one copied from it."""
+    m = out.shape[0]
+    for a in range(m):
+        for b in range(a, m):
+            out[a, b] = dt * hessian[start + a, start + b]
+    for a in range(1, m):
+        for b in range(a):
+            out[a, b] = out[b, a]
 
 
 @njit(cache=True)
@@ -133,22 +153,36 @@ def scale_cost_derivatives(dt, gradient, hessian, xx, xu, uu, Lx, Lu, Lxx, Lxu, 
     (ndx + nu,), and dt × each listed entry (a, b) of the Hessian's upper triangle (the
     :func:`hessian_entries` of its pattern) into its block: Lxx (ndx, ndx) and Luu (nu, nu) at
     (a, b) and (b, a), Lxu (ndx, nu) at (a, b). Block entries not listed are not written (they
-    stay structurally zero)."""
+    stay structurally zero). A block whose list holds all its entries (a dense pattern, the walking
+    OCPs') is written row by row without the list, its lower triangle copied from the upper one: the
+    same values (~2.5x faster on the H1's 50 + 19 columns)."""
     ndx = Lx.size
+    nu = Lu.size
     for i in range(ndx):
         Lx[i] = dt * gradient[i]
-    for i in range(Lu.size):
+    for i in range(nu):
         Lu[i] = dt * gradient[ndx + i]
-    for e in range(xx.shape[0]):
-        a, b = xx[e, 0], xx[e, 1]
-        value = dt * hessian[a, b]
-        Lxx[a, b] = value
-        Lxx[b, a] = value
-    for e in range(xu.shape[0]):
-        a, b = xu[e, 0], xu[e, 1]
-        Lxu[a, b - ndx] = dt * hessian[a, b]
-    for e in range(uu.shape[0]):
-        a, b = uu[e, 0], uu[e, 1]
-        value = dt * hessian[a, b]
-        Luu[a - ndx, b - ndx] = value
-        Luu[b - ndx, a - ndx] = value
+    if xx.shape[0] == ndx * (ndx + 1) // 2:
+        _scale_symmetric_block(dt, hessian, 0, Lxx)
+    else:
+        for e in range(xx.shape[0]):
+            a, b = xx[e, 0], xx[e, 1]
+            value = dt * hessian[a, b]
+            Lxx[a, b] = value
+            Lxx[b, a] = value
+    if xu.shape[0] == ndx * nu:
+        for a in range(ndx):
+            for b in range(nu):
+                Lxu[a, b] = dt * hessian[a, ndx + b]
+    else:
+        for e in range(xu.shape[0]):
+            a, b = xu[e, 0], xu[e, 1]
+            Lxu[a, b - ndx] = dt * hessian[a, b]
+    if uu.shape[0] == nu * (nu + 1) // 2:
+        _scale_symmetric_block(dt, hessian, ndx, Luu)
+    else:
+        for e in range(uu.shape[0]):
+            a, b = uu[e, 0], uu[e, 1]
+            value = dt * hessian[a, b]
+            Luu[a - ndx, b - ndx] = value
+            Luu[b - ndx, a - ndx] = value
