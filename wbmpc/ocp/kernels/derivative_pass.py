@@ -13,7 +13,8 @@ Node t is computed with the contact set of a row s of the horizon's padded conta
 the contact set node t will have in ``prepare_dynamics`` (the horizon shifted by one node). One set of buffers
 serves every node; the KKT kernels' BLAS products want whole contiguous arrays of the node's nc contact rows:
 the (nc, ·) buffers are the first nc rows of (nc_max, ·) arrays, the (nc, nc) ones the first nc² entries of a
-flat array, reshaped.
+flat array, reshaped. (numba caches :func:`kkt_derivative_pass` with the kernels it calls, keyed on this file's
+contents: a change to those invalidates nothing here unless this file changes too, or its cache is removed.)
 """
 
 from __future__ import annotations
