@@ -69,6 +69,10 @@ def test_real_time_factor_is_of_the_loop_without_the_setup(short_walk):
     assert timing["setup"] + timing["loop"] == pytest.approx(timing["total"])
     assert metrics["real_time_factor"] == pytest.approx(3.0 / timing["loop"])
     assert metrics["setup_time"] == timing["setup"]
+    # the first replan (the cold solve) is in the setup, the warm updates in the loop (the loop's until session 25)
+    ticks = short_walk.replans["mpc_tick_time"]
+    assert timing["setup"] > timing["cold_start"] >= ticks[0] > 0
+    assert timing["replan"] >= np.sum(ticks[1:])
 
 
 def test_mpc_time_budget_reaches_the_mpc_and_is_logged():

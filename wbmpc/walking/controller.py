@@ -105,7 +105,7 @@ class WalkingController:
                              f"got {type(params).__name__}")
 
     def reset(self, robot: Any, x0: np.ndarray, t0: float) -> None:
-        """Build the parts for ``robot`` and solve the first MPC update (cold start) at ``t0``."""
+        """Build the parts for ``robot`` at ``t0`` (the first :meth:`replan` then solves the MPC cold)."""
         cfg, preset = self.config, self.preset
         if robot.name != preset.robot:
             raise ParameterError(f"robot {robot.name!r} cannot walk with the walking preset of {preset.robot!r}")
