@@ -444,23 +444,19 @@ class WalkingOCPConfig:
             raise ParameterError(f"dynamics_backend={self.dynamics_backend!r} must be 'pinocchio' or 'kkt'")
         if self.evaluation not in ("auto", "batched", "nodes"):
             raise ParameterError(f"evaluation={self.evaluation!r} must be 'auto', 'batched' or 'nodes'")
-        if self.rollout_dynamics not in ROLLOUT_DYNAMICS:
-            raise ParameterError(f"rollout_dynamics={self.rollout_dynamics!r} must be 'pinocchio' or 'compiled'")
-        if self.rollout_dynamics == "compiled" and self.dynamics_backend != "kkt":
-            raise ParameterError(f"rollout_dynamics='compiled' needs dynamics_backend='kkt' (the 'pinocchio' "
-                                 f"backend's rollouts are constraintDynamics), got {self.dynamics_backend!r}")
-        if self.rollout_dynamics == "compiled" and self.evaluation == "nodes":
-            raise ParameterError("rollout_dynamics='compiled' needs the batched evaluation (evaluation 'auto' or "
-                                 "'batched'), got evaluation='nodes'")
-        if self.derivative_dynamics not in DERIVATIVE_DYNAMICS:
-            raise ParameterError(f"derivative_dynamics={self.derivative_dynamics!r} must be 'pinocchio' or 'compiled'")
-        if self.derivative_dynamics == "compiled" and self.dynamics_backend != "kkt":
-            raise ParameterError(f"derivative_dynamics='compiled' needs dynamics_backend='kkt' (the 'pinocchio' "
-                                 f"backend's derivatives are computeConstraintDynamicsDerivatives), got "
-                                 f"{self.dynamics_backend!r}")
-        if self.derivative_dynamics == "compiled" and self.evaluation == "nodes":
-            raise ParameterError("derivative_dynamics='compiled' needs the batched evaluation (evaluation 'auto' or "
-                                 "'batched'), got evaluation='nodes'")
+        # the two compiled code paths' options, checked alike: (name, allowed, what the "pinocchio" backend runs)
+        for name, allowed, pinocchio_backend in (
+                ("rollout_dynamics", ROLLOUT_DYNAMICS, "rollouts are constraintDynamics"),
+                ("derivative_dynamics", DERIVATIVE_DYNAMICS, "derivatives are computeConstraintDynamicsDerivatives")):
+            value = getattr(self, name)
+            if value not in allowed:
+                raise ParameterError(f"{name}={value!r} must be 'pinocchio' or 'compiled'")
+            if value == "compiled" and self.dynamics_backend != "kkt":
+                raise ParameterError(f"{name}='compiled' needs dynamics_backend='kkt' (the 'pinocchio' backend's "
+                                     f"{pinocchio_backend}), got {self.dynamics_backend!r}")
+            if value == "compiled" and self.evaluation == "nodes":
+                raise ParameterError(f"{name}='compiled' needs the batched evaluation (evaluation 'auto' or "
+                                     "'batched'), got evaluation='nodes'")
         if self.base_yaw_reference not in BASE_YAW_REFERENCES:
             raise ParameterError(f"base_yaw_reference={self.base_yaw_reference!r} must be one of {BASE_YAW_REFERENCES}")
         if not (0 < self.reg_min <= self.reg_max):
@@ -670,12 +666,10 @@ class WalkingOCP:
                 self.evaluation = "batched"
             elif config.evaluation == "batched":
                 raise ParameterError(f"evaluation='batched' is not possible for this problem: {reason}")
-            elif config.rollout_dynamics == "compiled":
-                raise ParameterError(f"rollout_dynamics='compiled' needs the batched evaluation, not possible for "
-                                     f"this problem: {reason}")
-            elif config.derivative_dynamics == "compiled":
-                raise ParameterError(f"derivative_dynamics='compiled' needs the batched evaluation, not possible for "
-                                     f"this problem: {reason}")
+            elif compiled := next((name for name in ("rollout_dynamics", "derivative_dynamics")
+                                   if getattr(config, name) == "compiled"), None):
+                raise ParameterError(f"{compiled}='compiled' needs the batched evaluation, not possible for this "
+                                     f"problem: {reason}")
             else:  # said, not silent: the node-wise path is several times slower
                 self.evaluation_note = f"node-wise evaluation: {reason}"
                 warnings.warn(f"WalkingOCP: {self.evaluation_note} (evaluation='auto'; set evaluation='nodes' to "
