@@ -324,9 +324,7 @@ class DifferentialActionModelContactFwdDynamics:
         elif not tree_terms:  # M (upper triangle) and b only, the same numbers
             pin.crba(model, pdata, q, pin.Convention.WORLD)
             pin.nonLinearEffects(model, pdata, q, v)
-        if data.active_contacts is not self.active_contacts:
-            data.active_contacts = self.active_contacts
-            data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
+        self._share_active_contacts(data)
         self.actuation.calc(data.tau, u)
         data.kkt_for_derivatives = derivatives
         if tree_terms:
@@ -355,6 +353,12 @@ class DifferentialActionModelContactFwdDynamics:
         for name, rows in self._active_rows:
             data.contacts[name].force[:] = forces[rows]
 
+    def _share_active_contacts(self, data) -> None:
+        """Point ``data``'s shared contacts (what the costs read) at the model's active contacts, when they changed."""
+        if data.active_contacts is not self.active_contacts:
+            data.active_contacts = self.active_contacts
+            data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
+
     def _calc_constraint_dynamics(self, data, q, v, u) -> None:
         """Pinocchio backend of calc: constraintDynamics with the active RigidConstraintModels."""
         pdata, constraint_datas = data.select_pinocchio(self)
@@ -369,9 +373,7 @@ class DifferentialActionModelContactFwdDynamics:
                 contacts[name].force[:] = forces[rows]
             else:
                 np.matmul(force_map, forces[rows], out=contacts[name].force)
-        if data.active_contacts is not self.active_contacts:
-            data.active_contacts = self.active_contacts
-            data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
+        self._share_active_contacts(data)
 
     def _calc_diff_constraint_dynamics(self, data) -> None:
         """Pinocchio backend of calcDiff: computeConstraintDynamicsDerivatives."""
@@ -473,9 +475,7 @@ class DifferentialActionModelContactFwdDynamics:
             self.calc_diff_dynamics(data, x, u, derivative_dynamics)
             return
         data.select_pinocchio(None)
-        if data.active_contacts is not self.active_contacts:
-            data.active_contacts = self.active_contacts
-            data.shared.contacts = {name: data.contacts[name] for name in self.active_contacts}
+        self._share_active_contacts(data)
         self.actuation.calc(data.tau, u)
         data.kkt_for_derivatives = True
         contact_set = self.contact_set
