@@ -622,10 +622,13 @@ class FootstepSequencer:
 
     def _approach(self, p0x, p0y, yaw, stance, per_stance, l_nom,
                   constraints: FootholdConstraints | None) -> tuple[float, float] | None:
-        """(ℓ_nom, b_x,nom) [m], heading frame: the even approach's nominal length and DCM offset for the step
-        from the stance (p0x, p0y) towards the last foothold before an obstacle ("The approach" in
-        :mod:`sequencer.footholds`); None: the gait's (no obstacle within ``obstacle_approach_distance``, or
-        less than half a nominal step before its foothold bound)."""
+        """(ℓ_nom, b_x,nom, f_y) [m, m, -], heading frame: the even approach's nominal length and DCM offset for the
+        step from the stance (p0x, p0y) towards the last foothold before an obstacle ("The approach" in
+        :mod:`sequencer.footholds`), and the fraction of the nominal lateral offset it aims at (the lateral aim's
+        :attr:`FootholdGeometry.lateral_aim_fraction` for a step from whose nominal foothold one step reaches beyond
+        the obstacle, a possible last step before it, else 1); None: the
+        gait's (no obstacle within ``obstacle_approach_distance``, or less than half a nominal step before its
+        foothold bound)."""
         if constraints is None:
             return None
         approach = constraints.approach((p0x, p0y), yaw, per_stance[stance][2], l_nom)
@@ -641,11 +644,15 @@ class FootstepSequencer:
                                         travel=b - length * (steps - 1))  # the crossing lifts off step n - 1
         for _ in range(steps - 1):  # eq. 1b backwards: b_{k-1} = (ℓ + b_k) / γ_nom
             aim = (length + aim) / self._gamma_nom
-        return length, aim
+        # from this step's foothold one step may reach beyond the box, and the sequencer crosses whenever the DCM lets
+        # it: a possible last step before the box (the even approach counts its steps to the bound a, which the H1's
+        # closed loop overshot: it crossed a step early, from the nominal lateral offset)
+        crossable = b - length <= constraints.geometry.step_length_max
+        return length, aim, constraints.geometry.lateral_aim_fraction if crossable else 1.0
 
     def _exact_step(self, p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom,
                     constraints: FootholdConstraints | None, lift, cross, duration_min: float = 0.0,
-                    length_min: float | None = None, approach: tuple[float, float] | None = None,
+                    length_min: float | None = None, approach: tuple[float, float, float] | None = None,
                     lateral_window: tuple[float, float] | None = None) -> tuple:
         """(p_x, p_y, γ, b_x, b_y, active bits, δ) of one step QP (closed form) from the stance foothold (p0x, p0y)
         and the DCM (zx, zy) ``elapsed`` [s] into the stance (world frame [m]), in the heading frame of ``yaw``
@@ -653,9 +660,10 @@ class FootstepSequencer:
         of ``constraints`` (``lift``: where the swinging foot lifted off; ``cross``: the before/beyond decision
         kept, or None), its duration at least ``duration_min``
         [s], its length along the heading at least ``length_min`` [m] (None: ``l_min``) and, with ``approach``
-        (ℓ_nom, b_x,nom) [m] (:meth:`_approach`), that nominal length and DCM offset along the heading in its QP
-        instead of the gait's (the before/beyond choice keeps the gait's); with ``lateral_window`` (low, high) [m] its
-        lateral component within that window too (the nearest width bound when they do not meet)."""
+        (ℓ_nom, b_x,nom, f_y) (:meth:`_approach`), that nominal length and DCM offset along the heading and f_y times
+        the nominal lateral offset in its QP instead of the gait's (the before/beyond choice keeps the gait's); with
+        ``lateral_window`` (low, high) [m] its lateral component within that window too (the nearest width bound when
+        they do not meet)."""
         params = self.params
         omega = self._omega
         a1, a2, a3 = params.alpha1, params.alpha2, params.alpha3
@@ -670,8 +678,10 @@ class FootstepSequencer:
                 low = high = w_hi if lateral_window[0] > w_hi else w_lo
             w_lo, w_hi = low, high
         l_gait, bnx_gait = l_nom, bnx
+        bny_step = bny  # the lateral offset of this step's QP (the before/beyond choice keeps the gait's)
         if approach is not None:
-            l_nom, bnx = approach
+            l_nom, bnx, lateral = approach
+            bny_step = bny * lateral
         if elapsed > 0.0:
             decay = math.exp(-omega * elapsed)
             g_lo = math.exp(omega * max(params.t_min, elapsed))
@@ -684,14 +694,14 @@ class FootstepSequencer:
         if rotate:  # solve in the heading frame of the stance, rotate the step and the offset back
             c, s = math.cos(yaw), math.sin(yaw)
             dx, dy, gamma, hx, hy, bits = solve_exact_scalars(
-                0.0, 0.0, c * ax + s * ay, c * ay - s * ax, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny,
+                0.0, 0.0, c * ax + s * ay, c * ay - s * ax, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny_step,
                 l_min, l_max, w_lo, w_hi, g_lo, g_hi,
             )
             px, py = p0x + (c * dx - s * dy), p0y + (s * dx + c * dy)
             bx, by = c * hx - s * hy, s * hx + c * hy
         else:
             px, py, gamma, bx, by, bits = solve_exact_scalars(
-                p0x, p0y, ax, ay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny,
+                p0x, p0y, ax, ay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny_step,
                 l_min, l_max, w_lo, w_hi, g_lo, g_hi,
             )
         cop = 0.0  # the centre of pressure behind the stance foothold the step was planned with [m]

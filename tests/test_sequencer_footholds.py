@@ -839,6 +839,32 @@ def test_the_even_approach_ends_on_the_bound_and_crosses_without_a_step_in_place
     assert greedy_lengths.min() < 0.1 or np.ptp(greedy_lengths) > 0.05  # greedy: a short or an in-place step
 
 
+def test_an_approach_step_from_which_the_box_is_crossable_aims_at_the_lateral_offset():
+    """The even approach counts two steps to the bound a (a = 0.26 m, ℓ_nom = 0.15 m), but from the first one's
+    foothold the box is already within a crossing step (b - a / 2 = 0.63 m <= 0.70 m), and the sequencer crosses from
+    there when its DCM lets it (the H1 at seed 25, 10 cm, session 26): that step aims at the lateral aim's offset, the
+    walk's steps behind it at the nominal one."""
+    from wbmpc.walking.preset import load_walking_preset
+
+    pinned = {"planner.horizon": 5.0, "planner.obstacle_crossing_cop": 0.0, "planner.obstacle_passed_cop": 0.0,
+              "planner.obstacle_approach_distance": 1.5, "planner.obstacle_lateral_aim_duration": 0.7}
+    params = load_walking_preset("h1", pinned).planner_params
+    planner = DcmFootstepPlanner(params)
+    geometry = params.foothold_geometry()
+    near = 0.26 + geometry.margin + geometry.sole_front  # the bound a 0.26 m ahead of the stance at x = 0
+    box = Obstacle(np.array([near + 0.05, 0.0]), 0.0, 0.1, 1.2, 0.1)
+    b = near + 0.1 + geometry.margin + geometry.sole_rear
+    assert round(0.26 / 0.15) == 2 and b - 0.13 <= geometry.step_length_max
+    plan = planner.plan(0.0, *_start(planner), COMMAND, obstacles=(box,))
+    fraction = np.exp(-params.omega * (0.7 - params.t_nom))
+    first = plan.steps[0]
+    assert first.crossing is None and first.position[0] == pytest.approx(0.13, abs=0.02)
+    assert abs(first.dcm_offset[1]) == pytest.approx(fraction * abs(params.b_nom("left")[1]), abs=0.005)
+    far = planner.plan(0.0, *_start(planner), COMMAND, obstacles=(Obstacle(np.array([1.3, 0.0]), 0.0, 0.1, 1.2, 0.1),))
+    assert abs(far.steps[0].dcm_offset[1]) == pytest.approx(abs(params.b_nom("left")[1]), abs=0.005)
+    assert _sole_overlaps(plan, box, geometry) == []
+
+
 def test_approach_distance_bad_input():
     for value in (-0.1, float("nan"), float("inf")):
         with pytest.raises(ParameterError, match="obstacle_approach_distance"):
