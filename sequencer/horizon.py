@@ -621,7 +621,7 @@ class FootstepSequencer:
         return planned, cop_offsets[0]
 
     def _approach(self, p0x, p0y, yaw, stance, per_stance, l_nom,
-                  constraints: FootholdConstraints | None) -> tuple[float, float] | None:
+                  constraints: FootholdConstraints | None) -> tuple[float, float, float] | None:
         """(ℓ_nom, b_x,nom, f_y) [m, m, -], heading frame: the even approach's nominal length and DCM offset for the
         step from the stance (p0x, p0y) towards the last foothold before an obstacle ("The approach" in
         :mod:`sequencer.footholds`), and the fraction of the nominal lateral offset it aims at (the lateral aim's
