@@ -622,13 +622,11 @@ class FootstepSequencer:
 
     def _approach(self, p0x, p0y, yaw, stance, per_stance, l_nom,
                   constraints: FootholdConstraints | None) -> tuple[float, float, float] | None:
-        """(ℓ_nom, b_x,nom, f_y) [m, m, -], heading frame: the even approach's nominal length and DCM offset for the
-        step from the stance (p0x, p0y) towards the last foothold before an obstacle ("The approach" in
-        :mod:`sequencer.footholds`), and the fraction of the nominal lateral offset it aims at (the lateral aim's
-        :attr:`FootholdGeometry.lateral_aim_fraction` for a step from whose nominal foothold one step reaches beyond
-        the obstacle, a possible last step before it, else 1); None: the
-        gait's (no obstacle within ``obstacle_approach_distance``, or less than half a nominal step before its
-        foothold bound)."""
+        """(ℓ_nom, b_x,nom, b) [m], heading frame: the even approach's nominal length and DCM offset for the step
+        from the stance (p0x, p0y) towards the last foothold before an obstacle ("The approach" in
+        :mod:`sequencer.footholds`), and the obstacle's far bound b from the stance (a step from whose foothold one
+        step reaches it may be the last before the obstacle); None: the gait's (no obstacle within
+        ``obstacle_approach_distance``, or less than half a nominal step before its foothold bound)."""
         if constraints is None:
             return None
         approach = constraints.approach((p0x, p0y), yaw, per_stance[stance][2], l_nom)
@@ -644,11 +642,7 @@ class FootstepSequencer:
                                         travel=b - length * (steps - 1))  # the crossing lifts off step n - 1
         for _ in range(steps - 1):  # eq. 1b backwards: b_{k-1} = (ℓ + b_k) / γ_nom
             aim = (length + aim) / self._gamma_nom
-        # from this step's foothold one step may reach beyond the box, and the sequencer crosses whenever the DCM lets
-        # it: a possible last step before the box (the even approach counts its steps to the bound a, which the H1's
-        # closed loop overshot: it crossed a step early, from the nominal lateral offset)
-        crossable = b - length <= constraints.geometry.step_length_max
-        return length, aim, constraints.geometry.lateral_aim_fraction if crossable else 1.0
+        return length, aim, b
 
     def _exact_step(self, p0x, p0y, zx, zy, elapsed, yaw, rotate, stance, per_stance, l_nom,
                     constraints: FootholdConstraints | None, lift, cross, duration_min: float = 0.0,
@@ -660,8 +654,9 @@ class FootstepSequencer:
         of ``constraints`` (``lift``: where the swinging foot lifted off; ``cross``: the before/beyond decision
         kept, or None), its duration at least ``duration_min``
         [s], its length along the heading at least ``length_min`` [m] (None: ``l_min``) and, with ``approach``
-        (ℓ_nom, b_x,nom, f_y) (:meth:`_approach`), that nominal length and DCM offset along the heading and f_y times
-        the nominal lateral offset in its QP instead of the gait's (the before/beyond choice keeps the gait's); with
+        (ℓ_nom, b_x,nom, b) (:meth:`_approach`), that nominal length and DCM offset along the heading in its QP instead
+        of the gait's, and the lateral aim's offset across it if one step reaches beyond b from the foothold so
+        planned (the before/beyond choice keeps the gait's); with
         ``lateral_window`` (low, high) [m] its lateral component within that window too (the nearest width bound when
         they do not meet)."""
         params = self.params
@@ -678,10 +673,9 @@ class FootstepSequencer:
                 low = high = w_hi if lateral_window[0] > w_hi else w_lo
             w_lo, w_hi = low, high
         l_gait, bnx_gait = l_nom, bnx
-        bny_step = bny  # the lateral offset of this step's QP (the before/beyond choice keeps the gait's)
+        far = None  # the obstacle's far bound of the even approach [m], heading frame
         if approach is not None:
-            l_nom, bnx, lateral = approach
-            bny_step = bny * lateral
+            l_nom, bnx, far = approach
         if elapsed > 0.0:
             decay = math.exp(-omega * elapsed)
             g_lo = math.exp(omega * max(params.t_min, elapsed))
@@ -691,22 +685,29 @@ class FootstepSequencer:
         if duration_min > 0.0:
             g_lo = max(g_lo, math.exp(omega * duration_min))
         ax, ay = (zx - p0x) * decay, (zy - p0y) * decay
-        if rotate:  # solve in the heading frame of the stance, rotate the step and the offset back
-            c, s = math.cos(yaw), math.sin(yaw)
-            dx, dy, gamma, hx, hy, bits = solve_exact_scalars(
-                0.0, 0.0, c * ax + s * ay, c * ay - s * ax, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny_step,
-                l_min, l_max, w_lo, w_hi, g_lo, g_hi,
-            )
-            px, py = p0x + (c * dx - s * dy), p0y + (s * dx + c * dy)
-            bx, by = c * hx - s * hy, s * hx + c * hy
-        else:
-            px, py, gamma, bx, by, bits = solve_exact_scalars(
-                p0x, p0y, ax, ay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, bny_step,
-                l_min, l_max, w_lo, w_hi, g_lo, g_hi,
-            )
+        c, s = math.cos(yaw), math.sin(yaw)
+
+        def step_qp(lateral_offset):  # (p_x, p_y, γ, b_x, b_y, bits) aiming at that DCM offset across the heading
+            if rotate:  # solve in the heading frame of the stance, rotate the step and the offset back
+                dx, dy, gamma, hx, hy, bits = solve_exact_scalars(
+                    0.0, 0.0, c * ax + s * ay, c * ay - s * ax, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx,
+                    lateral_offset, l_min, l_max, w_lo, w_hi, g_lo, g_hi,
+                )
+                return p0x + (c * dx - s * dy), p0y + (s * dx + c * dy), gamma, c * hx - s * hy, s * hx + c * hy, bits
+            return solve_exact_scalars(p0x, p0y, ax, ay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, lateral_offset,
+                                       l_min, l_max, w_lo, w_hi, g_lo, g_hi)
+
+        px, py, gamma, bx, by, bits = step_qp(bny)
+        if far is not None and constraints.geometry.lateral_aim_fraction != 1.0:
+            # a possible last step before the obstacle (one step from its foothold reaches beyond it, and the sequencer
+            # crosses whenever the DCM lets it) aims at the lateral aim's offset, judged from the foothold its QP
+            # plans (the H1's closed loop crossed a step early and from short of the bound, from the walking offset,
+            # and its steps planned short of the bound were followed by one more)
+            aimed = step_qp(bny * constraints.geometry.lateral_aim_fraction)
+            if far - (c * (aimed[0] - p0x) + s * (aimed[1] - p0y)) <= constraints.geometry.step_length_max:
+                px, py, gamma, bx, by, bits = aimed
         cop = 0.0  # the centre of pressure behind the stance foothold the step was planned with [m]
         if constraints is not None:  # footholds outside the obstacles (sequencer.footholds)
-            c, s = math.cos(yaw), math.sin(yaw)
             hax, hay = c * ax + s * ay, c * ay - s * ax  # the DCM growth in the heading frame
 
             def solve(bounds, aim, lateral=1.0, cop=0.0):

@@ -865,6 +865,38 @@ def test_an_approach_step_from_which_the_box_is_crossable_aims_at_the_lateral_of
     assert _sole_overlaps(plan, box, geometry) == []
 
 
+def test_an_approach_step_planned_out_of_crossing_reach_keeps_the_walking_lateral_offset():
+    """The lateral aim goes by the foothold the step's QP plans, not the approach's nominal one: with the DCM 4 cm
+    behind the plan at the stance of the approach's last step by count, the QP puts that step 16 cm short of the bound,
+    out of a crossing's reach; it keeps the walking lateral offset and the step after it, from which the box is
+    crossed, aims at the lateral aim's (the H1 at seed 1, 10 cm, session 26: two aimed steps in a row, the second on
+    the negotiation's inner width bound, 8 cm from its DCM at the crossing's lift-off)."""
+    from wbmpc.walking.preset import load_walking_preset
+
+    pinned = {"planner.horizon": 5.0, "planner.obstacle_crossing_cop": 0.0, "planner.obstacle_passed_cop": 0.0,
+              "planner.obstacle_approach_distance": 1.5, "planner.obstacle_lateral_aim_duration": 0.7}
+    params = load_walking_preset("h1", pinned).planner_params
+    geometry = params.foothold_geometry()
+    box = Obstacle(np.array([1.05, 0.0]), 0.0, 0.1, 1.2, 0.1)
+    planner = DcmFootstepPlanner(params)
+    plan = planner.plan(0.0, *_start(planner), COMMAND, obstacles=(box,))
+    lead = next(k for k, step in enumerate(plan.steps) if step.crossing is not None)
+    last_stance = plan.steps[lead - 2]
+    stance = StanceState(last_stance.foot, last_stance.position, 0.0, last_stance.touchdown_time,
+                         swing_liftoff=plan.steps[lead - 3].position)
+    dcm = last_stance.dcm_at_touchdown - np.array([0.04, 0.0])
+    replan = DcmFootstepPlanner(params).plan(last_stance.touchdown_time, stance,
+                                             ReducedState(np.array([*dcm, 0.97]), np.zeros(3), dcm), COMMAND,
+                                             obstacles=(box,))
+    far = 1.05 + 0.05 + geometry.margin + geometry.sole_rear
+    first, second = replan.steps[0], replan.steps[1]
+    assert first.crossing is None and far - first.position[0] > geometry.step_length_max  # out of reach
+    assert second.crossing is None and replan.steps[2].crossing is not None
+    nominal, fraction = abs(params.b_nom("left")[1]), np.exp(-params.omega * (0.7 - params.t_nom))
+    assert abs(first.dcm_offset[1]) == pytest.approx(nominal, abs=0.005)
+    assert abs(second.dcm_offset[1]) == pytest.approx(fraction * nominal, abs=0.005)
+
+
 def test_approach_distance_bad_input():
     for value in (-0.1, float("nan"), float("inf")):
         with pytest.raises(ParameterError, match="obstacle_approach_distance"):
