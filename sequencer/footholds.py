@@ -123,17 +123,16 @@ A step whose nominal foothold is free of the box plans as the walk does: the piv
 
 **The lateral aim.** A crossing step lasts longer than a walking step (T_c against t_nom), and the lateral DCM
 offset it starts from grows by exp(ω T_c), not exp(ω t_nom): from the nominal offset b_y,nom the crossing spreads
-the feet (on the H1 a 0.6 s crossing lands 0.2 m wider than the nominal width, and the QP's lateral cost bounded
-the crossing to its shortest duration, in which the DCM could not carry the crossing step). With
+the feet (on the H1 a 0.6 s crossing lands 0.2 m wider than the nominal width, and the QP's lateral cost bounded the
+crossing to its shortest duration, in which the DCM could not carry the crossing step). With
 ``obstacle_lateral_aim_duration`` T_lat > 0 the last step before an obstacle aims at b_y,nom exp(-ω (T_lat - t_nom))
 (:attr:`FootholdGeometry.lateral_aim_fraction`), from which a crossing lasting T_lat ends at the nominal lateral
-offset and width (eq. 1b across the heading): it lands nearer its DCM. In the even approach below every step from
-whose nominal foothold one step reaches beyond the obstacle aims there too, whatever the approach's count of steps:
-its own QP's foothold is kept as it is, without the choice above, and the sequencer crosses as soon as the DCM lets
-it (the H1's crossings that lifted off a step early or short of the bound started 10-11 cm from the DCM across the
-heading, the others 3-5 cm). So does the lead
-crossing, which the trailing crossing swing follows (from the nominal lateral offset the H1's trailing swing was
-planned at its widest bound and the lateral DCM still ran away).
+offset and width (eq. 1b across the heading): it lands nearer its DCM. So does the lead crossing, which the trailing
+crossing swing follows (from the nominal lateral offset the H1's trailing swing was planned at its widest bound and
+the lateral DCM still ran away). In the even approach below every step from whose planned foothold one step reaches
+beyond the obstacle aims there too, whatever the approach's count of steps: its own QP's foothold is kept as it is,
+without the choice above, and the sequencer crosses as soon as the DCM lets it (the H1's crossings that lifted off a
+step early or short of the bound started 10-11 cm from the DCM across the heading, the others 3-5 cm).
 
 "Cross when one step can reach beyond, else stop at the safe distance" rather than "the cheaper
 side": from the last foothold before an obstacle the cheaper step is always in place (the crossing
