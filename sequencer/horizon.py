@@ -656,9 +656,8 @@ class FootstepSequencer:
         [s], its length along the heading at least ``length_min`` [m] (None: ``l_min``) and, with ``approach``
         (ℓ_nom, b_x,nom, b) (:meth:`_approach`), that nominal length and DCM offset along the heading in its QP instead
         of the gait's, and the lateral aim's offset across it if one step reaches beyond b from the foothold so
-        planned (the before/beyond choice keeps the gait's); with
-        ``lateral_window`` (low, high) [m] its lateral component within that window too (the nearest width bound when
-        they do not meet)."""
+        planned (the before/beyond choice keeps the gait's); with ``lateral_window`` (low, high) [m] its lateral
+        component within that window too (the nearest width bound when they do not meet)."""
         params = self.params
         omega = self._omega
         a1, a2, a3 = params.alpha1, params.alpha2, params.alpha3
