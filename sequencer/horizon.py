@@ -696,7 +696,7 @@ class FootstepSequencer:
             return solve_exact_scalars(p0x, p0y, ax, ay, a1, a2, a3, l_nom, w_nom, gamma_nom, bnx, lateral_offset,
                                        l_min, l_max, w_lo, w_hi, g_lo, g_hi)
 
-        px, py, gamma, bx, by, bits = step_qp(bny)
+        step = None
         if far is not None and constraints.geometry.lateral_aim_fraction != 1.0:
             # a possible last step before the obstacle (one step from its foothold reaches beyond it, and the sequencer
             # crosses whenever the DCM lets it) aims at the lateral aim's offset, judged from the foothold its QP
@@ -704,7 +704,8 @@ class FootstepSequencer:
             # and its steps planned short of the bound were followed by one more)
             aimed = step_qp(bny * constraints.geometry.lateral_aim_fraction)
             if far - (c * (aimed[0] - p0x) + s * (aimed[1] - p0y)) <= constraints.geometry.step_length_max:
-                px, py, gamma, bx, by, bits = aimed
+                step = aimed
+        px, py, gamma, bx, by, bits = step_qp(bny) if step is None else step
         cop = 0.0  # the centre of pressure behind the stance foothold the step was planned with [m]
         if constraints is not None:  # footholds outside the obstacles (sequencer.footholds)
             hax, hay = c * ax + s * ay, c * ay - s * ax  # the DCM growth in the heading frame
