@@ -8,7 +8,6 @@ import pytest
 from wbmpc_fixtures import alternating_schedule, standing_state
 
 from robots import load_robot
-from wbmpc.errors import ParameterError
 from wbmpc.ocp import MPCSolution
 from wbmpc.walking import WalkingMPC, WalkingOCPConfig
 from wbmpc.walking.ocp import swing_height_reference
@@ -174,41 +173,3 @@ def test_repeat_horizon_end_is_the_plain_shift(bolt, walking):
     np.testing.assert_array_equal(us[-1], ticks[-1].us[-1])
     np.testing.assert_array_equal(xs[-1], ticks[-1].xs[-1])
     np.testing.assert_array_equal(xs[-2], ticks[-1].xs[-1])
-
-
-def test_retimed_touchdown_takes_the_controls_of_its_contact_set(bolt):
-    """retimed_controls="same_contact": steps re-timed from 0.30 to 0.33 s move every switch of
-    the horizon later, so nodes solved with one foot swinging now swing the other; each such node
-    takes the shifted control of the nearest node solved with its new contact set, every other
-    node keeps the plain shift."""
-    n = 40
-    mpc = WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=n, dt=DT, max_iterations=1, cold_start_iterations=10,
-                     retimed_controls="same_contact")
-    com_ref = np.array([0.3, 0.0, 0.3])
-    solution = mpc.update(0.0, standing_state(bolt), alternating_schedule(0.0, DT, n), com_ref)
-    assert solution.ok and len(solution.contact_keys) == n
-    solved = list(solution.contact_keys[1:]) + [solution.contact_keys[-1]]
-    x = solution.xs[1]
-    mpc.ocp.update(x, alternating_schedule(DT, DT, n, step_duration=0.33), com_ref)
-    xs, us, cold = mpc.warm_start(DT, x)
-    assert not cold
-    keys = [m.differential.active_key for m in mpc.problem.running_models]
-    shifted = np.concatenate([solution.us[1:], solution.us[-1:]])
-    changed = [j for j in range(n - 1) if keys[j] != solved[j]]
-    assert len(changed) >= 3 and mpc.receding.retimed_nodes == len(changed)
-    for j in range(n - 1):
-        if j not in changed:
-            np.testing.assert_array_equal(us[j], shifted[j])
-            continue
-        nearest = min((i for i in range(n - 1) if solved[i] == keys[j]), key=lambda i: (abs(i - j), i))
-        np.testing.assert_array_equal(us[j], shifted[nearest])
-        assert not np.array_equal(us[j], shifted[j])
-    # the default keeps the shifted controls and stores no keys
-    plain = WalkingMPC(bolt, WalkingOCPConfig(), n_nodes=n, dt=DT)
-    assert plain.receding.retimed_controls == "shifted"
-    plain.last_good = solution
-    plain.ocp.update(x, alternating_schedule(DT, DT, n, step_duration=0.33), com_ref)
-    _, us_plain, _ = plain.warm_start(DT, x)
-    np.testing.assert_array_equal(us_plain[:-1], shifted[:-1])
-    with pytest.raises(ParameterError, match="retimed_controls='nearest' must be one of"):
-        WalkingMPC(bolt, n_nodes=10, dt=DT, retimed_controls="nearest")

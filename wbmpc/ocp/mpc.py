@@ -71,9 +71,6 @@ class MPCSolution:
         restart: this update was a cold restart after failures (``RecedingHorizonMPC(
             restart_after_failures=)``): its guess was the quasi-static one, not the last good
             solution shifted (a failed restart still returns that solution, with ok=False).
-        contact_keys: the contact set of each running node (N,) this solution was solved with (the
-            models' ``differential.active_key``), or () when unknown; the next warm start compares
-            them with the new ones (``RecedingHorizonMPC(retimed_controls=)``).
     """
 
     ok: bool
@@ -86,7 +83,6 @@ class MPCSolution:
     us: np.ndarray
     K: np.ndarray
     restart: bool = False
-    contact_keys: tuple = ()
 
     def u(self, k: int) -> np.ndarray:
         """Torque of node k (nu,) [N·m]."""
@@ -100,15 +96,6 @@ class MPCSolution:
         object.__setattr__(self, "K", np.asarray(self.K, dtype=float).view(GainSequence))
 
 
-def _shift_keys(keys, nodes: int) -> list:
-    """The per-node contact keys shifted like :func:`_shift` shifts the rows of an array."""
-    keys = list(keys)
-    if nodes <= 0:
-        return keys
-    nodes = min(nodes, len(keys) - 1)
-    return keys[nodes:] + [keys[-1]] * nodes
-
-
 def _shift(array: np.ndarray, nodes: int) -> np.ndarray:
     """Drop the first ``nodes`` rows and repeat the last row to keep the shape."""
     if nodes <= 0:
@@ -119,10 +106,6 @@ def _shift(array: np.ndarray, nodes: int) -> np.ndarray:
 
 HORIZON_ENDS = ("rollout", "repeat")
 """Warm-start fills of the nodes entering at the end of the horizon (``RecedingHorizonMPC(horizon_end=)``)."""
-
-RETIMED_CONTROLS = ("shifted", "same_contact")
-"""Warm-start controls of the nodes whose contact set changed since the last solve
-(``RecedingHorizonMPC(retimed_controls=)``)."""
 
 
 def _is_iteration_count(value) -> bool:
@@ -160,13 +143,6 @@ class RecedingHorizonMPC:
             solver starts no iteration or line-search trial that would end after it (see
             ``SolverFDDP.solve``'s ``deadline``); such an update returns status "deadline". The
             cold start (first update) has no budget.
-        retimed_controls: the warm-start controls of the nodes whose contact set is not the one the
-            shifted solution was solved with (a touchdown or lift-off re-timed since the last solve:
-            a late touchdown turns planned double-support nodes into swing nodes, an early one the
-            reverse): "shifted" (default: the shifted solution's, computed for the other contact set,
-            e.g. a stance leg's torques on a swinging leg) or "same_contact" (the shifted control of
-            the nearest node, earlier on a tie, that was solved with the node's new contact set;
-            the shifted one when no node was; see :meth:`_retime_controls`).
         blas_threads: OpenBLAS thread count within each :meth:`update` and :meth:`prepare`
             (:func:`~wbmpc.ocp.blas.limit_blas_threads`, restored after; 1 by default: the small
             products run 3x faster so on a shared machine), or None to leave it alone.
@@ -175,15 +151,13 @@ class RecedingHorizonMPC:
     def __init__(self, problem, dt: float, initial_controls: Callable[[np.ndarray], np.ndarray] | None = None,
                  solver: MPCSolver | None = None, max_iterations: int = 1, cold_start_iterations: int = 20,
                  horizon_end: str = "repeat", time_budget: float | None = None, blas_threads: int | None = 1,
-                 restart_after_failures: int | None = None, retimed_controls: str = "shifted"):
+                 restart_after_failures: int | None = None):
         if not _is_iteration_count(max_iterations):
             raise ParameterError(f"max_iterations={max_iterations!r} must be an integer >= 1")
         if int(cold_start_iterations) != cold_start_iterations or cold_start_iterations < 1:
             raise ParameterError(f"cold_start_iterations={cold_start_iterations!r} must be an integer >= 1")
         if horizon_end not in HORIZON_ENDS:
             raise ParameterError(f"horizon_end={horizon_end!r} must be one of {HORIZON_ENDS}")
-        if retimed_controls not in RETIMED_CONTROLS:
-            raise ParameterError(f"retimed_controls={retimed_controls!r} must be one of {RETIMED_CONTROLS}")
         if time_budget is not None and (isinstance(time_budget, bool) or not isinstance(time_budget, (int, float))
                                         or not 0 < time_budget < 1e3):
             raise ParameterError(f"time_budget={time_budget!r} must be None or a number of seconds in (0, 1000)")
@@ -207,9 +181,6 @@ class RecedingHorizonMPC:
         self.max_iterations = int(max_iterations)
         self.cold_start_iterations = int(cold_start_iterations)
         self.horizon_end = horizon_end
-        self.retimed_controls = retimed_controls
-        self.retimed_nodes = 0
-        """Nodes whose warm-start control the last warm start replaced (``retimed_controls``)."""
         self.time_budget = None if time_budget is None else float(time_budget)
         self.n_nodes = problem.T
         self.dt = float(dt)
@@ -233,51 +204,12 @@ class RecedingHorizonMPC:
         xs = _shift(last.xs, nodes)
         us = _shift(last.us, nodes)
         xs[0] = x_measured
-        self.retimed_nodes = 0
-        if self.retimed_controls == "same_contact" and last.contact_keys:
-            self.retimed_nodes = self._retime_controls(us, _shift_keys(last.contact_keys, nodes),
-                                                       self.n_nodes - max(nodes, 0))
         if self.horizon_end == "rollout":
             self._extend_horizon_end(xs, us, min(nodes, self.n_nodes - 1))
         return xs, us, False
 
-    def _contact_keys(self) -> list:
-        """Each running node's contact set (its differential model's ``active_key``; None for a
-        model without one)."""
-        return [getattr(getattr(model, "differential", None), "active_key", None)
-                for model in self.problem.running_models]
-
-    def _solved_keys(self) -> tuple:
-        """The contact keys to store with a solution: () unless ``retimed_controls`` reads them."""
-        if self.retimed_controls == "shifted":
-            return ()
-        keys = self._contact_keys()
-        return () if all(key is None for key in keys) else tuple(keys)
-
-    def _retime_controls(self, us: np.ndarray, solved_keys: list, kept: int) -> int:
-        """Replace, in place, the shifted controls of the first ``kept`` running nodes whose
-        contact set is not ``solved_keys[j]`` (the one the shifted solution was solved with at
-        that node) by the shifted control of the nearest node j' (earlier on a tie) with
-        ``solved_keys[j'] ==`` the node's new set; a node with no such j' keeps its own. The
-        nodes after ``kept`` enter at the end and are ``horizon_end``'s. Returns the nodes replaced.
-
-        A re-timed touchdown or lift-off otherwise starts the solve from torques computed for the
-        other contact set at the nodes between the old and the new switch time.
-        """
-        keys = self._contact_keys()
-        shifted = us.copy()
-        replaced = 0
-        for j in range(min(kept, self.n_nodes)):
-            if keys[j] == solved_keys[j]:
-                continue
-            for distance in range(1, self.n_nodes):
-                match = next((i for i in (j - distance, j + distance)
-                              if 0 <= i < kept and solved_keys[i] == keys[j]), None)
-                if match is not None:
-                    us[j] = shifted[match]
-                    replaced += 1
-                    break
-        return replaced
+    def _contact_keys(self) -> list[tuple]:
+        return [model.differential.active_key for model in self.problem.running_models]
 
     def _extend_horizon_end(self, xs: np.ndarray, us: np.ndarray, nodes: int) -> None:
         """Fill the last ``nodes`` running nodes of a shifted guess (in place): each takes the
@@ -401,7 +333,6 @@ class RecedingHorizonMPC:
                 iterations=len(solver.log),
                 cost=float(solver.cost), solve_time=time.perf_counter() - tic, t=float(t),
                 xs=solver.xs.copy(), us=solver.us.copy(), K=K, restart=restart,
-                contact_keys=self._solved_keys(),
             )
             self.last_good = solution
             self.failures = 0

@@ -123,8 +123,7 @@ class WalkingController:
                                                  cfg.touchdown_wait_depth)
         self.mpc = WalkingMPC(robot, preset.ocp, n_nodes=cfg.n_nodes, dt=cfg.node_dt, max_iterations=cfg.max_iterations,
                               horizon_end=cfg.mpc_horizon_end, time_budget=cfg.mpc_time_budget, solver=self.mpc_solver,
-                              restart_after_failures=cfg.mpc_restart_after_failures,
-                              retimed_controls=cfg.mpc_retimed_controls)
+                              restart_after_failures=cfg.mpc_restart_after_failures)
         self.feedback = FeedbackLaw(self.mpc.ocp.state, cfg.node_dt, cfg.delay_nodes, cfg.interpolate, cfg.feedback,
                                     cfg.computation_delay)
         self.planning.reset(x0, t0, self.command)
@@ -207,7 +206,6 @@ class WalkingController:
             ok, status = bool(solution.ok), str(solution.status)
             restart = bool(solution.restart)
             record["mpc_prepared_used"] = float(getattr(self.mpc.problem, "prepared_used", 0))
-            record["mpc_retimed_nodes"] = float(self.mpc.receding.retimed_nodes)
             record["mpc_rollouts"] = float(getattr(self.mpc.solver, "rollouts", np.nan))
             iterations, cost, solve_time = int(solution.iterations), float(solution.cost), solution.solve_time
             if ok:

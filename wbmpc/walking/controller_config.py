@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from wbmpc.errors import ParameterError
-from wbmpc.ocp.mpc import HORIZON_ENDS, RETIMED_CONTROLS
+from wbmpc.ocp.mpc import HORIZON_ENDS
 from wbmpc.walking.stance import TOUCHDOWN_DETECTIONS
 
 
@@ -36,10 +36,6 @@ class WalkingControllerConfig:
         mpc_horizon_end: how the MPC's warm start fills the node entering at the end of the
             horizon: "repeat" (default, as ``wbmpc.ocp.mpc.RecedingHorizonMPC``) or "rollout". Bolt's
             preset uses "rollout": with "repeat", 1 iteration per update falls (see ``max_iterations``).
-        mpc_retimed_controls: the MPC's warm-start controls at nodes whose contact set changed since
-            the last solve (a touchdown or lift-off re-timed by the step QP or the touchdown wait):
-            "shifted" (default) or "same_contact" (``RecedingHorizonMPC(retimed_controls=)``; the
-            replan log's ``mpc_retimed_nodes`` counts them).
         mpc_restart_after_failures: after this many consecutive failed MPC updates the next one
             starts cold (``RecedingHorizonMPC(restart_after_failures=)``; the replan log's
             ``mpc_restart`` marks it), or None (default: never, the warm start from the last good
@@ -197,7 +193,6 @@ class WalkingControllerConfig:
     replan_period: float = 0.01
     max_iterations: int = 1
     mpc_horizon_end: str = "repeat"
-    mpc_retimed_controls: str = "shifted"
     mpc_restart_after_failures: int | None = None
     mpc_prepare: bool = True
     mpc_time_budget: float | None = None
@@ -336,8 +331,6 @@ class WalkingControllerConfig:
             raise ParameterError(f"mpc_restart_after_failures={restart!r} must be None, 0 (never) or an integer >= 1")
         if self.mpc_horizon_end not in HORIZON_ENDS:
             raise ParameterError(f"mpc_horizon_end={self.mpc_horizon_end!r} must be one of {HORIZON_ENDS}")
-        if self.mpc_retimed_controls not in RETIMED_CONTROLS:
-            raise ParameterError(f"mpc_retimed_controls={self.mpc_retimed_controls!r} must be one of {RETIMED_CONTROLS}")
         if self.sequencer_params_from is not None:
             switch = self.sequencer_params_from
             if not (isinstance(switch, tuple) and len(switch) == 2 and np.isfinite(switch[0]) and switch[0] >= 0):

@@ -27,15 +27,13 @@ class WalkingMPC:
         solver: callable problem -> :class:`~wbmpc.ocp.mpc.MPCSolver`, the solver to run on
             the OCP's problem (e.g. Crocoddyl's FDDP behind an adapter, in the benchmarks);
             None = the library's ``SolverFDDP`` with the config's options.
-        max_iterations, cold_start_iterations, horizon_end, time_budget, restart_after_failures,
-        retimed_controls: see
+        max_iterations, cold_start_iterations, horizon_end, time_budget, restart_after_failures: see
             :class:`~wbmpc.ocp.mpc.RecedingHorizonMPC`.
     """
 
     def __init__(self, robot, config: WalkingOCPConfig | None = None, n_nodes: int = 100, dt: float = 0.01,
                  max_iterations: int = 1, cold_start_iterations: int = 20, horizon_end: str = "repeat",
-                 time_budget: float | None = None, solver=None, restart_after_failures: int | None = None,
-                 retimed_controls: str = "shifted"):
+                 time_budget: float | None = None, solver=None, restart_after_failures: int | None = None):
         self.config = WalkingOCPConfig() if config is None else config
         self.ocp = WalkingOCP(robot, self.config, n_nodes, dt)
         self.problem = self.ocp.problem
@@ -47,7 +45,6 @@ class WalkingMPC:
             self.problem, self.ocp.dt, initial_controls=lambda x: quasi_static_controls(self.ocp, x),
             solver=chosen, max_iterations=max_iterations, cold_start_iterations=cold_start_iterations,
             horizon_end=horizon_end, time_budget=time_budget, restart_after_failures=restart_after_failures,
-            retimed_controls=retimed_controls,
         )
         self.solver = self.receding.solver
         self.n_nodes = self.ocp.n_nodes
