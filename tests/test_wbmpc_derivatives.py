@@ -652,6 +652,33 @@ def test_h1_leg_posture_is_scaled_only_while_the_horizon_holds_a_crossing():
         WalkingOCPConfig(obstacle_leg_posture_scale=-0.5)
 
 
+
+@needs_h1_extra
+def test_h1_swing_orientation_is_scaled_only_at_crossing_swing_nodes():
+    """``obstacle_swing_orientation_scale`` != 1: the ``{foot}_orientation`` weight is scaled at the nodes of a crossing
+    swing (crossings.index >= 0) and stays ``swing_orientation_weight`` at every other node and without crossings."""
+    from wbmpc.errors import ParameterError
+
+    h1, ocp, schedule, crossings = _h1_crossing()
+    scale = 0.1
+    scaled = WalkingOCP(h1, dataclasses.replace(ocp.config, obstacle_swing_orientation_scale=scale),
+                        n_nodes=ocp.n_nodes, dt=0.02)
+    weight = ocp.config.swing_orientation_weight
+    assert weight > 0
+    x0 = standing_state(h1)
+    columns = [list(schedule.feet).index(foot) for foot in scaled.feet]
+    crossing = np.asarray(crossings.index)[:, columns] >= 0
+    assert crossing.any() and not crossing.all()
+    for given in (crossings, None, crossings):
+        scaled.update(x0, schedule, np.array([0.1, 0.0, 0.97]), crossings=given)
+        for k, model in enumerate(scaled.problem.running_models):
+            for j, foot in enumerate(scaled.feet):
+                item = model.differential.costs.costs[f"{foot}_orientation"]
+                expected = weight * scale if given is not None and crossing[k, j] else weight
+                assert item.weight == expected
+    with pytest.raises(ParameterError, match="obstacle_swing_orientation_scale=-1.0 must be finite and >= 0"):
+        WalkingOCPConfig(obstacle_swing_orientation_scale=-1.0)
+
 def test_the_swing_path_timings_go_from_lift_off_to_touchdown_and_smooth_lands_at_rest():
     from wbmpc.errors import ParameterError
     phase = np.linspace(0.0, 1.0, 101)

@@ -290,6 +290,9 @@ class WalkingOCPConfig:
             posture's legs pull the pelvis between feet 0.6 m apart, against the ``com_path`` that carries it over
             the lead foot (docs/ocp.md "The legs' posture over a crossing"). 1 = unchanged (one
             ``state_regularization`` term); otherwise those rows are the separate term ``leg_posture``.
+        obstacle_swing_orientation_scale: factor on ``swing_orientation_weight`` at the nodes of a crossing swing,
+            >= 0: the flat-sole term charges the swing hip's abduction (a rolled sole), the H1's one way to lift the
+            lead foot higher than its sagittal reach (docs/robots.md "Can the H1 step over 40 cm?"). 1 = unchanged.
         max_line_search_trials: FDDP line-search steps tried (1, ½, …).
         reg_min, reg_max: FDDP regularisation bounds.
         th_stop: FDDP stopping threshold.
@@ -343,6 +346,7 @@ class WalkingOCPConfig:
     obstacle_foothold_weight: float = 0.0
     obstacle_com_weight: float = 0.0
     obstacle_leg_posture_scale: float = 1.0
+    obstacle_swing_orientation_scale: float = 1.0
     max_line_search_trials: int = 10
     reg_min: float = 1e-9
     reg_max: float = 1e9
@@ -354,7 +358,7 @@ class WalkingOCPConfig:
                      "com_terminal_weight", "foothold_weight", "contact_force_weight", "friction_cone_weight",
                      "wrench_cone_weight", "swing_orientation_weight", "swing_path_weight", "obstacle_clearance_weight",
                      "obstacle_swing_path_weight", "obstacle_foothold_weight", "obstacle_com_weight",
-                     "obstacle_leg_posture_scale"):
+                     "obstacle_leg_posture_scale", "obstacle_swing_orientation_scale"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f"{name}={value} must be finite and >= 0")
@@ -932,6 +936,12 @@ class WalkingOCP:
         first_stance[1:] = in_contact[1:] & ~in_contact[:-1]
         stance_names = [tuple(foot for j, foot in enumerate(self.feet) if row[j]) for row in in_contact.tolist()]
         swing_rows, last_rows, first_rows = (~in_contact).tolist(), last_swing.tolist(), first_stance.tolist()
+        orientation_weight = cfg.swing_orientation_weight
+        orientation_rows = None  # the orientation weight of each (node, foot) where a crossing scales it
+        if crossings is not None and cfg.obstacle_swing_orientation_scale != 1.0:
+            crossing = np.asarray(crossings.index)[:, columns] >= 0
+            orientation_rows = np.where(crossing, orientation_weight * cfg.obstacle_swing_orientation_scale,
+                                        orientation_weight).tolist()
         heights_rows = heights.tolist()
         force_reference = (self.mass * GRAVITY / n_stance).tolist()
         for k, (dam, feet_terms) in enumerate(self._node_terms):
@@ -967,6 +977,9 @@ class WalkingOCP:
                     wrench.active = not swing
                 if orientation is not None:
                     orientation.active = swing
+                    weight = orientation_weight if orientation_rows is None else orientation_rows[k][j]
+                    if orientation.weight != weight:
+                        orientation.weight = weight
                     if swing:
                         orientation.cost.residual.reference[:] = yaw_rotation(touchdown_yaw[k, j])
         if cfg.base_yaw_reference == "footholds":
