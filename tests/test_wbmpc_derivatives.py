@@ -652,7 +652,6 @@ def test_h1_leg_posture_is_scaled_only_while_the_horizon_holds_a_crossing():
         WalkingOCPConfig(obstacle_leg_posture_scale=-0.5)
 
 
-
 @needs_h1_extra
 def test_h1_swing_orientation_is_scaled_only_at_crossing_swing_nodes():
     """``obstacle_swing_orientation_scale`` != 1: the ``{foot}_orientation`` weight is scaled at the nodes of a crossing
@@ -678,6 +677,7 @@ def test_h1_swing_orientation_is_scaled_only_at_crossing_swing_nodes():
                 assert item.weight == expected
     with pytest.raises(ParameterError, match="obstacle_swing_orientation_scale=-1.0 must be finite and >= 0"):
         WalkingOCPConfig(obstacle_swing_orientation_scale=-1.0)
+
 
 def test_the_swing_path_timings_go_from_lift_off_to_touchdown_and_smooth_lands_at_rest():
     from wbmpc.errors import ParameterError
