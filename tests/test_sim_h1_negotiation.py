@@ -96,28 +96,6 @@ def test_the_updates_that_see_a_crossing_get_their_own_fddp_iterations():
     assert budget(walking, 1.1) == 5 and budget(walking, 1.12) is None
 
 
-def test_the_updates_at_a_touchdown_get_their_own_fddp_iterations():
-    """``touchdown_max_iterations``: an update whose replan switched the stance or waits for a due touchdown runs at
-    least that many FDDP iterations (the larger of it and the negotiation's or the fast walk's), below the crossing's."""
-    from wbmpc.walking.controller import WalkingController
-
-    preset = load_walking_preset("h1", {"touchdown_max_iterations": 6, "crossing_max_iterations": 60,
-                                        "negotiation_max_iterations": 8})
-    budget = WalkingController(preset)._iteration_budget
-    walking = {"crossing_nodes": 0.0, "negotiation_mode": 0.0, "stance_switched": 0.0, "touchdown_wait": 0.0}
-    assert budget(walking) is None
-    assert budget({**walking, "stance_switched": 1.0}) == 6
-    assert budget({**walking, "touchdown_wait": 0.02}) == 6
-    assert budget({**walking, "touchdown_wait": 0.02, "negotiation_mode": NEGOTIATION}) == 8
-    assert budget({**walking, "stance_switched": 1.0, "crossing_nodes": 4.0}) == 60
-    # below max_iterations it changes nothing; unset (0, the presets) it changes nothing either
-    preset = load_walking_preset("h1", {"touchdown_max_iterations": 1})
-    assert WalkingController(preset)._iteration_budget({**walking, "stance_switched": 1.0}) == 2
-    for name in ("h1", "g1"):
-        preset = load_walking_preset(name)
-        assert WalkingController(preset)._iteration_budget({**walking, "stance_switched": 1.0}) is None
-
-
 def test_crossing_iterations_hold_is_a_duration():
     from wbmpc.errors import ParameterError
     from wbmpc.walking.controller_config import WalkingControllerConfig
@@ -127,7 +105,7 @@ def test_crossing_iterations_hold_is_a_duration():
             WalkingControllerConfig(crossing_iterations_hold=bad)
 
 
-@pytest.mark.parametrize("name", ["negotiation_max_iterations", "crossing_max_iterations", "touchdown_max_iterations"])
+@pytest.mark.parametrize("name", ["negotiation_max_iterations", "crossing_max_iterations"])
 def test_the_iteration_budgets_are_zero_or_a_positive_integer(name):
     from wbmpc.errors import ParameterError
     from wbmpc.walking.controller_config import WalkingControllerConfig

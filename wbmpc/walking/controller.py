@@ -237,9 +237,7 @@ class WalkingController:
         """FDDP iterations of the update at ``t`` [s]: ``crossing_max_iterations`` while the horizon holds a crossing
         swing and ``crossing_iterations_hold`` after, else ``negotiation_max_iterations`` while negotiating, else
         ``fast_max_iterations`` at a planned |v_x| of ``fast_speed`` or more, else None (``max_iterations``); 0 means
-        unset. An update that sees a crossing records its ``t`` (the hold's start). An update at a touchdown (the
-        stance switched, or a due touchdown waited for) gets at least ``touchdown_max_iterations`` below the crossing's.
-        """
+        unset. An update that sees a crossing records its ``t`` (the hold's start)."""
         cfg = self.config
         if cfg.crossing_max_iterations:
             if record.get("crossing_nodes", 0.0) > 0:
@@ -248,15 +246,11 @@ class WalkingController:
             last = self._last_crossing_update
             if t is not None and last is not None and t - last <= cfg.crossing_iterations_hold + 1e-9:
                 return cfg.crossing_max_iterations
-        budget = None
         if cfg.negotiation_max_iterations and record.get("negotiation_mode") == NEGOTIATION:
-            budget = cfg.negotiation_max_iterations
-        elif cfg.fast_max_iterations and self._at_speed(record):
-            budget = cfg.fast_max_iterations
-        touchdown = record.get("stance_switched", 0.0) > 0 or record.get("touchdown_wait", 0.0) > 0
-        if cfg.touchdown_max_iterations and touchdown:
-            budget = max(budget or cfg.max_iterations, cfg.touchdown_max_iterations)
-        return budget
+            return cfg.negotiation_max_iterations
+        if cfg.fast_max_iterations and self._at_speed(record):
+            return cfg.fast_max_iterations
+        return None
 
     def _swing_path_weight(self, record: dict[str, float]) -> float | None:
         """The OCP's swing path weight of this replan: ``negotiation_swing_path_weight`` while negotiating, else

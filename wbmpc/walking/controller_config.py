@@ -175,13 +175,6 @@ class WalkingControllerConfig:
             budgets take precedence. A walk at speed changes the OCP more from one update to the next (shorter,
             quicker steps): the H1 at 1.0 m/s kept its MPC cost 10-100x lower with 4 iterations than with 3
             (docs/closed_loop.md "The H1 at 1.0 m/s, session 20").
-        touchdown_max_iterations: FDDP iterations of an MPC update at a touchdown: one whose replan switched the
-            stance (``stance_switched``) or waits for a due touchdown (``touchdown_wait`` > 0, with contact detection),
-            an integer >= 1, or 0 (none: the other budgets or ``max_iterations``). The crossing's budget takes
-            precedence; this one takes precedence over the negotiation's and the fast walk's when it is larger. At a
-            touchdown the OCP changes most from one update to the next (the contact set of the nodes around the switch,
-            the whole schedule delayed by a wait): the H1's MPC cost rose from ~1e1 to 1e4-2e5 there with two iterations,
-            and every traced fall began at such an update (docs/closed_loop.md "Touchdown iterations").
         fast_swing_path_weight: the OCP's ``swing_path_weight`` (the swing foot's (x, y) along a path from lift-off to
             its foothold, at rest at both ends with the "smooth" timing) from that speed (or ``fast_swing_path_speed``)
             on, >= 0 (0: the OCP's own at every speed). It needs the OCP's swing path terms (``swing_path_weight`` or
@@ -234,7 +227,6 @@ class WalkingControllerConfig:
     crossing_max_iterations: int = 0
     crossing_iterations_hold: float = 0.0
     fast_max_iterations: int = 0
-    touchdown_max_iterations: int = 0
     fast_swing_path_weight: float = 0.0
     fast_speed: float = 0.0
     fast_swing_path_speed: float = 0.0
@@ -304,8 +296,7 @@ class WalkingControllerConfig:
         if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
             raise ParameterError(f"max_iterations={self.max_iterations!r} must be an integer >= 1")
         for name, fallback in (("negotiation_max_iterations", "max_iterations"),
-                               ("crossing_max_iterations", "the negotiation's or max_iterations"),
-                               ("touchdown_max_iterations", "the other budgets or max_iterations")):
+                               ("crossing_max_iterations", "the negotiation's or max_iterations")):
             value = getattr(self, name)
             if isinstance(value, bool) or not (isinstance(value, int) and value >= 0):
                 raise ParameterError(f"{name}={value!r} must be 0 ({fallback}) or an integer >= 1")
