@@ -96,6 +96,22 @@ class MPCSolution:
         object.__setattr__(self, "K", np.asarray(self.K, dtype=float).view(GainSequence))
 
 
+def _phase_keys(contact_keys: list[tuple]) -> list[tuple]:
+    """Each node's (contact set, the different contact set of the run of nodes before it); None for the
+    horizon's first run, whose predecessor is not in the horizon."""
+    keys, previous = [], None
+    for j, key in enumerate(contact_keys):
+        if j > 0 and key != contact_keys[j - 1]:
+            previous = contact_keys[j - 1]
+        keys.append((key, previous))
+    return keys
+
+
+def _same_phase(a: tuple, b: tuple) -> bool:
+    """Whether two nodes' phase keys are the same phase of the gait (an unknown predecessor matches any)."""
+    return a[0] == b[0] and (a[1] is None or b[1] is None or a[1] == b[1])
+
+
 def _shift(array: np.ndarray, nodes: int) -> np.ndarray:
     """Drop the first ``nodes`` rows and repeat the last row to keep the shape."""
     if nodes <= 0:
@@ -104,7 +120,7 @@ def _shift(array: np.ndarray, nodes: int) -> np.ndarray:
     return np.concatenate([array[nodes:], np.repeat(array[-1:], nodes, axis=0)])
 
 
-HORIZON_ENDS = ("rollout", "repeat")
+HORIZON_ENDS = ("rollout", "repeat", "phase")
 """Warm-start fills of the nodes entering at the end of the horizon (``RecedingHorizonMPC(horizon_end=)``)."""
 
 
@@ -137,7 +153,14 @@ class RecedingHorizonMPC:
             :meth:`_extend_horizon_end`). "rollout" is what lets Bolt's closed loop run one
             iteration per update (its controller's default); it needs a plan whose end is
             stable: on the G1 benchmark problem, whose cold start ends on a diverging tail, each
-            rolled-out node extended the divergence and the MPC failed after 13 ticks.
+            rolled-out node extended the divergence and the MPC failed after 13 ticks. "phase":
+            "rollout" with the control of the latest node in the same phase of the gait (the same
+            contact set entered from the same other one: a double support after the left foot's
+            touchdown is not the one after the right foot's), or, when the horizon holds none,
+            ``entering_controls`` (required) at the node's state.
+        entering_controls: callable (x (nx,), node index) -> u (nu,), the control of a node entering
+            the horizon whose gait phase the horizon does not hold ("phase"), e.g. the quasi-static
+            torques of that node's contact set; None (the other fills).
         time_budget: wall time [s] an update may take, counted from its call (a real-time tick's
             deadline, e.g. 0.009 for a 100 Hz loop with 1 ms to spare), or None (no limit). The
             solver starts no iteration or line-search trial that would end after it (see
@@ -151,13 +174,17 @@ class RecedingHorizonMPC:
     def __init__(self, problem, dt: float, initial_controls: Callable[[np.ndarray], np.ndarray] | None = None,
                  solver: MPCSolver | None = None, max_iterations: int = 1, cold_start_iterations: int = 20,
                  horizon_end: str = "repeat", time_budget: float | None = None, blas_threads: int | None = 1,
-                 restart_after_failures: int | None = None):
+                 restart_after_failures: int | None = None,
+                 entering_controls: Callable[[np.ndarray, int], np.ndarray] | None = None):
         if not _is_iteration_count(max_iterations):
             raise ParameterError(f"max_iterations={max_iterations!r} must be an integer >= 1")
         if int(cold_start_iterations) != cold_start_iterations or cold_start_iterations < 1:
             raise ParameterError(f"cold_start_iterations={cold_start_iterations!r} must be an integer >= 1")
         if horizon_end not in HORIZON_ENDS:
             raise ParameterError(f"horizon_end={horizon_end!r} must be one of {HORIZON_ENDS}")
+        if horizon_end == "phase" and entering_controls is None:
+            raise ParameterError("horizon_end='phase' needs entering_controls (x, node) -> u")
+        self.entering_controls = entering_controls
         if time_budget is not None and (isinstance(time_budget, bool) or not isinstance(time_budget, (int, float))
                                         or not 0 < time_budget < 1e3):
             raise ParameterError(f"time_budget={time_budget!r} must be None or a number of seconds in (0, 1000)")
@@ -204,7 +231,7 @@ class RecedingHorizonMPC:
         xs = _shift(last.xs, nodes)
         us = _shift(last.us, nodes)
         xs[0] = x_measured
-        if self.horizon_end == "rollout":
+        if self.horizon_end in ("rollout", "phase"):
             self._extend_horizon_end(xs, us, min(nodes, self.n_nodes - 1))
         return xs, us, False
 
@@ -226,11 +253,16 @@ class RecedingHorizonMPC:
         if nodes <= 0:
             return
         models, datas = self.problem.running_models, self.problem.running_datas
-        keys = self._contact_keys()
+        phase = self.horizon_end == "phase"
+        keys = _phase_keys(self._contact_keys()) if phase else self._contact_keys()
         N = self.n_nodes
         for j in range(N - nodes, N):
-            same = next((i for i in range(j - 1, -1, -1) if keys[i] == keys[j]), None)
-            u = us[same] if same is not None else us[j]
+            match = _same_phase if phase else tuple.__eq__
+            same = next((i for i in range(j - 1, -1, -1) if match(keys[i], keys[j])), None)
+            if same is not None:
+                u = us[same]
+            else:
+                u = self.entering_controls(xs[j], j) if phase else us[j]
             models[j].calc(datas[j], xs[j], u)
             if not np.all(np.isfinite(datas[j].xnext)):
                 return

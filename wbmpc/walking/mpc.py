@@ -45,6 +45,7 @@ class WalkingMPC:
             self.problem, self.ocp.dt, initial_controls=lambda x: quasi_static_controls(self.ocp, x),
             solver=chosen, max_iterations=max_iterations, cold_start_iterations=cold_start_iterations,
             horizon_end=horizon_end, time_budget=time_budget, restart_after_failures=restart_after_failures,
+            entering_controls=lambda x, node: quasi_static_controls(self.ocp, x, node),
         )
         self.solver = self.receding.solver
         self.n_nodes = self.ocp.n_nodes

@@ -1156,15 +1156,15 @@ class WalkingOCP:
         self._timed = True
 
 
-def quasi_static_controls(ocp: WalkingOCP, x: np.ndarray) -> np.ndarray:
-    """Torques (nu,) [N·m] holding the configuration of x still on the node-0 stance feet: the
-    torques of :func:`quasi_static_load`."""
-    return quasi_static_load(ocp, x)[0]
+def quasi_static_controls(ocp: WalkingOCP, x: np.ndarray, node: int = 0) -> np.ndarray:
+    """Torques (nu,) [N·m] holding the configuration of x still on the stance feet of running node
+    ``node`` (default 0): the torques of :func:`quasi_static_load`."""
+    return quasi_static_load(ocp, x, node)[0]
 
 
-def quasi_static_load(ocp: WalkingOCP, x: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """Torques (nu,) [N·m] and contact wrenches holding the configuration of x still on the node-0
-    stance feet.
+def quasi_static_load(ocp: WalkingOCP, x: np.ndarray, node: int = 0) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Torques (nu,) [N·m] and contact wrenches holding the configuration of x still on the stance
+    feet of running node ``node`` (default 0).
 
     Solves S^T tau + sum_c J_c^T f_c = g(q) (g the generalised gravity, S the actuated rows) for
     the torques and contact wrenches of least weighted norm, sum_i (tau_i / tau_max_i)^2 + sum_c
@@ -1187,7 +1187,7 @@ def quasi_static_load(ocp: WalkingOCP, x: np.ndarray) -> tuple[np.ndarray, dict[
     gravity = pin.computeGeneralizedGravity(model, pdata, q)
     pin.computeJointJacobians(model, pdata, q)
     pin.updateFramePlacements(model, pdata)
-    dam = ocp.problem.running_models[0].differential
+    dam = ocp.problem.running_models[node].differential
     columns = [np.vstack([np.zeros((6, ocp.nu)), np.eye(ocp.nu)])]
     scales = [ocp.torque_limit]
     wrench_scale = contact_wrench_scales(ocp.mass * GRAVITY, ocp.robot.sole_size)
