@@ -34,8 +34,11 @@ class WalkingControllerConfig:
             slower (docs/closed_loop.md). Three recover more pushes (push map 27.1 % against
             21.4 %, docs/campaigns.md).
         mpc_horizon_end: how the MPC's warm start fills the node entering at the end of the
-            horizon: "repeat" (default, as ``wbmpc.ocp.mpc.RecedingHorizonMPC``) or "rollout". Bolt's
-            preset uses "rollout": with "repeat", 1 iteration per update falls (see ``max_iterations``).
+            horizon: "repeat" (default, as ``wbmpc.ocp.mpc.RecedingHorizonMPC``), "rollout" or "phase" (the
+            rollout with the control of the latest node in the same gait phase, else the quasi-static torques of the
+            node's contact set: a double support entering after one foot's touchdown is not filled from the one
+            after the other's). Bolt's preset uses "rollout": with "repeat", 1 iteration per update falls (see
+            ``max_iterations``); on point feet "rollout" and "phase" are the same.
         mpc_restart_after_failures: after this many consecutive failed MPC updates the next one
             starts cold (``RecedingHorizonMPC(restart_after_failures=)``; the replan log's
             ``mpc_restart`` marks it), or None (default: never, the warm start from the last good
