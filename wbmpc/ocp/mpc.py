@@ -241,7 +241,8 @@ class RecedingHorizonMPC:
     def _extend_horizon_end(self, xs: np.ndarray, us: np.ndarray, nodes: int) -> None:
         """Fill the last ``nodes`` running nodes of a shifted guess (in place): each takes the
         control of the latest earlier node with the same contact set (the last node's when there
-        is none) and its successor state is rolled out through the node's dynamics.
+        is none; with "phase" the same gait phase, :func:`_phase_keys`, else ``entering_controls``)
+        and its successor state is rolled out through the node's dynamics.
 
         Repeating the last state and control instead leaves a gap at the end of the horizon (one
         step of motion, ~1-3 in velocity units on Bolt) and, when the new node's contact set
@@ -255,9 +256,9 @@ class RecedingHorizonMPC:
         models, datas = self.problem.running_models, self.problem.running_datas
         phase = self.horizon_end == "phase"
         keys = _phase_keys(self._contact_keys()) if phase else self._contact_keys()
+        match = _same_phase if phase else tuple.__eq__
         N = self.n_nodes
         for j in range(N - nodes, N):
-            match = _same_phase if phase else tuple.__eq__
             same = next((i for i in range(j - 1, -1, -1) if match(keys[i], keys[j])), None)
             if same is not None:
                 u = us[same]
