@@ -926,9 +926,11 @@ class WalkingOCP:
                                          f"{np.shape(schedule.touchdown_position)}")
                 self._swing_paths(liftoff[:, columns], ~in_contact, np.nan_to_num(phase), touchdown, path_weight)
         heights = self.ground_height + swing_height_reference(np.nan_to_num(phase), apex)
+        crossing = None  # the (node, foot) pairs of a crossing swing: where _clearance gave a height reference
         if crossings is not None:
             crossing_heights = self._clearance(crossings, ~in_contact, np.nan_to_num(phase), touchdown, columns)
-            heights = np.where(np.isnan(crossing_heights), heights, self.ground_height + crossing_heights)
+            crossing = ~np.isnan(crossing_heights)
+            heights = np.where(crossing, self.ground_height + crossing_heights, heights)
         n_stance = np.maximum(in_contact.sum(axis=1), 1)
         last_swing = np.zeros_like(in_contact)
         last_swing[:-1] = ~in_contact[:-1] & in_contact[1:]
@@ -938,8 +940,7 @@ class WalkingOCP:
         swing_rows, last_rows, first_rows = (~in_contact).tolist(), last_swing.tolist(), first_stance.tolist()
         orientation_weight = cfg.swing_orientation_weight
         orientation_rows = None  # the orientation weight of each (node, foot) where a crossing scales it
-        if crossings is not None and cfg.obstacle_swing_orientation_scale != 1.0:
-            crossing = np.asarray(crossings.index)[:, columns] >= 0
+        if crossing is not None and cfg.obstacle_swing_orientation_scale != 1.0:
             orientation_rows = np.where(crossing, orientation_weight * cfg.obstacle_swing_orientation_scale,
                                         orientation_weight).tolist()
         heights_rows = heights.tolist()
