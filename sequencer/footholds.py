@@ -121,6 +121,16 @@ lies behind the stance) pivots within δ_p of its stance foothold, chosen by its
 carries the DCM forwards), and the trailing crossing swing within max(δ, δ_p); the plan's CoM prediction pivots there.
 A step whose nominal foothold is free of the box plans as the walk does: the pivot ends once the DCM is ahead.
 
+**The trailing swing's duration.** The trailing crossing swing (its stance foot, the lead foot, already beyond the
+obstacle) has the crossing's duration bounds by default, though its foothold lies next to the lead foot: its DCM has no
+long step to travel, only the swing foot has. On a robot without ankle roll the lateral DCM offset that swing lifts off
+with grows by exp(ω T) until it lands, and the width bound stops the foothold from following it: on the H1 every
+trailing swing of a 10 cm campaign lasted its 0.6 s bound (the QP asked for less), and the falls after both feet were
+across began where the lead foot had landed wide and the trailing one lifted off 10 cm from the DCM across the heading
+(x 6.7 over 0.6 s: beyond the 0.6 m width bound). With ``obstacle_trailing_duration_min`` > 0 the trailing swing's
+lower bound is that instead (:attr:`FootholdGeometry.trailing_duration`), and the lead crossing's aim b_c is computed
+with it.
+
 **The lateral aim.** A crossing step lasts longer than a walking step (T_c against t_nom), and the lateral DCM
 offset it starts from grows by exp(ω T_c), not exp(ω t_nom): from the nominal offset b_y,nom the crossing spreads
 the feet (on the H1 a 0.6 s crossing lands 0.2 m wider than the nominal width, and the QP's lateral cost bounded the
@@ -175,6 +185,11 @@ class FootholdGeometry:
             max(l_max, this)).
         step_duration_min: duration lower bound of a step whose swing passes over an obstacle [s] (the
             planner uses max(t_min, this)).
+        trailing_duration_min: > 0: the duration lower bound [s] of the trailing crossing swing instead (the swing
+            over an obstacle whose stance foot is already beyond it: its foothold lies next to the lead foot, so
+            its DCM has no long step to travel, and over a robot without ankle roll the lateral DCM offset it
+            lifts off with grows as exp(ω T) until it lands; "The trailing swing's duration" in the module
+            docstring); 0: ``step_duration_min``.
         sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m].
         sole_half_width: the sole's half width [m].
         approach_margin: the near side (facing the stance, along the heading) grown by this much more [m]:
@@ -250,6 +265,13 @@ class FootholdGeometry:
     crossing_offset: float = 0.0
     landing_room: float = 0.0
     far_margin_reduction: float = 0.0
+    trailing_duration_min: float = 0.0
+
+    @property
+    def trailing_duration(self) -> float:
+        """The duration lower bound [s] of the trailing crossing swing: ``trailing_duration_min``, or
+        ``step_duration_min`` when that is 0."""
+        return self.trailing_duration_min or self.step_duration_min
 
     def landing_length(self, length: float) -> float:
         """|ℓ| [m] of a lead crossing whose far bound is ``length`` [m] (>= 0) along the direction of travel:
@@ -672,16 +694,19 @@ class FootholdConstraints:
                       offset_nominal: float) -> float:
         """b_c [m], heading frame: the DCM offset at the touchdown of a crossing step of ``crossing_length`` [m]
         from which the trailing step, ℓ_t = min(|l_nom|, max(0, s_max - crossing_length)) long and lasting the
-        crossing's least duration, ends at ``offset_nominal``: sign (ℓ_t + sign b_nom) exp(-ω T_c,min), plus the
+        trailing swing's least duration (:attr:`FootholdGeometry.trailing_duration`), ends at ``offset_nominal``:
+        sign (ℓ_t + sign b_nom) exp(-ω T_t,min), plus the
         crossing's momentum sign Δb (``crossing_offset``)."""
         trailing = min(abs(step_length_nominal), max(0.0, self.geometry.swing_length_max - crossing_length))
-        return sign * ((trailing + sign * offset_nominal) * math.exp(-self.omega * self.geometry.step_duration_min)
+        return sign * ((trailing + sign * offset_nominal) * math.exp(-self.omega * self.geometry.trailing_duration)
                        + self.geometry.crossing_offset)
 
     def _trailing_bounds(self, bounds: StepBounds, p0, yaw: float, liftoff, boxes=(), free: float | None = None
                          ) -> StepBounds:
         """``bounds`` of a step whose swing passes over an obstacle with a foothold outside it (the trailing foot):
-        the crossing durations and, with a swing travel bound s_max and a known ``liftoff`` (world (x, y) [m]),
+        the crossing durations (the trailing swing's, :attr:`FootholdGeometry.trailing_duration`, when the middle
+        of one of ``boxes`` lies between the lift-off and the stance: the stance foot beyond it) and, with a swing
+        travel bound s_max and a known ``liftoff`` (world (x, y) [m]),
         ℓ within ℓ_lift ± s_max (ℓ_lift = (liftoff - p0) · heading; never tighter than the step's other bound).
         A travel bound that would end inside one of ``boxes`` (a, b, c, d) the swing crosses, between the lift-off
         and ``free`` (the foothold ℓ found without the bound, outside every box), is moved to that box's far side
@@ -689,8 +714,8 @@ class FootholdConstraints:
         step infeasible, the plan with it: the H1 with s_max = 0.3 m from 2.7 s on)."""
         l_lo, l_hi = bounds[0], bounds[1]
         reach = self.geometry.swing_length_max
-        if reach > 0.0 and liftoff is not None:
-            along = along_heading(liftoff, p0, yaw)
+        along = None if liftoff is None else along_heading(liftoff, p0, yaw)
+        if reach > 0.0 and along is not None:
             upper, lower = along + reach, along - reach
             if free is not None:
                 for a, b, _, _ in sorted(boxes, key=lambda box: box[1]):  # forwards: the far side b
@@ -700,7 +725,9 @@ class FootholdConstraints:
                     if free - 1e-12 <= a < along and a < lower < b:
                         lower = a
             l_lo, l_hi = min(max(l_lo, lower), l_hi), max(min(l_hi, upper), l_lo)
-        return (l_lo, l_hi, bounds[2], bounds[3], max(bounds[4], self.geometry.step_duration_min),
+        passed = along is not None and any(min(along, 0.0) < 0.5 * (a + b) < max(along, 0.0) for a, b, _, _ in boxes)
+        shortest = self.geometry.trailing_duration if passed else self.geometry.step_duration_min
+        return (l_lo, l_hi, bounds[2], bounds[3], max(bounds[4], shortest),
                 self.geometry.step_duration_max or bounds[5])
 
     def _feasible(self, bounds: StepBounds) -> bool:

@@ -84,6 +84,11 @@ class SequencerParams:
             uses max(l_max, this): the crossing step may be longer than a walking one).
         obstacle_step_duration_min: duration lower bound [s] of a step whose swing passes over an obstacle
             (the planner uses max(t_min, this)), <= :attr:`crossing_duration_max`.
+        obstacle_trailing_duration_min: 0 (``obstacle_step_duration_min``) or the duration lower bound [s] of the
+            trailing crossing swing (the one whose stance foot is already beyond the obstacle), in [t_min,
+            :attr:`crossing_duration_max`]: its foothold lies next to the lead foot, so its DCM has no long step to
+            travel, and the lateral DCM offset it lifts off with grows as exp(ω T) while it swings ("The trailing
+            swing's duration" in :mod:`sequencer.footholds`).
         obstacle_step_duration_max: duration upper bound [s] of a step whose swing passes over an obstacle,
             0 (t_max, the walking bound) or in [max(t_min, obstacle_step_duration_min), 3], above t_max or below
             it (:attr:`crossing_duration_max`). Longer: a crossing step is longer than a walking one and its DCM,
@@ -241,6 +246,7 @@ class SequencerParams:
     obstacle_crossing_offset: float = 0.0
     obstacle_width_min: float = 0.0
     obstacle_landing_room: float = 0.0
+    obstacle_trailing_duration_min: float = 0.0
     swing_commit_time: float = 0.0
     swing_commit_rate: float = 0.0
     fast_speed_start: float = 0.0
@@ -328,6 +334,11 @@ class SequencerParams:
                                  f"obstacle_double_support = obstacle_trailing_double_support = 0 (they settle the "
                                  f"resuming step themselves)")
         crossing_max = self.crossing_duration_max
+        if not (self.obstacle_trailing_duration_min == 0.0
+                or self.t_min <= self.obstacle_trailing_duration_min <= crossing_max):
+            raise ParameterError(f"obstacle_trailing_duration_min={self.obstacle_trailing_duration_min} s must be 0 "
+                                 f"(obstacle_step_duration_min) or in [t_min={self.t_min} s, the crossing's duration "
+                                 f"bound {crossing_max} s]")
         if not (self.obstacle_aim_duration == 0.0 or crossing_min <= self.obstacle_aim_duration <= crossing_max):
             raise ParameterError(f"obstacle_aim_duration={self.obstacle_aim_duration} s must be 0 or in "
                                  f"[max(t_min, obstacle_step_duration_min)={crossing_min} s, "
@@ -451,6 +462,7 @@ class SequencerParams:
                                 crossing_offset=self.obstacle_crossing_offset,
                                 landing_room=self.obstacle_landing_room,
                                 far_margin_reduction=self.obstacle_far_margin_reduction,
+                                trailing_duration_min=self.obstacle_trailing_duration_min,
                                 lateral_aim_fraction=math.exp(-self.omega * (self.obstacle_lateral_aim_duration - self.t_nom))
                                 if self.obstacle_lateral_aim_duration > 0.0 else 1.0)
 

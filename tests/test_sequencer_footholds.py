@@ -778,6 +778,41 @@ def test_a_crossing_bound_below_t_max_shortens_both_crossing_swings(seed):
     assert max(durations["t_max"]) > 0.6 + 1e-3  # the bound is active: without it a crossing takes longer
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_the_trailing_swing_has_its_own_duration_bound(seed):
+    """obstacle_trailing_duration_min below obstacle_step_duration_min: the trailing crossing swing (its stance foot
+    beyond the box) may be that short, the lead crossing keeps the crossing's bound, every sole stays outside the box;
+    0 gives the trailing swing the crossing's bound (the preset's plan unchanged)."""
+    from wbmpc.walking.preset import load_walking_preset
+
+    rng = np.random.default_rng(300 + seed)
+    distance, depth = rng.uniform(0.8, 1.4), rng.uniform(0.1, 0.3)
+    obstacle = Obstacle(np.array([distance + 0.5 * depth, 0.0]), 0.0, depth, 1.2, 0.1)
+    durations = {}
+    for shortest in (0.0, 0.4):
+        params = load_walking_preset("h1", {"planner.horizon": 5.0,
+                                            "planner.obstacle_trailing_duration_min": shortest}).planner_params
+        geometry = params.foothold_geometry()
+        assert geometry.trailing_duration == (shortest or geometry.step_duration_min)
+        planner = DcmFootstepPlanner(params)
+        stance, measured = _start(planner)
+        plan = planner.plan(0.0, stance, measured, COMMAND, obstacles=(obstacle,))
+        assert _sole_overlaps(plan, obstacle, geometry) == []
+        lead, trailing, _ = _crossings(plan)
+        durations[shortest] = (plan.steps[lead].duration, plan.steps[trailing].duration)
+        assert plan.steps[lead].duration >= geometry.step_duration_min - 1e-9
+        assert plan.steps[trailing].duration >= geometry.trailing_duration - 1e-9
+    assert durations[0.0][1] >= 0.6 - 1e-9  # the crossing's bound (the preset's 0.6 s)
+    assert durations[0.4][1] < 0.6 - 1e-3  # the trailing swing's own bound is used
+
+
+def test_trailing_duration_bad_input():
+    with pytest.raises(ParameterError, match=r"obstacle_trailing_duration_min=0.2 s must be 0 "):
+        dataclasses.replace(H1, obstacle_trailing_duration_min=0.2)  # below t_min
+    with pytest.raises(ParameterError, match=r"obstacle_trailing_duration_min=0.9 s must be 0 "):
+        dataclasses.replace(H1, obstacle_trailing_duration_min=0.9)  # above the crossing's bound t_max
+
+
 def test_crossing_duration_and_travel_bad_input():
     with pytest.raises(ParameterError, match="obstacle_step_duration_max"):
         dataclasses.replace(H1, obstacle_step_duration_max=0.4)  # below the crossing's lower bound 0.5 s

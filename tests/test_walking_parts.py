@@ -298,7 +298,7 @@ OBSTACLE_FIELDS = {
                 "obstacle_aim_duration", "obstacle_approach_distance", "obstacle_crossing_drift",
                 "obstacle_crossing_cop", "obstacle_passed_cop", "obstacle_crossing_offset", "obstacle_lateral_aim_duration",
                 "obstacle_width_min",
-                "obstacle_landing_room", "obstacle_far_margin_reduction", "sole_front", "sole_rear", "sole_half_width"},
+                "obstacle_landing_room", "obstacle_far_margin_reduction", "obstacle_trailing_duration_min", "sole_front", "sole_rear", "sole_half_width"},
     "ocp": {"obstacle_clearance_weight", "obstacle_sole_points", "obstacle_shank_frames", "obstacle_clearance_margin",
             "obstacle_shank_margin", "obstacle_footprint_margin", "obstacle_apex_margin", "obstacle_apex_height_max",
             "obstacle_swing_profile", "obstacle_plateau_transition_min", "obstacle_swing_path_timing",
