@@ -128,8 +128,9 @@ with grows by exp(ω T) until it lands, and the width bound stops the foothold f
 trailing swing of a 10 cm campaign lasted its 0.6 s bound (the QP asked for less), and the falls after both feet were
 across began where the lead foot had landed wide and the trailing one lifted off 10 cm from the DCM across the heading
 (x 6.7 over 0.6 s: beyond the 0.6 m width bound). With ``obstacle_trailing_duration_min`` > 0 the trailing swing's
-lower bound is that instead (:attr:`FootholdGeometry.trailing_duration`), and the lead crossing's aim b_c is computed
-with it.
+lower bound is that instead (:attr:`FootholdGeometry.trailing_duration`; with ``obstacle_trailing_height_max`` > 0 only
+over obstacles up to that high: a higher one's trailing swing lifts higher). The lead crossing's aim b_c ("Two steps
+ahead") keeps the crossing's bound for the trailing step.
 
 **The lateral aim.** A crossing step lasts longer than a walking step (T_c against t_nom), and the lateral DCM
 offset it starts from grows by exp(ω T_c), not exp(ω t_nom): from the nominal offset b_y,nom the crossing spreads
@@ -190,6 +191,8 @@ class FootholdGeometry:
             its DCM has no long step to travel, and over a robot without ankle roll the lateral DCM offset it
             lifts off with grows as exp(ω T) until it lands; "The trailing swing's duration" in the module
             docstring); 0: ``step_duration_min``.
+        trailing_height_max: > 0: ``trailing_duration_min`` holds over obstacles up to this high [m] only (a higher
+            one keeps ``step_duration_min``: its trailing swing lifts higher); 0: over any obstacle.
         sole_front, sole_rear: the sole's extent ahead of and behind the foot frame along its heading [m].
         sole_half_width: the sole's half width [m].
         approach_margin: the near side (facing the stance, along the heading) grown by this much more [m]:
@@ -266,6 +269,7 @@ class FootholdGeometry:
     landing_room: float = 0.0
     far_margin_reduction: float = 0.0
     trailing_duration_min: float = 0.0
+    trailing_height_max: float = 0.0
 
     @property
     def trailing_duration(self) -> float:
@@ -694,18 +698,19 @@ class FootholdConstraints:
                       offset_nominal: float) -> float:
         """b_c [m], heading frame: the DCM offset at the touchdown of a crossing step of ``crossing_length`` [m]
         from which the trailing step, ℓ_t = min(|l_nom|, max(0, s_max - crossing_length)) long and lasting the
-        trailing swing's least duration (:attr:`FootholdGeometry.trailing_duration`), ends at ``offset_nominal``:
-        sign (ℓ_t + sign b_nom) exp(-ω T_t,min), plus the
+        crossing's least duration (the trailing swing's own bound, when shorter, is left out: this aim is that of
+        the longest trailing swing), ends at ``offset_nominal``: sign (ℓ_t + sign b_nom) exp(-ω T_c,min), plus the
         crossing's momentum sign Δb (``crossing_offset``)."""
         trailing = min(abs(step_length_nominal), max(0.0, self.geometry.swing_length_max - crossing_length))
-        return sign * ((trailing + sign * offset_nominal) * math.exp(-self.omega * self.geometry.trailing_duration)
+        return sign * ((trailing + sign * offset_nominal) * math.exp(-self.omega * self.geometry.step_duration_min)
                        + self.geometry.crossing_offset)
 
     def _trailing_bounds(self, bounds: StepBounds, p0, yaw: float, liftoff, boxes=(), free: float | None = None
                          ) -> StepBounds:
         """``bounds`` of a step whose swing passes over an obstacle with a foothold outside it (the trailing foot):
         the crossing durations (the trailing swing's, :attr:`FootholdGeometry.trailing_duration`, when the middle
-        of one of ``boxes`` lies between the lift-off and the stance: the stance foot beyond it) and, with a swing
+        of one of ``boxes``, the obstacles' in their order, lies between the lift-off and the stance, the stance foot
+        beyond it, and no such obstacle is higher than ``trailing_height_max``) and, with a swing
         travel bound s_max and a known ``liftoff`` (world (x, y) [m]),
         ℓ within ℓ_lift ± s_max (ℓ_lift = (liftoff - p0) · heading; never tighter than the step's other bound).
         A travel bound that would end inside one of ``boxes`` (a, b, c, d) the swing crosses, between the lift-off
@@ -725,8 +730,11 @@ class FootholdConstraints:
                     if free - 1e-12 <= a < along and a < lower < b:
                         lower = a
             l_lo, l_hi = min(max(l_lo, lower), l_hi), max(min(l_hi, upper), l_lo)
-        passed = along is not None and any(min(along, 0.0) < 0.5 * (a + b) < max(along, 0.0) for a, b, _, _ in boxes)
-        shortest = self.geometry.trailing_duration if passed else self.geometry.step_duration_min
+        passed = [obstacle for obstacle, (a, b, _, _) in zip(self.obstacles, boxes)
+                  if along is not None and min(along, 0.0) < 0.5 * (a + b) < max(along, 0.0)]
+        low = self.geometry.trailing_height_max or math.inf
+        shortest = self.geometry.trailing_duration if passed and max(o.height for o in passed) <= low \
+            else self.geometry.step_duration_min
         return (l_lo, l_hi, bounds[2], bounds[3], max(bounds[4], shortest),
                 self.geometry.step_duration_max or bounds[5])
 

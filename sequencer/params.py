@@ -89,6 +89,8 @@ class SequencerParams:
             :attr:`crossing_duration_max`]: its foothold lies next to the lead foot, so its DCM has no long step to
             travel, and the lateral DCM offset it lifts off with grows as exp(ω T) while it swings ("The trailing
             swing's duration" in :mod:`sequencer.footholds`).
+        obstacle_trailing_height_max: [m] >= 0: ``obstacle_trailing_duration_min`` holds over obstacles up to this high
+            only (a higher one's trailing swing keeps the crossing's bound); 0: over any obstacle.
         obstacle_step_duration_max: duration upper bound [s] of a step whose swing passes over an obstacle,
             0 (t_max, the walking bound) or in [max(t_min, obstacle_step_duration_min), 3], above t_max or below
             it (:attr:`crossing_duration_max`). Longer: a crossing step is longer than a walking one and its DCM,
@@ -247,6 +249,7 @@ class SequencerParams:
     obstacle_width_min: float = 0.0
     obstacle_landing_room: float = 0.0
     obstacle_trailing_duration_min: float = 0.0
+    obstacle_trailing_height_max: float = 0.0
     swing_commit_time: float = 0.0
     swing_commit_rate: float = 0.0
     fast_speed_start: float = 0.0
@@ -334,6 +337,9 @@ class SequencerParams:
                                  f"obstacle_double_support = obstacle_trailing_double_support = 0 (they settle the "
                                  f"resuming step themselves)")
         crossing_max = self.crossing_duration_max
+        if not (math.isfinite(self.obstacle_trailing_height_max) and self.obstacle_trailing_height_max >= 0.0):
+            raise ParameterError(f"obstacle_trailing_height_max={self.obstacle_trailing_height_max} m must be 0 (any "
+                                 f"height) or a finite number > 0")
         if not (self.obstacle_trailing_duration_min == 0.0
                 or self.t_min <= self.obstacle_trailing_duration_min <= crossing_max):
             raise ParameterError(f"obstacle_trailing_duration_min={self.obstacle_trailing_duration_min} s must be 0 "
@@ -463,6 +469,7 @@ class SequencerParams:
                                 landing_room=self.obstacle_landing_room,
                                 far_margin_reduction=self.obstacle_far_margin_reduction,
                                 trailing_duration_min=self.obstacle_trailing_duration_min,
+                                trailing_height_max=self.obstacle_trailing_height_max,
                                 lateral_aim_fraction=math.exp(-self.omega * (self.obstacle_lateral_aim_duration - self.t_nom))
                                 if self.obstacle_lateral_aim_duration > 0.0 else 1.0)
 

@@ -804,6 +804,14 @@ def test_the_trailing_swing_has_its_own_duration_bound(seed):
         assert plan.steps[trailing].duration >= geometry.trailing_duration - 1e-9
     assert durations[0.0][1] >= 0.6 - 1e-9  # the crossing's bound (the preset's 0.6 s)
     assert durations[0.4][1] < 0.6 - 1e-3  # the trailing swing's own bound is used
+    # over an obstacle higher than obstacle_trailing_height_max the trailing swing keeps the crossing's bound
+    params = load_walking_preset("h1", {"planner.horizon": 5.0, "planner.obstacle_trailing_duration_min": 0.4,
+                                        "planner.obstacle_trailing_height_max": 0.09}).planner_params
+    planner = DcmFootstepPlanner(params)
+    stance, measured = _start(planner)
+    plan = planner.plan(0.0, stance, measured, COMMAND, obstacles=(obstacle,))
+    lead, trailing, _ = _crossings(plan)
+    assert (plan.steps[lead].duration, plan.steps[trailing].duration) == pytest.approx(durations[0.0], abs=1e-12)
 
 
 def test_trailing_duration_bad_input():
@@ -811,6 +819,8 @@ def test_trailing_duration_bad_input():
         dataclasses.replace(H1, obstacle_trailing_duration_min=0.2)  # below t_min
     with pytest.raises(ParameterError, match=r"obstacle_trailing_duration_min=0.9 s must be 0 "):
         dataclasses.replace(H1, obstacle_trailing_duration_min=0.9)  # above the crossing's bound t_max
+    with pytest.raises(ParameterError, match=r"obstacle_trailing_height_max=-0.1 m must be 0 "):
+        dataclasses.replace(H1, obstacle_trailing_height_max=-0.1)
 
 
 def test_crossing_duration_and_travel_bad_input():

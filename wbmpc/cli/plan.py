@@ -76,6 +76,8 @@ _HELP = {
     "obstacle_crossing_offset": "DCM offset the lead crossing aims at beyond the nominal one [m] (0: the nominal)",
     "obstacle_trailing_duration_min": "duration lower bound of the trailing swing over an obstacle [s] (0: "
                                       "obstacle_step_duration_min's)",
+    "obstacle_trailing_height_max": "obstacles up to this high get the trailing swing's own duration bound [m] (0: "
+                                    "any height)",
     "obstacle_landing_room": "the lead crossing lands at least this beyond the obstacle's far bound [m] (0: on it)",
     "obstacle_far_margin_reduction": "an obstacle's side further along the heading grown by obstacle_margin minus this [m]",
     "obstacle_approach_distance": "even steps to the last foothold before an obstacle within this distance [m] "
