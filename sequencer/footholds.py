@@ -734,8 +734,8 @@ class FootholdConstraints:
             l_lo, l_hi = min(max(l_lo, lower), l_hi), max(min(l_hi, upper), l_lo)
         passed = [obstacle for obstacle, (a, b, _, _) in zip(self.obstacles, boxes)
                   if along is not None and min(along, 0.0) < 0.5 * (a + b) < max(along, 0.0)]
-        low = self.geometry.trailing_height_max or math.inf
-        shortest = self.geometry.trailing_duration if passed and max(o.height for o in passed) <= low \
+        highest = self.geometry.trailing_height_max or math.inf
+        shortest = self.geometry.trailing_duration if passed and max(o.height for o in passed) <= highest \
             else self.geometry.step_duration_min
         return (l_lo, l_hi, bounds[2], bounds[3], max(bounds[4], shortest),
                 self.geometry.step_duration_max or bounds[5])
