@@ -496,7 +496,7 @@ class FootholdConstraints:
             if hit is None:
                 if lengthened or not self._crosses(p0, yaw, candidate, liftoff):
                     return candidate, changed
-                trailing = self._trailing_bounds(bounds, p0, yaw, liftoff, boxes, candidate.dx)
+                trailing = self._trailing_bounds(bounds, lift_along, sign, boxes, candidate.dx)
                 if trailing[0] <= candidate.dx <= trailing[1] \
                         and trailing[4] - 1e-12 <= candidate.duration <= trailing[5] + 1e-12:
                     return candidate, changed
@@ -537,13 +537,16 @@ class FootholdConstraints:
         """The pivot bound [m] of a swing over an obstacle (:meth:`swing_solve`): max(``crossing_cop``, ``passed_cop``)
         for the trailing swing (a box (a, b, c, d) whose middle lies behind the stance in the direction of travel
         ``sign`` and ahead of the lift-off ``lift_along`` [m], when known), else None (``crossing_cop``)."""
-        if self.geometry.passed_cop <= 0.0:
+        if self.geometry.passed_cop <= 0.0 or not self._passed(boxes, sign, lift_along):
             return None
-        for a, b, _, _ in boxes:
-            middle = 0.5 * (a + b)
-            if sign * middle < 0.0 and (lift_along is None or sign * (middle - lift_along) > 0.0):
-                return max(self.geometry.crossing_cop, self.geometry.passed_cop)
-        return None
+        return max(self.geometry.crossing_cop, self.geometry.passed_cop)
+
+    def _passed(self, boxes, sign: float, lift_along: float | None) -> list[Obstacle]:
+        """The obstacles of ``boxes`` (a, b, c, d), :attr:`obstacles`' boxes in their order, that a trailing swing
+        crosses: the box's middle behind the stance in the direction of travel ``sign`` and ahead of the lift-off
+        ``lift_along`` [m] along the heading (None: unknown, any box behind the stance)."""
+        return [obstacle for obstacle, (a, b, _, _) in zip(self.obstacles, boxes)
+                if sign * (a + b) < 0.0 and (lift_along is None or sign * (0.5 * (a + b) - lift_along) > 0.0)]
 
     @staticmethod
     def _kept_crossing(boxes, candidate: StepCandidate, sign: float):
@@ -707,33 +710,31 @@ class FootholdConstraints:
         return sign * ((trailing + sign * offset_nominal) * math.exp(-self.omega * self.geometry.step_duration_min)
                        + self.geometry.crossing_offset)
 
-    def _trailing_bounds(self, bounds: StepBounds, p0, yaw: float, liftoff, boxes=(), free: float | None = None
-                         ) -> StepBounds:
+    def _trailing_bounds(self, bounds: StepBounds, lift_along: float | None, sign: float, boxes=(),
+                         free: float | None = None) -> StepBounds:
         """``bounds`` of a step whose swing passes over an obstacle with a foothold outside it (the trailing foot):
-        the crossing durations (the trailing swing's, :attr:`FootholdGeometry.trailing_duration`, when the middle
-        of one of ``boxes``, the obstacles' in their order, lies between the lift-off and the stance, the stance foot
-        beyond it, and no such obstacle is higher than ``trailing_height_max``) and, with a swing
-        travel bound s_max and a known ``liftoff`` (world (x, y) [m]),
-        ℓ within ℓ_lift ± s_max (ℓ_lift = (liftoff - p0) · heading; never tighter than the step's other bound).
+        the crossing durations (the trailing swing's, :attr:`FootholdGeometry.trailing_duration`, over the boxes
+        :meth:`_passed` finds for a known lift-off, in the direction of travel ``sign``, when none of those obstacles
+        is higher than ``trailing_height_max``) and, with a swing travel bound s_max and a known lift-off
+        ``lift_along`` [m] (along the heading from the stance, None: unknown), ℓ within ℓ_lift ± s_max (never
+        tighter than the step's other bound).
         A travel bound that would end inside one of ``boxes`` (a, b, c, d) the swing crosses, between the lift-off
         and ``free`` (the foothold ℓ found without the bound, outside every box), is moved to that box's far side
         (b forwards, a backwards): a bound shorter than what clears the box put the foothold inside it (the
         step infeasible, the plan with it: the H1 with s_max = 0.3 m from 2.7 s on)."""
         l_lo, l_hi = bounds[0], bounds[1]
         reach = self.geometry.swing_length_max
-        along = None if liftoff is None else along_heading(liftoff, p0, yaw)
-        if reach > 0.0 and along is not None:
-            upper, lower = along + reach, along - reach
+        if reach > 0.0 and lift_along is not None:
+            upper, lower = lift_along + reach, lift_along - reach
             if free is not None:
                 for a, b, _, _ in sorted(boxes, key=lambda box: box[1]):  # forwards: the far side b
-                    if along < b <= free + 1e-12 and a < upper < b:
+                    if lift_along < b <= free + 1e-12 and a < upper < b:
                         upper = b
                 for a, b, _, _ in sorted(boxes, key=lambda box: -box[0]):  # backwards: the far side a
-                    if free - 1e-12 <= a < along and a < lower < b:
+                    if free - 1e-12 <= a < lift_along and a < lower < b:
                         lower = a
             l_lo, l_hi = min(max(l_lo, lower), l_hi), max(min(l_hi, upper), l_lo)
-        passed = [obstacle for obstacle, (a, b, _, _) in zip(self.obstacles, boxes)
-                  if along is not None and min(along, 0.0) < 0.5 * (a + b) < max(along, 0.0)]
+        passed = [] if lift_along is None else self._passed(boxes, sign, lift_along)
         highest = self.geometry.trailing_height_max or math.inf
         shortest = self.geometry.trailing_duration if passed and max(o.height for o in passed) <= highest \
             else self.geometry.step_duration_min

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from sequencer.dcm_planner import DcmFootstepPlanner
-from sequencer.footholds import FootholdConstraints, sole_on_obstacle
+from sequencer.footholds import FootholdConstraints, along_heading, sole_on_obstacle
 from sequencer.obstacles import Obstacle
 from sequencer.planner import ReducedState, StanceState, VelocityCommand
 from wbmpc.walking.preset import load_walking_preset
@@ -51,8 +51,9 @@ def test_the_trailing_bounds_without_a_box_in_the_way_are_the_travel_bound():
     chooser = FootholdConstraints((BOX,), _params(0.3).foothold_geometry(), 3.2)
     bounds = (-0.3, 0.3, -0.6, -0.3, 0.3, 0.8)
     p0, liftoff = np.array([0.8, 0.2]), np.array([0.6, -0.2])  # lift-off 0.2 m behind: ℓ <= 0.1
+    lift_along = along_heading(liftoff, p0, 0.0)
     free_box = (0.5, 0.7, -1.0, 1.0)  # ahead of the bound's end: not in the way
-    assert chooser._trailing_bounds(bounds, p0, 0.0, liftoff, [free_box], 0.25)[:2] == pytest.approx((-0.3, 0.1))
+    assert chooser._trailing_bounds(bounds, lift_along, 1.0, [free_box], 0.25)[:2] == pytest.approx((-0.3, 0.1))
     in_way = (0.0, 0.2, -1.0, 1.0)  # the bound ends inside it, the free foothold beyond it: its far side
-    assert chooser._trailing_bounds(bounds, p0, 0.0, liftoff, [in_way], 0.25)[:2] == pytest.approx((-0.3, 0.2))
-    assert chooser._trailing_bounds(bounds, p0, 0.0, liftoff)[:2] == pytest.approx((-0.3, 0.1))
+    assert chooser._trailing_bounds(bounds, lift_along, 1.0, [in_way], 0.25)[:2] == pytest.approx((-0.3, 0.2))
+    assert chooser._trailing_bounds(bounds, lift_along, 1.0)[:2] == pytest.approx((-0.3, 0.1))
