@@ -99,6 +99,27 @@ def test_an_obstacle_too_deep_to_cross_stops_the_walk_before_it():
     assert record["negotiation_blocked"] == 0.0 and record["sequencer_v_x"] == pytest.approx(0.2)
 
 
+def test_the_negotiation_decelerates_to_its_bound_at_the_set_rate():
+    """With ``negotiation_deceleration`` a > 0 the forward command falls to the negotiation's bound (0 before a box too
+    deep to cross) by at most a dt per update from the last planned one, and holds once there; 0 stops at once."""
+    robot, stage, x0 = _bolt_stage(negotiation_lookahead=1.0, negotiation_speed_max=0.2, negotiation_deceleration=0.5)
+    contact = np.ones(2, dtype=bool)
+    deep = Obstacle(np.array([1.0, 0.0]), 0.0, 1.2, 0.6, 0.05)
+    _, _, record = stage.update(0.0, x0, contact)  # walking: the user's 0.3 m/s
+    assert record["negotiation_mode"] == WALKING and record["sequencer_v_x"] == pytest.approx(0.3)
+    forwards = []
+    for t in (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8):
+        _, _, record = stage.update(t, x0, contact, obstacles=(deep,))
+        assert record["negotiation_blocked"] == 1.0
+        forwards.append(record["sequencer_v_x"])
+    assert forwards == pytest.approx([0.25, 0.2, 0.15, 0.1, 0.05, 0.0, 0.0, 0.0], abs=1e-12)
+    _, at_once, _ = _bolt_stage(negotiation_lookahead=1.0, negotiation_speed_max=0.2)
+    at_once.update(0.0, x0, contact)
+    assert at_once.update(0.1, x0, contact, obstacles=(deep,))[2]["sequencer_v_x"] == 0.0
+    with pytest.raises(ParameterError, match=r"negotiation_deceleration=-1.0 m/s\^2 must be finite and >= 0"):
+        _bolt_stage(negotiation_deceleration=-1.0)
+
+
 def test_a_passed_obstacle_bounds_a_step_back_onto_it():
     """After the crossing (both feet beyond the release line: walking again) a step back, commanded here by a
     backwards velocity, lands beyond the box's far side, not on it (the H1 was planned a step back onto the box it

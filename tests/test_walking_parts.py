@@ -307,6 +307,7 @@ OBSTACLE_FIELDS = {
             "obstacle_profile_transition", "obstacle_com_weight", "obstacle_leg_posture_scale",
             "obstacle_swing_orientation_scale"},
     "controller": {"negotiation_lookahead", "negotiation_corridor", "negotiation_release", "negotiation_speed_max",
+                   "negotiation_deceleration",
                    "negotiation_max_iterations", "negotiation_swing_path_weight", "crossing_max_iterations",
                    "crossing_iterations_hold"},
 }

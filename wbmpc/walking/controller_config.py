@@ -154,6 +154,10 @@ class WalkingControllerConfig:
             obstacle of the negotiation (along the heading).
         negotiation_speed_max: forward command bound [m/s] while negotiating (the approach and crossing
             speed; inf = the walking command).
+        negotiation_deceleration: [m/s^2], finite and >= 0: while negotiating, the forward command falls to its bound
+            (``negotiation_speed_max``, or 0 before an obstacle too deep to cross) from the last planned one at most
+            this fast; 0: at once. The G1, walking at 0.4 m/s, fell stopping within one step before a box it could
+            not cross (docs/closed_loop.md "The G1's obstacle runs on the DCM planner").
         negotiation_max_iterations: FDDP iterations per MPC update while negotiating, an integer >= 1, or
             0 (``max_iterations`` throughout). A crossing changes the OCP more from one update to the next
             than walking does (a plateau, clearance barriers, a long step entering the horizon), and a
@@ -225,6 +229,7 @@ class WalkingControllerConfig:
     negotiation_corridor: float = 0.3
     negotiation_release: float = 0.05
     negotiation_speed_max: float = float("inf")
+    negotiation_deceleration: float = 0.0
     negotiation_max_iterations: int = 0
     negotiation_swing_path_weight: float = 0.0
     crossing_max_iterations: int = 0
@@ -292,6 +297,10 @@ class WalkingControllerConfig:
                 raise ParameterError(f"{name}={value!r} m must be in [0, {high}] m")
         if isinstance(self.negotiation_speed_max, bool) or not self.negotiation_speed_max > 0:
             raise ParameterError(f"negotiation_speed_max={self.negotiation_speed_max!r} m/s must be > 0 (inf: none)")
+        if isinstance(self.negotiation_deceleration, bool) or not (np.isfinite(self.negotiation_deceleration)
+                                                                   and self.negotiation_deceleration >= 0.0):
+            raise ParameterError(f"negotiation_deceleration={self.negotiation_deceleration!r} m/s^2 must be finite and "
+                                 f">= 0 (0: at once)")
         if self.planner_backend not in ("exact", "osqp", "proxqp"):
             raise ParameterError(f"planner_backend={self.planner_backend!r} must be 'exact', 'osqp' or 'proxqp'")
         if self.first_stance_foot not in ("left", "right"):

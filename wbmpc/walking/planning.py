@@ -96,6 +96,8 @@ class PlanningStage:
         self.swing_liftoff = None  # world (x, y) [m] where the swinging foot lifted off
         self.plan = None
         self.blocked = False  # an obstacle of the negotiation too deep to cross (set by every update, _blocked)
+        self._forward_bound = math.inf  # [m/s] the negotiation's bound on the forward command (_update_forward_bound)
+        self._last_forward = None  # (time [s], planned forward command [m/s]) of the last update
         self.planner_time = 0.0  # [s], total wall time in the planner
         self._clear_failures()
 
@@ -124,6 +126,8 @@ class PlanningStage:
         self.swing_liftoff = feet[1 - index, :2].copy() if len(self.feet) == 2 else None
         self.negotiation.reset()
         self.blocked = False
+        self._forward_bound = math.inf
+        self._last_forward = None
         self.set_command(command)
         self.plan = None
         self._clear_failures()
@@ -151,9 +155,22 @@ class PlanningStage:
         c = self.command
         dx, dy = self.velocity_integral.correction_xy
         (low_x, high_x), (low_y, high_y) = self._range["v_x"], self._range["v_y"]
-        if self.negotiation.mode == NEGOTIATION:
-            high_x = min(high_x, 0.0 if self.blocked else self.config.negotiation_speed_max)
+        high_x = min(high_x, self._forward_bound)
         return VelocityCommand(min(max(c.v_x + dx, low_x), high_x), min(max(c.v_y + dy, low_y), high_y), c.yaw_rate)
+
+    def _update_forward_bound(self, t: float) -> None:
+        """The negotiation's bound on the forward command [m/s] at time ``t`` [s]: ``negotiation_speed_max``, 0 when
+        blocked, none while walking; reached from the last planned forward command at most at
+        ``negotiation_deceleration`` (> 0) [m/s^2]."""
+        bound = math.inf
+        if self.negotiation.mode == NEGOTIATION:
+            bound = 0.0 if self.blocked else self.config.negotiation_speed_max
+        deceleration = self.config.negotiation_deceleration
+        if deceleration > 0.0 and self._last_forward is not None:
+            t_last, forward = self._last_forward
+            if bound < forward:
+                bound = max(bound, forward - deceleration * max(t - t_last, 0.0))
+        self._forward_bound = bound
 
     def _blocked(self) -> bool:
         """Whether an obstacle of the negotiation is too deep for one crossing step from the current stance (the
@@ -209,8 +226,10 @@ class PlanningStage:
         self.slide.follow_if_sliding(slide, feet[stance_index, :2], bool(foot_in_contact[stance_index]))
         mode_switch = self.negotiation.update(t, obstacles, measured.com[:2], feet[:, :2], stance.yaw)
         self.blocked = self._blocked()
+        self._update_forward_bound(t)
         planned_obstacles = self.negotiation.avoided
         command = self.planned_command
+        self._last_forward = (t, command.v_x)
         record: dict[str, float] = {
             "stance_foot": float(stance_index),
             "stance_x": stance.position[0],
