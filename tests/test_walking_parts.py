@@ -400,6 +400,11 @@ def test_g1_obstacle_settings_keep_its_walking_and_load_for_its_obstacle_runs():
     run = _trial_preset(spec.robot, spec.scenario, arguments)
     assert run.footstep_planner.kind == "dcm" and run.controller.planner_backend == "exact"
     assert run.controller.negotiation_lookahead > 0 and run.perception.enabled
+    # what the G1 needs to walk on the DCM step QP (every swing on its path, no speed integrals), to stop before a
+    # box it cannot cross (the deceleration) and to perceive a box's depth across its near edge
+    assert run.ocp.swing_path_weight > 0 and run.controller.negotiation_deceleration > 0
+    assert run.controller.velocity_integral_gain == run.controller.lateral_velocity_integral_gain == 0.0
+    assert run.perception.obstacle_axis == "near_edge"
     dcm = DcmFootstepPlanner(run.planner)
     for depth, crossable in ((0.18, True), (0.19, False)):
         box = Obstacle(center=np.array([1.0 + 0.5 * depth, 0.0]), yaw=0.0, depth=depth, width=1.2, height=0.08)
@@ -407,7 +412,7 @@ def test_g1_obstacle_settings_keep_its_walking_and_load_for_its_obstacle_runs():
     ocp = WalkingOCP(load_robot("g1"), run.ocp, n_nodes=2, dt=0.02)
     terms = ocp.problem.running_models[0].differential.costs.costs
     assert {"left_clearance_shank", "right_clearance_sole1", "com_path"} <= set(terms)
-    assert ocp.evaluation == "nodes"
+    assert ocp.evaluation == "batched"
 
 
 def test_h1_preset_states_every_tuned_number():
