@@ -185,6 +185,12 @@ def _run(args: argparse.Namespace, spec) -> int:
     from sim.campaigns.report import format_summary, write_report
     from sim.campaigns.run import run_campaign
 
+    if spec.scenario == "obstacle" and spec.controller == "walking":
+        from wbmpc.cli.walk import obstacle_negotiation_note
+
+        note = obstacle_negotiation_note(spec.robot, spec.params)
+        if note is not None:
+            print(f"wbmpc campaign: {note}", file=sys.stderr)
     out = args.out or os.path.join("runs", "campaigns", spec.name)
     try:
         outcome = run_campaign(

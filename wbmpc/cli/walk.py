@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 
 from wbmpc.cli.arguments import DURATION, FINITE, NON_NEGATIVE, SEED, output_directory, parse_assignment
 from wbmpc.cli.output import add_output_arguments, print_json
@@ -201,6 +202,29 @@ def check_numeric_overrides(scenario: str, overrides: dict) -> None:
             break
 
 
+def obstacle_negotiation_note(robot: str, params: dict) -> str | None:
+    """A one-line note when ``robot``'s walking preset with the overrides in ``params`` negotiates no obstacle
+    (``controller.negotiation_lookahead`` = 0: the box of an obstacle run is not planned around or stepped over),
+    naming the robot's obstacle campaign file if it has one (``sim/campaigns/examples/ROBOT_obstacles.toml``); None
+    when it negotiates."""
+    from pathlib import Path
+
+    import sim.campaigns
+    from wbmpc.walking.preset import is_preset_override, load_walking_preset
+
+    preset = load_walking_preset(robot, {k: v for k, v in params.items() if is_preset_override(k)})
+    if preset.controller.negotiation_lookahead > 0:
+        return None
+    why = "; its preset plans with the ALIP planner, which avoids no obstacle" \
+        if preset.footstep_planner.kind == "alip" else ""
+    note = (f"note: robot {robot!r} negotiates no obstacle with these settings (controller.negotiation_lookahead = 0"
+            f"{why}): the box is not planned around or stepped over")
+    spec = Path(sim.campaigns.__file__).resolve().parent / "examples" / f"{robot}_obstacles.toml"
+    if spec.is_file():
+        note += f"; its obstacle settings: sim/campaigns/examples/{spec.name}"
+    return note
+
+
 def _run(args: argparse.Namespace) -> int:
     on_tick = None
     if args.viewer:
@@ -214,6 +238,10 @@ def _run(args: argparse.Namespace) -> int:
     from sim.runner import run_scenario
 
     params = params_from_args(args)
+    if args.scenario == "obstacle" and args.controller == "walking":
+        note = obstacle_negotiation_note(args.robot, params)
+        if note is not None:
+            print(note, file=sys.stderr)
     extra = {} if on_tick is None else {"on_tick": on_tick}
     try:
         log = run_scenario(args.scenario, robot=args.robot, duration=args.duration, seed=args.seed, out=args.out,
