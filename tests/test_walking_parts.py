@@ -378,7 +378,7 @@ def test_g1_obstacle_settings_keep_its_walking_and_load_for_its_obstacle_runs():
     from sequencer.dcm_planner import DcmFootstepPlanner
     from sequencer.obstacles import Obstacle
     from sim.campaigns.spec import CampaignSpec
-    from sim.campaigns.trial import _trial_preset, resolve_arguments
+    from sim.campaigns.trial import resolve_arguments, trial_preset
     from wbmpc.walking.ocp import WalkingOCP
 
     walking = load_walking_preset("g1")
@@ -397,7 +397,7 @@ def test_g1_obstacle_settings_keep_its_walking_and_load_for_its_obstacle_runs():
     assert spec.grid["height"] == [0.08, 0.16, 0.24, 0.32]  # the H1's 0.1-0.4 m x 0.80
     arguments = resolve_arguments(spec.scenario, spec.controller, spec.duration, {**spec.params, "height": 0.08},
                                   spec.robot)
-    run = _trial_preset(spec.robot, spec.scenario, arguments)
+    run = trial_preset(spec.robot, spec.scenario, arguments)
     assert run.footstep_planner.kind == "dcm" and run.controller.planner_backend == "exact"
     assert run.controller.negotiation_lookahead > 0 and run.perception.enabled
     # what the G1 needs to walk on the DCM step QP (every swing on its path, no speed integrals), to stop before a

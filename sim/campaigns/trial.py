@@ -171,7 +171,7 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
         arguments["sequencer_params"] = (
             SequencerParams.preset(given)
             if isinstance(given, str)
-            else SequencerParams.from_dict({**_trial_preset(robot, scenario, {}).planner.to_dict(), **given},
+            else SequencerParams.from_dict({**trial_preset(robot, scenario, {}).planner.to_dict(), **given},
                                            "sequencer_params")
         )
     step_timing = arguments.pop("step_timing", None)
@@ -181,7 +181,7 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
     # [s], the step period of the planner the trial starts with (the phase's unit)
     nominal_period = nominal_step_period(robot, scenario, arguments) if "phase" in arguments else None
     if step_timing is not None:
-        preset = _trial_preset(robot, scenario, arguments)
+        preset = trial_preset(robot, scenario, arguments)
         adaptive = preset.planner_params
         timed = timed_planner_params(step_timing, adaptive)
         planner_key = "sequencer_params" if preset.footstep_planner.kind == "dcm" else "footstep_planner.alip"
@@ -221,11 +221,11 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
             f"the push ends at t = {events['push_end']:.3f} s, not before the end of the trial (duration={duration} s)"
         )
     if controller == "walking":
-        _trial_preset(robot, scenario, arguments)  # validated as the run will load it
+        trial_preset(robot, scenario, arguments)  # validated as the run will load it
     return arguments
 
 
-def _trial_preset(robot: str, scenario: str, arguments: dict[str, Any]):
+def trial_preset(robot: str, scenario: str, arguments: dict[str, Any]):
     """The walking preset of ``robot`` with the preset overrides among ``arguments`` (the trial's controller).
 
     Raises:
@@ -245,7 +245,7 @@ def _trial_preset(robot: str, scenario: str, arguments: dict[str, Any]):
 def nominal_step_period(robot: str, scenario: str, arguments: dict[str, Any]) -> float:
     """The nominal step period [s] of the footstep planner of ``robot``'s walking preset with the preset
     overrides among ``arguments`` (:attr:`wbmpc.walking.preset.WalkingPreset.step_period`)."""
-    return _trial_preset(robot, scenario, arguments).step_period
+    return trial_preset(robot, scenario, arguments).step_period
 
 
 def timed_planner_params(step_timing: str, params):

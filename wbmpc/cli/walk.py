@@ -210,9 +210,9 @@ def obstacle_negotiation_note(robot: str, params: dict) -> str | None:
     from pathlib import Path
 
     import sim.campaigns
-    from wbmpc.walking.preset import is_preset_override, load_walking_preset
+    from sim.campaigns.trial import trial_preset
 
-    preset = load_walking_preset(robot, {k: v for k, v in params.items() if is_preset_override(k)})
+    preset = trial_preset(robot, "obstacle", params)
     if preset.controller.negotiation_lookahead > 0:
         return None
     why = "; its preset plans with the ALIP planner, which avoids no obstacle" \
