@@ -188,7 +188,7 @@ def run_scenario(
         if "mpc_failure_times" in controller_options:
             controller_options["mpc_failure_times"] = tuple(
                 float(t) for t in np.atleast_1d(controller_options["mpc_failure_times"]))
-        preset = load_walking_preset(robot, controller_options)
+        preset = load_walking_preset(robot, controller_options, scenario=name)
         ctrl = WalkingController(preset)
     else:
         ctrl = JointPDController(**controller_options)
@@ -209,6 +209,7 @@ def run_scenario(
             "scenario": dataclasses.asdict(scenario),
             "runner": dataclasses.asdict(options),
             "controller_options": {k: _jsonable_param(v) for k, v in controller_options.items()},
+            "preset_scenario_overrides": {} if preset is None else dict(preset.scenario_overrides),
             "events": scenario.events(),
             "steady_start": scenario_cls.steady_start,
         },

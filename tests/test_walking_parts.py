@@ -369,9 +369,9 @@ G1_OBSTACLE_CAMPAIGN = "sim/campaigns/examples/g1_obstacles.toml"
 
 def test_g1_obstacle_settings_keep_its_walking_and_load_for_its_obstacle_runs():
     """The G1 preset's obstacle settings (scaled from the H1's) leave its walking as it was (no negotiation with the
-    ALIP planner, no obstacle term in the batched OCP); with the overrides of its obstacle campaign the DCM planner
-    keeps the whole foot mesh off the box, crosses boxes up to 0.52 - 0.337 = 0.183 m deep, and the OCP holds
-    the clearance terms on the G1's knee frames."""
+    ALIP planner, no obstacle term in the batched OCP); in its obstacle runs (the preset's [scenarios.obstacle],
+    which its campaign spec adds nothing to) the DCM planner keeps the whole foot mesh off the box, crosses boxes up
+    to 0.52 - 0.337 = 0.183 m deep, and the OCP holds the clearance terms on the G1's knee frames."""
     from pathlib import Path
 
     from robots.g1 import SOLE_CENTER_IN_ANKLE, SOLE_SPHERES_IN_ANKLE
@@ -392,12 +392,15 @@ def test_g1_obstacle_settings_keep_its_walking_and_load_for_its_obstacle_runs():
     assert [tuple(p) for p in walking.ocp.obstacle_sole_points] == [(planner.sole_front, 0.0, 0.0),
                                                                      (-planner.sole_rear, 0.0, 0.0)]
 
+    assert dataclasses.replace(load_walking_preset("g1", scenario="walk"), scenario="") == walking  # no [scenarios.walk]
     spec = CampaignSpec.from_toml(Path(__file__).resolve().parents[1] / G1_OBSTACLE_CAMPAIGN)
-    assert (spec.robot, spec.scenario, spec.seeds) == ("g1", "obstacle", list(range(20)))
+    assert (spec.robot, spec.scenario, spec.seeds, spec.params) == ("g1", "obstacle", list(range(20)), {})
     assert spec.grid["height"] == [0.08, 0.16, 0.24, 0.32]  # the H1's 0.1-0.4 m x 0.80
     arguments = resolve_arguments(spec.scenario, spec.controller, spec.duration, {**spec.params, "height": 0.08},
                                   spec.robot)
     run = trial_preset(spec.robot, spec.scenario, arguments)
+    assert run == load_walking_preset("g1", scenario="obstacle") and run.scenario == "obstacle"
+    assert dict(run.scenario_overrides)["footstep_planner.kind"] == "dcm"
     assert run.footstep_planner.kind == "dcm" and run.controller.planner_backend == "exact"
     assert run.controller.negotiation_lookahead > 0 and run.perception.enabled
     # what the G1 needs to walk on the DCM step QP (every swing on its path, no speed integrals), to stop before a
@@ -433,6 +436,37 @@ def test_a_robot_without_a_walking_preset_is_refused_at_once(monkeypatch, tmp_pa
     monkeypatch.setattr(preset_module, "PRESET_DIR", tmp_path)  # a registered robot with no file: the G1's
     with pytest.raises(ParameterError, match=r"robot='g1' has no walking preset yet \(robots that walk: bolt\)"):
         load_walking_preset("g1")
+
+
+def test_a_presets_scenario_overrides_apply_to_that_scenario_only_and_under_the_runs_own(tmp_path):
+    """[scenarios.<name>] of a preset file: applied for runs of that scenario before their own overrides, recorded on
+    the preset, absent from other runs; a key that addresses no preset field is refused in one line, naming it."""
+    import wbmpc.walking.preset as preset_module
+    from sim.scenarios import available_scenarios
+
+    text = (preset_module.PRESET_DIR / "bolt.toml").read_text()
+    path = tmp_path / "bolt.toml"
+    path.write_text(text + '\n[scenarios.push]\n"planner.l_max" = 0.18\ncontroller.max_iterations = 3\n')
+    plain = load_walking_preset("bolt", path=path)
+    assert plain.scenario_overrides == () and plain.planner.l_max != 0.18
+    assert load_walking_preset("bolt", path=path, scenario="walk").planner == plain.planner
+    push = load_walking_preset("bolt", path=path, scenario="push")
+    assert push.planner.l_max == 0.18 and push.controller.max_iterations == 3
+    assert push.scenario_overrides == (("planner.l_max", 0.18), ("controller.max_iterations", 3))
+    assert load_walking_preset("bolt", {"planner.l_max": 0.25}, path=path, scenario="push").planner.l_max == 0.25
+    path.write_text(text + '\n[scenarios.push]\n"planner.no_such_field" = 1.0\n')
+    with pytest.raises(ParameterError, match=r"bolt.toml' \[scenarios.push\]: unknown sequencer parameter\(s\) "
+                                             r"\['no_such_field'\]"):
+        load_walking_preset("bolt", path=path, scenario="push")
+    path.write_text(text + '\n[scenarios.push]\nl_max = 0.18\n')
+    with pytest.raises(ParameterError, match=r"\[scenarios.push\] key 'l_max' must be 'section.field'"):
+        load_walking_preset("bolt", path=path)  # refused whatever the scenario
+    for robot in available_walking_presets():  # every preset's scenario tables name scenarios and load
+        tables = preset_module.scenario_override_tables(
+            preset_module.read_toml(preset_module.PRESET_DIR / f"{robot}.toml", "walking preset").get("scenarios", {}))
+        for scenario in tables:
+            assert scenario in available_scenarios(), (robot, scenario)
+            assert load_walking_preset(robot, scenario=scenario).scenario_overrides
 
 
 def test_command_range_refuses_with_the_reason():

@@ -226,7 +226,8 @@ def resolve_arguments(scenario: str, controller: str, duration: float | None, pa
 
 
 def trial_preset(robot: str, scenario: str, arguments: dict[str, Any]):
-    """The walking preset of ``robot`` with the preset overrides among ``arguments`` (the trial's controller).
+    """The walking preset of ``robot`` for runs of ``scenario`` (its ``[scenarios.<scenario>]`` overrides) with the
+    preset overrides among ``arguments`` (the trial's controller).
 
     Raises:
         ParameterError: an override the preset refuses, or a robot without a walking preset.
@@ -239,7 +240,7 @@ def trial_preset(robot: str, scenario: str, arguments: dict[str, Any]):
                  if k == "sequencer_params" or (is_preset_override(k) and k not in scenario_keys)}
     if "mpc_failure_times" in overrides:
         overrides["mpc_failure_times"] = tuple(float(t) for t in overrides["mpc_failure_times"])
-    return load_walking_preset(robot, overrides)
+    return load_walking_preset(robot, overrides, scenario=scenario)
 
 
 def nominal_step_period(robot: str, scenario: str, arguments: dict[str, Any]) -> float:

@@ -203,26 +203,18 @@ def check_numeric_overrides(scenario: str, overrides: dict) -> None:
 
 
 def obstacle_negotiation_note(robot: str, params: dict) -> str | None:
-    """A one-line note when ``robot``'s walking preset with the overrides in ``params`` negotiates no obstacle
-    (``controller.negotiation_lookahead`` = 0: the box of an obstacle run is not planned around or stepped over),
-    naming the robot's obstacle campaign file if it has one (``sim/campaigns/examples/ROBOT_obstacles.toml``); None
-    when it negotiates."""
-    from pathlib import Path
-
-    import sim.campaigns
+    """A one-line note when ``robot``'s walking preset for obstacle runs (its ``[scenarios.obstacle]`` overrides
+    applied) with the overrides in ``params`` negotiates no obstacle (``controller.negotiation_lookahead`` = 0: the
+    box of an obstacle run is not planned around or stepped over); None when it negotiates."""
     from sim.campaigns.trial import trial_preset
 
     preset = trial_preset(robot, "obstacle", params)
     if preset.controller.negotiation_lookahead > 0:
         return None
-    why = "; its preset plans with the ALIP planner, which avoids no obstacle" \
+    why = "; it plans with the ALIP planner, which avoids no obstacle" \
         if preset.footstep_planner.kind == "alip" else ""
-    note = (f"note: robot {robot!r} negotiates no obstacle with these settings (controller.negotiation_lookahead = 0"
+    return (f"note: robot {robot!r} negotiates no obstacle with these settings (controller.negotiation_lookahead = 0"
             f"{why}): the box is not planned around or stepped over")
-    spec = Path(sim.campaigns.__file__).resolve().parent / "examples" / f"{robot}_obstacles.toml"
-    if spec.is_file():
-        note += f"; its obstacle settings: sim/campaigns/examples/{spec.name}"
-    return note
 
 
 def _run(args: argparse.Namespace) -> int:

@@ -16,7 +16,14 @@ optional ones:
 - ``[perception]`` (optional): the rangefinder array and terrain estimate that report obstacles in
   ``Measurement.obstacles`` (:class:`~wbmpc.walking.perception_config.PerceptionConfig`); a preset without
   it has no perception (``WalkingPreset.perception`` is None) unless an override addresses
-  ``perception.*`` (the fields it does not set are the class's defaults, the H1's).
+  ``perception.*`` (the fields it does not set are the class's defaults, the H1's);
+- ``[scenarios.<name>]`` (optional, one table per scenario of :mod:`sim.scenarios`): overrides (the keys
+  below) that runs of that scenario apply before their own, for settings a robot needs in one kind of run
+  only. The G1 walks with the ALIP planner, which avoids no obstacle; its ``[scenarios.obstacle]`` switches its
+  obstacle runs to the DCM step QP with the negotiation and the clearance terms (off in its walking, whose
+  recorded runs they would change at the rounding level). ``load_walking_preset(robot, scenario=name)``
+  applies them (:func:`sim.runner.run_scenario` does) and :attr:`WalkingPreset.scenario_overrides` records
+  them.
 
 Overrides address a value as ``"section.name"`` (``"planner.l_max"``, ``"ocp.state_weights.joint_position"``),
 a bare name addresses ``[controller]``; a whole section can be replaced by a dataclass instance
@@ -51,6 +58,8 @@ PRESET_DIR = Path(__file__).resolve().parent / "presets"
 SECTIONS = ("planner", "ocp", "controller", "fall", "command")
 OPTIONAL_SECTIONS = ("footstep_planner", "perception")
 ALL_SECTIONS = SECTIONS + OPTIONAL_SECTIONS
+SCENARIO_TABLE = "scenarios"
+"""The preset file's optional table of per-scenario overrides (``[scenarios.<name>]``; not an override section)."""
 PLANNER_KINDS = ("dcm", "alip")
 ALIP_SOLVERS = ("sqp", "ipopt")
 ANGULAR_MOMENTUM_SOURCES = ("exact", "approximate")
@@ -201,6 +210,10 @@ class WalkingPreset:
     source: str = ""
     footstep_planner: FootstepPlannerChoice = FootstepPlannerChoice()
     perception: PerceptionConfig | None = None
+    scenario: str = ""
+    scenario_overrides: tuple[tuple[str, Any], ...] = ()
+    """The ``[scenarios.<scenario>]`` overrides of the file that were applied, as (key, value) pairs in file
+    order (empty: none; ``scenario`` is the scenario the preset was loaded for, "" for none)."""
 
     @property
     def planner_params(self) -> SequencerParams | AlipParams:
@@ -297,7 +310,7 @@ def _apply_override(tables: dict[str, dict[str, Any]], key: str, value: Any) -> 
 
 
 def load_walking_preset(robot: str, overrides: Mapping[str, Any] | None = None,
-                        path: str | Path | None = None) -> WalkingPreset:
+                        path: str | Path | None = None, scenario: str | None = None) -> WalkingPreset:
     """The walking preset of ``robot`` with ``overrides`` applied (see the module docstring).
 
     Args:
@@ -306,6 +319,8 @@ def load_walking_preset(robot: str, overrides: Mapping[str, Any] | None = None,
             whole sections).
         path: a preset file to read instead of ``wbmpc/walking/presets/<robot>.toml`` (a robot
             of your own, or a variant of a preset).
+        scenario: the scenario of the run (a name of :mod:`sim.scenarios`): the file's
+            ``[scenarios.<scenario>]`` overrides, if it has them, go before ``overrides``; None: none.
 
     Raises:
         ParameterError: the robot has no walking preset (the message lists those that do), the
@@ -321,15 +336,29 @@ def load_walking_preset(robot: str, overrides: Mapping[str, Any] | None = None,
     path = PRESET_DIR / f"{robot}.toml" if path is None else Path(path)
     data = read_toml(path, "walking preset")
     missing = [s for s in SECTIONS if s not in data]
-    extra = sorted(set(data) - set(ALL_SECTIONS))
+    extra = sorted(set(data) - set(ALL_SECTIONS) - {SCENARIO_TABLE})
     if missing or extra:
         raise ParameterError(f"walking preset {str(path)!r}: sections must be {list(SECTIONS)} and optionally "
-                             f"{list(OPTIONAL_SECTIONS)} (missing {missing}, unknown {extra})")
+                             f"{list(OPTIONAL_SECTIONS)} and [{SCENARIO_TABLE}.<name>] (missing {missing}, "
+                             f"unknown {extra})")
+    by_scenario = scenario_override_tables(data.get(SCENARIO_TABLE, {}), path)
+    applied = tuple(by_scenario.get(scenario, {}).items()) if scenario is not None else ()
+    if applied:  # the file's own overrides alone first, so that an error in them says where it is
+        try:
+            _preset_from_tables(robot, path, data, applied)
+        except ParameterError as err:
+            raise ParameterError(f"walking preset {str(path)!r} [{SCENARIO_TABLE}.{scenario}]: {err}") from None
+    preset = _preset_from_tables(robot, path, data, (*applied, *(overrides or {}).items()))
+    return dataclasses.replace(preset, scenario=scenario or "", scenario_overrides=applied)
+
+
+def _preset_from_tables(robot: str, path: Path, data: Mapping[str, Any], overrides) -> WalkingPreset:
+    """The preset of the file's ``data`` with the ``(key, value)`` pairs of ``overrides`` applied in order."""
     tables = {section: _as_table(data[section]) for section in SECTIONS}
     tables["footstep_planner"] = {"alip": {}, **_as_table(data.get("footstep_planner", {}))}
     tables["perception"] = _as_table(data.get("perception", {}))
     has_perception = "perception" in data
-    for key, value in (overrides or {}).items():
+    for key, value in overrides:
         _apply_override(tables, key, value)
         has_perception = has_perception or key.split(".", 1)[0] == "perception"
     sections = {section: _BUILDERS[section](tables[section]) for section in SECTIONS}
@@ -337,6 +366,37 @@ def load_walking_preset(robot: str, overrides: Mapping[str, Any] | None = None,
     perception = _perception_from_table(tables["perception"]) if has_perception else None
     return WalkingPreset(robot=robot, source=str(path), footstep_planner=footstep_planner, perception=perception,
                          **sections)
+
+
+def scenario_override_tables(table: Any, source: str | Path = "") -> dict[str, dict[str, Any]]:
+    """A preset file's ``[scenarios]`` table as {scenario: {"section.field": value}} (nested tables flattened to
+    dotted keys, in file order).
+
+    Raises:
+        ParameterError: the table is not a table of tables, or a key addresses nothing a preset override can
+            (a section, ``section.field`` or a controller field).
+    """
+    where = f"walking preset {str(source)!r}: " if source else ""
+    if not isinstance(table, Mapping) or not all(isinstance(v, Mapping) for v in table.values()):
+        raise ParameterError(f"{where}[{SCENARIO_TABLE}] must hold one table of overrides per scenario, "
+                             f"[{SCENARIO_TABLE}.<name>], got {table!r}")
+
+    def flat(values: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for key, value in values.items():
+            if isinstance(value, Mapping):
+                out.update(flat(value, f"{prefix}{key}."))
+            else:
+                out[f"{prefix}{key}"] = value
+        return out
+
+    tables = {name: flat(values) for name, values in table.items()}
+    for name, values in tables.items():
+        for key in values:
+            if "." not in key or key.split(".", 1)[0] not in ALL_SECTIONS:
+                raise ParameterError(f"{where}[{SCENARIO_TABLE}.{name}] key {key!r} must be 'section.field' "
+                                     f"(sections {list(ALL_SECTIONS)})")
+    return tables
 
 
 def _perception_from_table(table: Mapping[str, Any]) -> PerceptionConfig:
