@@ -263,6 +263,20 @@ def test_weights_and_activity_set_on_the_node_items_are_seen_without_sync(bolt):
         costs[6]["control_bounds"].weight = -1.0
 
 
+@pytest.mark.parametrize(("nr", "ndx", "nu"), [(1, 3, 2), (7, 50, 19), (300, 12, 0), (0, 4, 3)])
+def test_the_dense_patterns_hessian_entries_are_those_of_its_rows(nr, ndx, nu):
+    """A node's cost data lists the Hessian entries of its dense Jacobian pattern without building the rows' incidence:
+    the same arrays, in the same order, as :func:`hessian_entries` of the pattern (none without rows)."""
+    from wbmpc.ocp.kernels.costs import dense_hessian_entries, hessian_entries
+
+    n = ndx + nu
+    pattern = hessian_entries(np.arange(0, nr * n + 1, n, dtype=np.int64), np.tile(np.arange(n, dtype=np.int64), nr),
+                              ndx)
+    dense = dense_hessian_entries(n if nr else 0, ndx)
+    for expected, got in zip(pattern, dense, strict=True):
+        assert got.dtype == np.int64 and got.flags.c_contiguous and np.array_equal(got, expected)
+
+
 @pytest.mark.parametrize("density", [0.3, 1.0])
 def test_sparse_gauss_newton_writes_exactly_the_dense_result_on_its_hessian_entries(density):
     """The batched pass's Hessian over the entries of its Jacobian pattern equals the dense

@@ -20,7 +20,7 @@ import numpy as np
 
 from wbmpc.errors import ParameterError
 from wbmpc.ocp.activations import ActivationQuad
-from wbmpc.ocp.kernels.costs import cost_rows_derivatives, cost_rows_value, hessian_entries
+from wbmpc.ocp.kernels.costs import cost_rows_derivatives, cost_rows_value, dense_hessian_entries
 from wbmpc.ocp.residuals.base import DataCollector
 from wbmpc.ocp.state import StateMultibody
 
@@ -222,7 +222,7 @@ class CostDataSum:
         self.R_values = self.R.reshape(-1)
         self.R_row_start = np.arange(0, nr_total * n + 1, n, dtype=np.int64)
         self.R_cols = np.tile(np.arange(n, dtype=np.int64), nr_total)
-        self.hessian_entries = hessian_entries(self.R_row_start, self.R_cols, ndx)  # every entry (R is dense)
+        self.hessian_entries = dense_hessian_entries(n if nr_total else 0, ndx)  # every entry (R is dense)
         self.gradient = np.zeros(ndx + nu)
         self.hessian = np.zeros((ndx + nu, ndx + nu))
         self.cost = 0.0

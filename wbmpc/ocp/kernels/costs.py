@@ -111,7 +111,19 @@ def hessian_entries(row_start: np.ndarray, cols: np.ndarray, ndx: int) -> tuple[
     n = int(cols.max()) + 1 if cols.size else 0
     incidence = np.zeros((row_start.size - 1, n))
     incidence[np.repeat(np.arange(row_start.size - 1), np.diff(row_start)), cols] = 1.0
-    a, b = np.nonzero(np.triu(incidence.T @ incidence))
+    return _blocks_of_entries(*np.nonzero(np.triu(incidence.T @ incidence)), ndx)
+
+
+def dense_hessian_entries(n: int, ndx: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`hessian_entries` of a dense pattern, every row holding the columns 0..n−1 (and of at least one row):
+    the whole upper triangle, without building the rows' incidence (~6 ms for a node of the H1's OCP, once per
+    node data: at every MPC update, for the node that enters the horizon). The same arrays, in the same order."""
+    return _blocks_of_entries(*np.triu_indices(n), ndx)
+
+
+def _blocks_of_entries(a: np.ndarray, b: np.ndarray, ndx: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The entries (a[k], b[k]) of the Hessian's upper triangle, row-major, split into their Lxx, Lxu and Luu
+    blocks as (m, 2) int64 arrays (see :func:`hessian_entries`)."""
     pairs = np.stack([a, b], axis=1).astype(np.int64)
     in_x = pairs < ndx
     return (np.ascontiguousarray(pairs[in_x[:, 1]]), np.ascontiguousarray(pairs[in_x[:, 0] & ~in_x[:, 1]]),
