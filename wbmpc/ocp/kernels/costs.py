@@ -116,7 +116,7 @@ def hessian_entries(row_start: np.ndarray, cols: np.ndarray, ndx: int) -> tuple[
 
 def dense_hessian_entries(n: int, ndx: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`hessian_entries` of a dense pattern, every row holding the columns 0..n−1 (and of at least one row):
-    the whole upper triangle, without building the rows' incidence (~6 ms for a node of the H1's OCP, once per
+    the whole upper triangle, without the rows' incidence product (0.4-8 ms for a node of the H1's OCP, once per
     node data: at every MPC update, for the node that enters the horizon). The same arrays, in the same order."""
     return _blocks_of_entries(*np.triu_indices(n), ndx)
 
