@@ -1,7 +1,7 @@
 """Can the H1's legs step over a 10-50 cm box? The highest clearance a crossing swing can reach over the box's
 edges, from Pinocchio kinematics and SLSQP (issue 15; docs/robots.md, "Can the H1 step over 40 cm?").
 
-    PYTHONPATH=. python docs/scripts/h1_step_over_reach.py [--heights 0.1 0.2 0.3 0.4 0.5] [--margin 0.08]
+    PYTHONPATH=. python docs/scripts/step_over_reach.py [--heights 0.1 0.2 0.3 0.4 0.5] [--margin 0.08]
         [--hip-extension-cap 0.5] [--plot docs/figures/h1_step_over_reach.png]
 
 Geometry (the H1 preset's rules): the box's near edge at x = 0, its far edge at x = depth; the clearance terms act
@@ -314,7 +314,7 @@ def plot(curves: dict, heights, knee_floor: float, path: str) -> None:
         ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=1)
     axes[0].set_ylabel("highest clearance t of toe, heel and knee [m]")
     fig.suptitle("H1: the highest sole-and-knee clearance over the grown box's edges, statically balanced in the "
-                 "sagittal plane, joint and torque limits (docs/scripts/h1_step_over_reach.py)", fontsize=10)
+                 "sagittal plane, joint and torque limits (docs/scripts/step_over_reach.py)", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
