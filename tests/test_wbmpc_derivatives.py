@@ -522,6 +522,32 @@ def test_h1_obstacle_clearance_residual_jacobians_match_finite_differences():
 
 
 @needs_h1_extra
+def test_h1_profile_shank_clearance_holds_the_knee_above_the_box_only_over_it():
+    """``obstacle_shank_gating = "profile"``: the knee's clearance is active at every node of a crossing swing, on the
+    box's height profile at the knee's own position (top + ``obstacle_shank_margin`` over the grown footprint, the
+    ground beyond the transition), so a knee beside the box at lift-off or touchdown is asked nothing; its Jacobians
+    match finite differences; an unknown gating is refused in one line."""
+    h1, ocp, schedule, crossings = _h1_crossing()
+    config = dataclasses.replace(ocp.config, obstacle_shank_gating="profile")
+    profile_ocp = WalkingOCP(h1, config, n_nodes=ocp.n_nodes, dt=0.02)
+    profile_ocp.update(standing_state(h1), schedule, np.array([0.1, 0.0, 0.97]), crossings=crossings)
+    costs = [model.differential.costs.costs for model in profile_ocp.problem.running_models]
+    swing = np.flatnonzero(~schedule.in_contact[:-1, 1])
+    for k, node in enumerate(costs):
+        assert node["right_clearance_shank"].active == (k in swing), k
+    residual = costs[int(swing[0])]["right_clearance_shank"].cost.residual
+    top = 0.1 + config.obstacle_shank_margin
+    edge = 0.05 + config.obstacle_footprint_margin  # the fixture's box: 10 cm deep, centred at x = 0.25 m
+    assert residual.profile([0.25, 0.0])[0] == pytest.approx(top)
+    assert residual.profile([0.25 - edge - config.obstacle_profile_transition - 1e-6, 0.0])[0] == 0.0
+    kinds = _check_every_residual(h1, profile_ocp.problem, np.random.default_rng(19))
+    assert "clearance_shank" in kinds, kinds
+    from wbmpc.errors import ParameterError
+    with pytest.raises(ParameterError, match="obstacle_shank_gating='knee' must be one of"):
+        WalkingOCPConfig(obstacle_shank_gating="knee")
+
+
+@needs_h1_extra
 def test_h1_profile_clearance_holds_the_sole_points_above_the_box_wherever_they_are():
     """``obstacle_clearance_gating = "profile"``: the sole points' clearance is active at every node of a crossing swing
     (not only where the planned path is over the box) with the box's height profile, whose value and gradient are

@@ -246,10 +246,17 @@ class WalkingOCPConfig:
         obstacle_sole_points: points of the swing sole kept above the obstacle, (x, y, z) [m] in the foot
             frame (the toe and the heel).
         obstacle_shank_frames: (foot, frame name) pairs: the shank frame of each foot (its knee) kept
-            above the obstacle over the whole crossing swing; () = none.
+            above the obstacle during a crossing swing (``obstacle_shank_gating``); () = none.
         obstacle_clearance_margin: the sole points stay this far above the obstacle's top [m] while their
             path position (``obstacle_swing_path_timing``) is over its footprint grown by ``obstacle_footprint_margin``.
         obstacle_shank_margin: the shank frame stays this far above the top [m].
+        obstacle_shank_gating: where the shank frame's clearance applies: "swing" (at every node of the crossing
+            swing, the reference top + ``obstacle_shank_margin`` wherever the knee is: lift-off and touchdown
+            included, where a flat sole on the floor bounds the knee's height, the H1's to 0.470 m and the G1's to
+            0.353 m, so the barrier cannot be met there for boxes above those minus the margin; docs/robots.md) or
+            "profile" (at every node of the crossing swing, the box's height profile at the knee's own position:
+            top + ``obstacle_shank_margin`` over the footprint grown by ``obstacle_footprint_margin``, the ground
+            beyond ``obstacle_profile_transition`` outside it, as the sole points' "profile" gating).
         obstacle_footprint_margin: the footprint grown by this for the sole points' gating [m].
         obstacle_clearance_gating: where the sole points' clearance applies: "path" (at the nodes where their
             planned path position is over the grown footprint, the reference top + ``obstacle_clearance_margin``)
@@ -334,6 +341,7 @@ class WalkingOCPConfig:
     obstacle_shank_frames: tuple[tuple[str, str], ...] = ()
     obstacle_clearance_margin: float = 0.05
     obstacle_shank_margin: float = 0.05
+    obstacle_shank_gating: str = "swing"
     obstacle_footprint_margin: float = 0.02
     obstacle_clearance_gating: str = "path"
     obstacle_profile_transition: float = 0.05
@@ -381,6 +389,9 @@ class WalkingOCPConfig:
         if self.obstacle_clearance_gating not in CLEARANCE_GATINGS:
             raise ParameterError(f"obstacle_clearance_gating={self.obstacle_clearance_gating!r} must be one of "
                                  f"{CLEARANCE_GATINGS}")
+        if self.obstacle_shank_gating not in SHANK_GATINGS:
+            raise ParameterError(f"obstacle_shank_gating={self.obstacle_shank_gating!r} must be one of "
+                                 f"{SHANK_GATINGS}")
         if isinstance(self.obstacle_profile_transition, bool) or not (
                 np.isfinite(self.obstacle_profile_transition) and self.obstacle_profile_transition > 0):
             raise ParameterError(f"obstacle_profile_transition={self.obstacle_profile_transition!r} m must be "
@@ -504,6 +515,8 @@ def swing_height_reference_derivative(phase, apex_height: float):
 SWING_PATH_TIMINGS = ("straight", "smooth")
 CLEARANCE_GATINGS = ("path", "profile")
 """``WalkingOCPConfig.obstacle_clearance_gating`` values."""
+SHANK_GATINGS = ("swing", "profile")
+"""``WalkingOCPConfig.obstacle_shank_gating`` values."""
 
 
 def swing_path_fraction(phase, timing: str = "straight"):
@@ -800,9 +813,12 @@ class WalkingOCP:
                               cfg.obstacle_clearance_weight, active=False)
                 shank = self._shank_frame_ids.get(foot)
                 if shank is not None:
+                    residual = ResidualFramePointAboveBox(
+                        state, shank, np.zeros(3), nu, cfg.obstacle_footprint_margin, cfg.obstacle_profile_transition,
+                        self.ground_height) if cfg.obstacle_shank_gating == "profile" else \
+                        ResidualFramePointHeight(state, shank, np.zeros(3), 0.0, nu)
                     costs.add(f"{foot}_clearance_shank",
-                              CostModelResidual(ResidualFramePointHeight(state, shank, np.zeros(3), 0.0, nu),
-                                                ActivationQuadraticBarrier(*barrier)),
+                              CostModelResidual(residual, ActivationQuadraticBarrier(*barrier)),
                               cfg.obstacle_clearance_weight, active=False)
             if not terminal and (cfg.swing_path_weight > 0 or cfg.obstacle_swing_path_weight > 0):
                 costs.add(f"{foot}_swing_path", self._frame_xy_cost(foot),
@@ -1037,7 +1053,8 @@ class WalkingOCP:
         position (the foot's plus p_i turned by the touchdown yaw) is over the footprint grown by
         ``obstacle_footprint_margin`` at some nodes: there ``{foot}_clearance_sole{i}`` is active with the
         reference top + ``obstacle_clearance_margin``; ``{foot}_clearance_shank`` is active over the whole
-        crossing swing with top + ``obstacle_shank_margin``. The height reference
+        crossing swing with top + ``obstacle_shank_margin`` (with ``obstacle_shank_gating`` "profile" on the box's
+        profile at the knee's position). The height reference
         (``obstacle_swing_profile``): "plateau", :func:`plateau_height_reference` at H = the largest of
         ``swing_apex_height`` and top + ``obstacle_apex_margin``, at most ``obstacle_apex_height_max``, its
         rise over until the first sole point's path enters the grown footprint and its fall begun
@@ -1111,7 +1128,12 @@ class WalkingOCP:
                             item.cost.residual.reference = top + cfg.obstacle_clearance_margin
                     if shank is not None:
                         shank.active = True
-                        shank.cost.residual.reference = top + cfg.obstacle_shank_margin
+                        if cfg.obstacle_shank_gating == "profile":  # wherever the knee is: the box's profile
+                            shank.cost.residual.set_box(obstacle.center, obstacle.axes[0], 0.5 * obstacle.depth,
+                                                        0.5 * obstacle.width,
+                                                        top + cfg.obstacle_shank_margin - self.ground_height)
+                        else:
+                            shank.cost.residual.reference = top + cfg.obstacle_shank_margin
         return heights
 
     @staticmethod
