@@ -301,7 +301,7 @@ OBSTACLE_FIELDS = {
                 "obstacle_landing_room", "obstacle_far_margin_reduction", "obstacle_trailing_duration_min",
                 "obstacle_trailing_height_max", "sole_front", "sole_rear", "sole_half_width"},
     "ocp": {"obstacle_clearance_weight", "obstacle_sole_points", "obstacle_shank_frames", "obstacle_clearance_margin",
-            "obstacle_shank_margin", "obstacle_shank_gating", "obstacle_clearance_swings", "obstacle_footprint_margin",
+            "obstacle_shank_margin", "obstacle_shank_gating", "obstacle_clearance_legs", "obstacle_footprint_margin",
             "obstacle_apex_margin",
             "obstacle_apex_height_max",
             "obstacle_swing_profile", "obstacle_plateau_transition_min", "obstacle_swing_path_timing",

@@ -548,34 +548,36 @@ def test_h1_profile_shank_clearance_holds_the_knee_above_the_box_only_over_it():
 
 
 @needs_h1_extra
-def test_h1_clearance_of_every_swing_holds_a_step_beside_the_box_on_its_profile():
-    """``obstacle_clearance_swings = "all"``: a swing that does not pass over the box (the last step before it, here the
+def test_h1_clearance_of_every_leg_holds_a_step_beside_the_box_on_its_profile():
+    """``obstacle_clearance_legs = "all"``: a swing that does not pass over the box (the last step before it, here the
     fixture's swing with its crossing index cleared) gets the sole and knee clearance on the box's profile while a
-    crossing is planned; "crossing" leaves it without; "all" without both "profile" gatings is refused in one line."""
+    crossing is planned, a standing leg the knee's; "crossing" leaves them without; "all" without both "profile"
+    gatings is refused in one line."""
     from wbmpc.errors import ParameterError
     from wbmpc.walking.reference import CrossingSchedule
 
     h1, ocp, schedule, crossings = _h1_crossing()
     beside = CrossingSchedule(crossings.obstacles, np.full_like(crossings.index, -1), crossings.liftoff_xy * np.nan,
                               crossings.path_yaw * np.nan, crossings.feet)
-    swing = np.flatnonzero(~schedule.in_contact[:-1, 1])
-    for swings, expected in (("crossing", False), ("all", True)):
+    for legs, expected in (("crossing", False), ("all", True)):
         config = dataclasses.replace(ocp.config, obstacle_clearance_gating="profile", obstacle_shank_gating="profile",
-                                     obstacle_clearance_swings=swings)
+                                     obstacle_clearance_legs=legs)
         other = WalkingOCP(h1, config, n_nodes=ocp.n_nodes, dt=0.02)
         other.update(standing_state(h1), schedule, np.array([0.1, 0.0, 0.97]), crossings=beside)
         for k, model in enumerate(other.problem.running_models):
             node = model.differential.costs.costs
-            for j, foot in enumerate(schedule.feet):  # every swinging foot, none in contact
+            for j, foot in enumerate(schedule.feet):
                 swinging = not schedule.in_contact[k, j]
-                for term in ("clearance_sole0", "clearance_sole1", "clearance_shank"):
-                    assert node[f"{foot}_{term}"].active == (expected and swinging), (swings, k, foot, term)
-    shank = other.problem.running_models[int(swing[0])].differential.costs.costs["right_clearance_shank"].cost.residual
+                for term in ("clearance_sole0", "clearance_sole1"):
+                    assert node[f"{foot}_{term}"].active == (expected and swinging), (legs, k, foot, term)
+                assert node[f"{foot}_clearance_shank"].active == expected, (legs, k, foot)
+    swing = int(np.flatnonzero(~schedule.in_contact[:-1, 1])[0])
+    shank = other.problem.running_models[swing].differential.costs.costs["right_clearance_shank"].cost.residual
     assert shank.profile([0.25, 0.0])[0] == pytest.approx(0.1 + config.obstacle_shank_margin)
-    with pytest.raises(ParameterError, match="obstacle_clearance_swings='all' needs obstacle_clearance_gating="):
+    with pytest.raises(ParameterError, match="obstacle_clearance_legs='all' needs obstacle_clearance_gating="):
         dataclasses.replace(config, obstacle_shank_gating="swing")
-    with pytest.raises(ParameterError, match="obstacle_clearance_swings='every' must be one of"):
-        dataclasses.replace(config, obstacle_clearance_swings="every")
+    with pytest.raises(ParameterError, match="obstacle_clearance_legs='every' must be one of"):
+        dataclasses.replace(config, obstacle_clearance_legs="every")
 
 
 @needs_h1_extra

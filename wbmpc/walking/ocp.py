@@ -257,11 +257,12 @@ class WalkingOCPConfig:
             "profile" (at every node of the crossing swing, the box's height profile at the knee's own position:
             top + ``obstacle_shank_margin`` over the footprint grown by ``obstacle_footprint_margin``, the ground
             beyond ``obstacle_profile_transition`` outside it, as the sole points' "profile" gating).
-        obstacle_clearance_swings: which swings the clearance terms hold: "crossing" (those that pass over an
-            obstacle) or "all" (also every other swing while a crossing is planned in the horizon, on the profile of
-            the crossed obstacle nearest its touchdown: the last step before a box lands next to it, and on the
-            H1 at 40 cm its shank struck the box's top edge as that foot came down; docs/ocp.md). "all" needs
-            both gatings "profile": a sole or a knee away from the box is then asked nothing.
+        obstacle_clearance_legs: which legs the clearance terms hold: "crossing" (the swings that pass over an
+            obstacle) or "all" (while a crossing is planned in the horizon, also every other swing's soles and knee
+            and every standing leg's knee, on the profile of the crossed obstacle nearest the foot: the last step
+            before a box lands next to it, and on the H1 at 40 cm its shank struck the box's top edge as that foot
+            came down, then, with that swing held, the standing leg's thigh as the body went over it; docs/ocp.md).
+            "all" needs both gatings "profile": a sole or a knee away from the box is then asked nothing.
         obstacle_footprint_margin: the footprint grown by this for the sole points' gating [m].
         obstacle_clearance_gating: where the sole points' clearance applies: "path" (at the nodes where their
             planned path position is over the grown footprint, the reference top + ``obstacle_clearance_margin``)
@@ -347,7 +348,7 @@ class WalkingOCPConfig:
     obstacle_clearance_margin: float = 0.05
     obstacle_shank_margin: float = 0.05
     obstacle_shank_gating: str = "swing"
-    obstacle_clearance_swings: str = "crossing"
+    obstacle_clearance_legs: str = "crossing"
     obstacle_footprint_margin: float = 0.02
     obstacle_clearance_gating: str = "path"
     obstacle_profile_transition: float = 0.05
@@ -398,12 +399,12 @@ class WalkingOCPConfig:
         if self.obstacle_shank_gating not in SHANK_GATINGS:
             raise ParameterError(f"obstacle_shank_gating={self.obstacle_shank_gating!r} must be one of "
                                  f"{SHANK_GATINGS}")
-        if self.obstacle_clearance_swings not in CLEARANCE_SWINGS:
-            raise ParameterError(f"obstacle_clearance_swings={self.obstacle_clearance_swings!r} must be one of "
-                                 f"{CLEARANCE_SWINGS}")
-        if self.obstacle_clearance_swings == "all" and (self.obstacle_clearance_gating,
+        if self.obstacle_clearance_legs not in CLEARANCE_LEGS:
+            raise ParameterError(f"obstacle_clearance_legs={self.obstacle_clearance_legs!r} must be one of "
+                                 f"{CLEARANCE_LEGS}")
+        if self.obstacle_clearance_legs == "all" and (self.obstacle_clearance_gating,
                                                          self.obstacle_shank_gating) != ("profile", "profile"):
-            raise ParameterError("obstacle_clearance_swings='all' needs obstacle_clearance_gating='profile' and "
+            raise ParameterError("obstacle_clearance_legs='all' needs obstacle_clearance_gating='profile' and "
                                  f"obstacle_shank_gating='profile' (got {self.obstacle_clearance_gating!r} and "
                                  f"{self.obstacle_shank_gating!r})")
         if isinstance(self.obstacle_profile_transition, bool) or not (
@@ -531,8 +532,8 @@ CLEARANCE_GATINGS = ("path", "profile")
 """``WalkingOCPConfig.obstacle_clearance_gating`` values."""
 SHANK_GATINGS = ("swing", "profile")
 """``WalkingOCPConfig.obstacle_shank_gating`` values."""
-CLEARANCE_SWINGS = ("crossing", "all")
-"""``WalkingOCPConfig.obstacle_clearance_swings`` values."""
+CLEARANCE_LEGS = ("crossing", "all")
+"""``WalkingOCPConfig.obstacle_clearance_legs`` values."""
 
 
 def swing_path_fraction(phase, timing: str = "straight"):
@@ -1150,23 +1151,28 @@ class WalkingOCP:
                                                         top + cfg.obstacle_shank_margin - self.ground_height)
                         else:
                             shank.cost.residual.reference = top + cfg.obstacle_shank_margin
-            if terms is not None and cfg.obstacle_clearance_swings == "all":
-                self._clearance_beside(crossings.obstacles, swinging[:, j] & (index[:, j] < 0), touchdown[:, j],
+            if terms is not None and cfg.obstacle_clearance_legs == "all":
+                self._clearance_beside(crossings.obstacles, swinging[:, j], index[:, j] < 0, touchdown[:, j],
                                        [node[j] for node in terms])
         return heights
 
-    def _clearance_beside(self, obstacles, swinging: np.ndarray, touchdown: np.ndarray, terms) -> None:
-        """``obstacle_clearance_swings`` "all": at the running nodes where ``swinging`` (n + 1,) and not crossing, the
-        foot's clearance terms ``terms`` ((soles, shank) per running node) on the "profile" of the obstacle of
-        ``obstacles`` whose centre is nearest the swing's ``touchdown`` (n + 1, 2) [m]."""
+    def _clearance_beside(self, obstacles, swinging: np.ndarray, free: np.ndarray, position: np.ndarray,
+                          terms) -> None:
+        """``obstacle_clearance_legs`` "all": one foot's clearance terms ``terms`` ((soles, shank) per running node) on
+        the "profile" of the obstacle of ``obstacles`` whose centre is nearest the foot's schedule position
+        ``position`` (n + 1, 2) [m] (the first obstacle where that is unknown), at the running nodes ``free`` (n + 1,)
+        of no crossing swing: the soles and the knee where ``swinging`` (n + 1,), the knee alone where the foot
+        stands."""
         cfg = self.config
         centers = np.array([obstacle.center for obstacle in obstacles], dtype=float).reshape(-1, 2)
-        for node in np.flatnonzero(swinging[:self.n_nodes]).tolist():
-            obstacle = obstacles[int(np.argmin(np.linalg.norm(centers - touchdown[node], axis=1)))]
+        for node in np.flatnonzero(free[:self.n_nodes]).tolist():
+            where = position[node]
+            nearest = int(np.argmin(np.linalg.norm(centers - where, axis=1))) if np.all(np.isfinite(where)) else 0
+            obstacle = obstacles[nearest]
             top = float(obstacle.height) - self.ground_height
             soles, shank = terms[node]
             box = (obstacle.center, obstacle.axes[0], 0.5 * obstacle.depth, 0.5 * obstacle.width)
-            for item in soles:
+            for item in soles if swinging[node] else ():
                 item.active = True
                 item.cost.residual.set_box(*box, top + cfg.obstacle_clearance_margin)
             if shank is not None:
