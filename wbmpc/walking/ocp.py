@@ -388,20 +388,11 @@ class WalkingOCPConfig:
                 0.0 < self.obstacle_plateau_transition_min <= 0.5):
             raise ParameterError(f"obstacle_plateau_transition_min={self.obstacle_plateau_transition_min!r} "
                                  "must be in (0, 0.5]")
-        if self.swing_path_timing not in SWING_PATH_TIMINGS:
-            raise ParameterError(f"swing_path_timing={self.swing_path_timing!r} must be one of {SWING_PATH_TIMINGS}")
-        if self.obstacle_swing_path_timing not in SWING_PATH_TIMINGS:
-            raise ParameterError(f"obstacle_swing_path_timing={self.obstacle_swing_path_timing!r} must be one of "
-                                 f"{SWING_PATH_TIMINGS}")
-        if self.obstacle_clearance_gating not in CLEARANCE_GATINGS:
-            raise ParameterError(f"obstacle_clearance_gating={self.obstacle_clearance_gating!r} must be one of "
-                                 f"{CLEARANCE_GATINGS}")
-        if self.obstacle_shank_gating not in SHANK_GATINGS:
-            raise ParameterError(f"obstacle_shank_gating={self.obstacle_shank_gating!r} must be one of "
-                                 f"{SHANK_GATINGS}")
-        if self.obstacle_clearance_legs not in CLEARANCE_LEGS:
-            raise ParameterError(f"obstacle_clearance_legs={self.obstacle_clearance_legs!r} must be one of "
-                                 f"{CLEARANCE_LEGS}")
+        for name, allowed in (("swing_path_timing", SWING_PATH_TIMINGS), ("obstacle_swing_path_timing", SWING_PATH_TIMINGS),
+                              ("obstacle_clearance_gating", CLEARANCE_GATINGS), ("obstacle_shank_gating", SHANK_GATINGS),
+                              ("obstacle_clearance_legs", CLEARANCE_LEGS)):
+            if getattr(self, name) not in allowed:
+                raise ParameterError(f"{name}={getattr(self, name)!r} must be one of {allowed}")
         if self.obstacle_clearance_legs == "all" and (self.obstacle_clearance_gating,
                                                          self.obstacle_shank_gating) != ("profile", "profile"):
             raise ParameterError("obstacle_clearance_legs='all' needs obstacle_clearance_gating='profile' and "
