@@ -812,19 +812,13 @@ class WalkingOCP:
             if not terminal and cfg.obstacle_clearance_weight > 0:
                 barrier = (np.zeros(1), np.full(1, np.inf))  # one-sided: no cost above the reference
                 for i, point in enumerate(cfg.obstacle_sole_points):
-                    residual = ResidualFramePointAboveBox(
-                        state, fid, point, nu, cfg.obstacle_footprint_margin, cfg.obstacle_profile_transition,
-                        self.ground_height) if cfg.obstacle_clearance_gating == "profile" else \
-                        ResidualFramePointHeight(state, fid, point, 0.0, nu)
+                    residual = self._clearance_residual(fid, point, cfg.obstacle_clearance_gating == "profile")
                     costs.add(f"{foot}_clearance_sole{i}",
                               CostModelResidual(residual, ActivationQuadraticBarrier(*barrier)),
                               cfg.obstacle_clearance_weight, active=False)
                 shank = self._shank_frame_ids.get(foot)
                 if shank is not None:
-                    residual = ResidualFramePointAboveBox(
-                        state, shank, np.zeros(3), nu, cfg.obstacle_footprint_margin, cfg.obstacle_profile_transition,
-                        self.ground_height) if cfg.obstacle_shank_gating == "profile" else \
-                        ResidualFramePointHeight(state, shank, np.zeros(3), 0.0, nu)
+                    residual = self._clearance_residual(shank, np.zeros(3), cfg.obstacle_shank_gating == "profile")
                     costs.add(f"{foot}_clearance_shank",
                               CostModelResidual(residual, ActivationQuadraticBarrier(*barrier)),
                               cfg.obstacle_clearance_weight, active=False)
@@ -1127,20 +1121,15 @@ class WalkingOCP:
                     soles, shank = terms[node][j]
                     for i, item in enumerate(soles):
                         if cfg.obstacle_clearance_gating == "profile":  # wherever the point is: the box's profile
-                            item.active = True
-                            item.cost.residual.set_box(obstacle.center, obstacle.axes[0], 0.5 * obstacle.depth,
-                                                       0.5 * obstacle.width,
-                                                       top + cfg.obstacle_clearance_margin - self.ground_height)
+                            self._hold_on_profile(item, obstacle, cfg.obstacle_clearance_margin)
                         else:
                             item.active = bool(gated[row, i])
                             item.cost.residual.reference = top + cfg.obstacle_clearance_margin
                     if shank is not None:
-                        shank.active = True
                         if cfg.obstacle_shank_gating == "profile":  # wherever the knee is: the box's profile
-                            shank.cost.residual.set_box(obstacle.center, obstacle.axes[0], 0.5 * obstacle.depth,
-                                                        0.5 * obstacle.width,
-                                                        top + cfg.obstacle_shank_margin - self.ground_height)
+                            self._hold_on_profile(shank, obstacle, cfg.obstacle_shank_margin)
                         else:
+                            shank.active = True
                             shank.cost.residual.reference = top + cfg.obstacle_shank_margin
             if terms is not None and cfg.obstacle_clearance_legs == "all":
                 self._clearance_beside(crossings.obstacles, swinging[:, j], index[:, j] < 0, touchdown[:, j],
@@ -1160,15 +1149,28 @@ class WalkingOCP:
             where = position[node]
             nearest = int(np.argmin(np.linalg.norm(centers - where, axis=1))) if np.all(np.isfinite(where)) else 0
             obstacle = obstacles[nearest]
-            top = float(obstacle.height) - self.ground_height
             soles, shank = terms[node]
-            box = (obstacle.center, obstacle.axes[0], 0.5 * obstacle.depth, 0.5 * obstacle.width)
             for item in soles if swinging[node] else ():
-                item.active = True
-                item.cost.residual.set_box(*box, top + cfg.obstacle_clearance_margin)
+                self._hold_on_profile(item, obstacle, cfg.obstacle_clearance_margin)
             if shank is not None:
-                shank.active = True
-                shank.cost.residual.set_box(*box, top + cfg.obstacle_shank_margin)
+                self._hold_on_profile(shank, obstacle, cfg.obstacle_shank_margin)
+
+    def _hold_on_profile(self, item, obstacle, margin: float) -> None:
+        """Turn on the clearance term ``item`` (a :class:`~wbmpc.ocp.residuals.ResidualFramePointAboveBox` barrier) on
+        ``obstacle``'s height profile, its top + ``margin`` [m] above the ground."""
+        item.active = True
+        item.cost.residual.set_box(obstacle.center, obstacle.axes[0], 0.5 * obstacle.depth, 0.5 * obstacle.width,
+                                   float(obstacle.height) + margin - self.ground_height)
+
+    def _clearance_residual(self, frame_id: int, point, profile: bool):
+        """The residual of a clearance term on ``point`` (3,) [m] of frame ``frame_id``: on a box's height profile
+        (``profile``, :class:`~wbmpc.ocp.residuals.ResidualFramePointAboveBox`) or a height reference
+        (:class:`~wbmpc.ocp.residuals.ResidualFramePointHeight`)."""
+        state, nu, cfg = self.state, self.nu, self.config
+        if profile:
+            return ResidualFramePointAboveBox(state, frame_id, point, nu, cfg.obstacle_footprint_margin,
+                                              cfg.obstacle_profile_transition, self.ground_height)
+        return ResidualFramePointHeight(state, frame_id, point, 0.0, nu)
 
     @staticmethod
     def _plateau_phases(region, liftoff_xy: np.ndarray, touchdown_xy: np.ndarray, timing: str, yaw: float,
