@@ -152,9 +152,9 @@ def pinocchio_floor(mpc, rollouts_per_update: float, repeats: int = 10) -> dict:
 def _run_loop(args: argparse.Namespace, controller_class=None, overrides: dict | None = None):
     """One run of the benchmarked closed loop with a walking controller of ``controller_class``
     (default :class:`~wbmpc.walking.controller.WalkingController`) built as ``run_scenario`` builds its own
-    (the scenario's velocity command, ``--max-iterations``), on the robot's preset with ``--set``'s overrides,
-    then ``overrides`` (``{"ocp.<field>": value}``, e.g. the Crocoddyl-twin-able variant's); returns (log,
-    controller)."""
+    (the scenario's velocity command, ``--max-iterations``), on the robot's preset for the scenario (its
+    ``[scenarios.<name>]`` table, as ``run_scenario`` loads it) with ``--set``'s overrides, then ``overrides``
+    (``{"ocp.<field>": value}``, e.g. the Crocoddyl-twin-able variant's); returns (log, controller)."""
     from sim.runner import run_scenario
     from wbmpc.walking.controller import WalkingController
     from wbmpc.walking.preset import load_walking_preset
@@ -163,7 +163,7 @@ def _run_loop(args: argparse.Namespace, controller_class=None, overrides: dict |
     extra = {} if args.max_iterations is None else {"max_iterations": args.max_iterations}
     extra.update(preset_overrides(args))
     extra.update(overrides or {})
-    controller = (controller_class or WalkingController)(load_walking_preset(robot, extra))
+    controller = (controller_class or WalkingController)(load_walking_preset(robot, extra, scenario=args.scenario))
     log = run_scenario(args.scenario, robot=robot, duration=args.duration, seed=args.seed, progress=False,
                        controller=controller)
     return log, controller
@@ -174,7 +174,7 @@ def run(args: argparse.Namespace) -> dict:
 
     from wbmpc.walking.preset import load_walking_preset
 
-    load_walking_preset(args.robot, preset_overrides(args))  # a bad --set is refused before any run
+    load_walking_preset(args.robot, preset_overrides(args), scenario=args.scenario)  # a bad --set: refused before any run
     bare = _bare_step_time(args.robot)
     log, controller = _run_loop(args)
     timing = dict(log.timing)

@@ -21,7 +21,7 @@ pytestmark = [needs_h1_extra, pytest.mark.filterwarnings(f"ignore::{SlowPathWarn
 @pytest.fixture(scope="module")
 def approach():
     box = StepOverBox(height=0.1, depth=0.1, distance=1.0, speed=0.3)
-    preset = load_walking_preset("h1")
+    preset = load_walking_preset("h1", scenario="obstacle")
     controller = KnownObstacleController(preset, (box.obstacle(),))
     contacts = BoxContacts(box)
     log = run_scenario("step_over_box", robot="h1", duration=3.6, controller=controller, on_tick=contacts,
@@ -63,7 +63,7 @@ def test_h1_gives_the_negotiation_its_own_fddp_iterations(distance, negotiating)
     """``negotiation_max_iterations``: while negotiating (the box within the 1.5 m lookahead) every warm-started
     update runs up to that many FDDP iterations, and the preset's ``max_iterations`` otherwise."""
     box = StepOverBox(height=0.1, depth=0.1, distance=distance, speed=0.3)
-    preset = load_walking_preset("h1", {"negotiation_max_iterations": 4})
+    preset = load_walking_preset("h1", {"negotiation_max_iterations": 4}, scenario="obstacle")
     assert preset.controller.max_iterations == 2
     controller = KnownObstacleController(preset, (box.obstacle(),))
     log = run_scenario("step_over_box", robot="h1", duration=0.1, controller=controller, progress=False,

@@ -445,7 +445,8 @@ def test_h1_soles_with_the_obstacle_clearance_are_batched_and_match_the_node_pip
     h1 = load_robot("h1")
     backend = "kkt" if moments == "sole" else "pinocchio"
     config = dataclasses.replace(load_walking_preset("h1").ocp, contact_damping_moments=moments,
-                                 dynamics_backend=backend, evaluation="auto", obstacle_swing_path_timing="smooth",
+                                 dynamics_backend=backend, rollout_dynamics="pinocchio", derivative_dynamics="pinocchio",
+                                 evaluation="auto", obstacle_swing_path_timing="smooth",
                                  obstacle_swing_path_weight=1e4, obstacle_clearance_gating="path",
                                  obstacle_com_weight=0.0)  # (the "profile" clearance and the CoM path: below)
     n_nodes = 12
@@ -660,9 +661,16 @@ def _rollout(problem, solver, alpha: float, calls: list | None = None) -> tuple:
     return cost, xs_try, us_try, dx, forces
 
 
+def _h1_preset_on_pinocchio_paths():
+    """The H1 preset's OCP with both dynamics paths "pinocchio" (the reference the compiled ones are checked
+    against; the preset runs both compiled since session 27)."""
+    return dataclasses.replace(load_walking_preset("h1").ocp, rollout_dynamics="pinocchio",
+                               derivative_dynamics="pinocchio")
+
+
 @needs_h1_extra
 def test_h1_rollout_dynamics_pinocchio_is_mains_node_by_node_rollout():
-    """The default rollout_dynamics="pinocchio" (the H1 preset's): every "kkt" node of the rollout is its own
+    """rollout_dynamics="pinocchio" (the default; the H1 preset's until session 27): every "kkt" node of the rollout is its own
     calc_dynamics as before the option (Pinocchio's crba and nonLinearEffects, the explicit-inverse KKT
     solve, node by node from Python), so each transition is, to the last bit, the default calc_dynamics and
     Euler step at the rollout's (x, u); the compiled rollout is not built."""
@@ -670,8 +678,7 @@ def test_h1_rollout_dynamics_pinocchio_is_mains_node_by_node_rollout():
 
     h1 = load_robot("h1")
     n_nodes = 12
-    preset = load_walking_preset("h1").ocp
-    assert preset.rollout_dynamics == "pinocchio"
+    preset = _h1_preset_on_pinocchio_paths()
     ocp = _batched_walking_ocp(h1, preset, n_nodes)
     nodes, batched, solver = _h1_rollouts(ocp, n_nodes, seed=6)
     assert batched.rollout_dynamics == "pinocchio" and batched._kkt_rollout is None and batched._keep_forces
@@ -710,7 +717,7 @@ def test_h1_rollout_dynamics_compiled_agrees_with_pinocchio(python_node):
     assert all(batched._kkt_rollout.compiled(k) for k in range(n_nodes)) and batched._keep_forces
     if python_node is not None:
         batched._horizon_contacts.contacts[python_node] = -1
-    default = _batched_walking_ocp(h1, preset, n_nodes)  # the same OCP, rollout_dynamics="pinocchio"
+    default = _batched_walking_ocp(h1, dataclasses.replace(preset, rollout_dynamics="pinocchio"), n_nodes)
     _, default_problem, _ = _h1_rollouts(default, n_nodes, seed=6)
     for alpha in (1.0, 0.5):
         outputs = []
@@ -771,8 +778,7 @@ def test_h1_derivative_dynamics_compiled_agrees_with_pinocchio(monkeypatch):
     the bit, without any of those binding calls; prepare_dynamics too; the rollouts are the default's."""
     h1 = load_robot("h1")
     n_nodes = 12
-    preset = load_walking_preset("h1").ocp
-    assert preset.derivative_dynamics == "pinocchio"
+    preset = _h1_preset_on_pinocchio_paths()
     default = _batched_walking_ocp(h1, preset, n_nodes)
     compiled = _batched_walking_ocp(h1, dataclasses.replace(preset, derivative_dynamics="compiled"), n_nodes)
     problems = []
@@ -832,7 +838,7 @@ def test_h1_derivative_pass_in_one_compiled_call_is_the_node_by_node_pass(python
     run) is computed there."""
     h1 = load_robot("h1")
     n_nodes = 12
-    preset = load_walking_preset("h1").ocp
+    preset = _h1_preset_on_pinocchio_paths()
     ocp = _batched_walking_ocp(h1, dataclasses.replace(preset, derivative_dynamics="compiled"), n_nodes)
     _, batched, solver = _h1_rollouts(ocp, n_nodes, seed=6)
     assert batched._kkt_derivatives is not None and batched._kkt_rollout is None and batched._keep_forces

@@ -67,23 +67,34 @@ def test_bench_loop_takes_walking_preset_overrides(capsys):
 
 
 @needs_h1_extra
-def test_bench_loop_runs_the_h1_with_compiled_rollouts():
-    """``--set ocp.rollout_dynamics=compiled`` reaches the H1's MPC problem (the speed-up measured against the
-    default in alternated runs, docs/benchmarks.md "H1 loop, session 24")."""
+def test_bench_loop_runs_the_h1_on_its_scenarios_preset_and_takes_the_dynamics_paths_from_set():
+    """The walk runs the H1 preset's compiled paths; ``--set ocp.rollout_dynamics=pinocchio`` reaches the MPC
+    problem (the two compared in alternated runs, docs/benchmarks.md "H1 loop, session 33"); ``--scenario obstacle``
+    runs the preset's ``[scenarios.obstacle]`` table (Pinocchio's paths, the "rollout" fill), as ``wbmpc run`` does."""
     import argparse
 
     from bench.loop import _run_loop
 
-    args = argparse.Namespace(robot="h1", scenario="walk", duration=0.05, seed=0, max_iterations=None,
-                              overrides=[("ocp.rollout_dynamics", "compiled")])
-    log, controller = _run_loop(args)
-    assert log.status == "completed" and controller.mpc.problem.rollout_dynamics == "compiled"
+    def run(scenario, overrides=()):
+        args = argparse.Namespace(robot="h1", scenario=scenario, duration=0.05, seed=0, max_iterations=None,
+                                  overrides=list(overrides))
+        log, controller = _run_loop(args)
+        assert log.status == "completed", log.error
+        return controller
+
+    walk = run("walk")
+    assert walk.mpc.problem.rollout_dynamics == "compiled" and walk.preset.controller.mpc_horizon_end == "phase"
+    assert run("walk", [("ocp.rollout_dynamics", "pinocchio")]).mpc.problem.rollout_dynamics == "pinocchio"
+    obstacle = run("obstacle")
+    assert (obstacle.mpc.problem.rollout_dynamics, obstacle.mpc.problem.derivative_dynamics) == ("pinocchio",) * 2
+    assert obstacle.preset.controller.mpc_horizon_end == "rollout"
 
 
 @needs_h1_extra
-def test_bench_loop_runs_the_h1_with_compiled_derivatives(capsys):
-    """``--set ocp.derivative_dynamics=compiled`` reaches the H1's MPC problem (docs/benchmarks.md "H1 loop, session
-    25"), with compiled rollouts too; a bad value is refused in one line before any run."""
+def test_bench_loop_takes_the_h1_derivative_path_from_set(capsys):
+    """``--set ocp.derivative_dynamics=pinocchio`` reaches the H1's MPC problem (the preset's walk compiles it,
+    docs/benchmarks.md "H1 loop, session 25"), the rollouts staying compiled; a bad value is refused in one line
+    before any run."""
     import argparse
 
     from bench.loop import _run_loop
@@ -92,7 +103,8 @@ def test_bench_loop_runs_the_h1_with_compiled_derivatives(capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "derivative_dynamics='rnea' must be 'pinocchio' or 'compiled'" in err
     args = argparse.Namespace(robot="h1", scenario="walk", duration=0.05, seed=0, max_iterations=None,
-                              overrides=[("ocp.derivative_dynamics", "compiled"), ("ocp.rollout_dynamics", "compiled")])
+                              overrides=[("ocp.derivative_dynamics", "pinocchio"), ("ocp.rollout_dynamics", "compiled")])
     log, controller = _run_loop(args)
     problem = controller.mpc.problem
-    assert log.status == "completed" and (problem.derivative_dynamics, problem.rollout_dynamics) == ("compiled",) * 2
+    assert log.status == "completed" and (problem.derivative_dynamics, problem.rollout_dynamics) == ("pinocchio",
+                                                                                                    "compiled")

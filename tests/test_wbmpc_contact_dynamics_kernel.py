@@ -9,8 +9,6 @@ read no Pinocchio kinematics) against the default: the same accelerations and de
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 from robot_extras import needs_h1_extra
@@ -239,7 +237,7 @@ def test_bolt_point_contacts_with_moving_references():
 def test_h1_soles(moments):
     """6D soles (Kp = 0, the H1 preset's damping and its variants): single and double support."""
     h1 = load_robot("h1")
-    config = dataclasses.replace(load_walking_preset("h1").ocp, evaluation="nodes", contact_damping_moments=moments)
+    config = load_walking_preset("h1").ocp.node_wise(contact_damping_moments=moments)
     ocp = WalkingOCP(h1, config, n_nodes=10, dt=0.02)
     ocp.update(standing_state(h1), alternating_schedule(0.0, 0.02, 10, step_duration=0.1, foot_y=(0.2, -0.2),
                                                         t_start=0.07), np.array([0.0, 0.0, 0.97]))
@@ -253,7 +251,7 @@ def test_h1_soles_with_baumgarte_position_gains_take_the_separate_calls():
     """6D soles with Kp > 0 (positioned soles: the contacts and the KKT solve as separate calls): the
     rollouts' solve there too, and the compiled derivatives (the contacts' derivatives apart)."""
     h1 = load_robot("h1")
-    config = dataclasses.replace(load_walking_preset("h1").ocp, evaluation="nodes", baumgarte_gains=(10.0, 20.0))
+    config = load_walking_preset("h1").ocp.node_wise(baumgarte_gains=(10.0, 20.0))
     ocp = WalkingOCP(h1, config, n_nodes=6, dt=0.02)
     ocp.update(standing_state(h1), alternating_schedule(0.0, 0.02, 6, step_duration=0.1, foot_y=(0.2, -0.2),
                                                         t_start=0.05), np.array([0.0, 0.0, 0.97]))

@@ -502,10 +502,10 @@ def _h1_crossing(n_nodes: int = 12):
     from wbmpc.walking.preset import load_walking_preset
 
     h1 = load_robot("h1")
-    config = dataclasses.replace(load_walking_preset("h1").ocp, evaluation="nodes", dynamics_backend="kkt",
-                                 baumgarte_gains=(10.0, 30.0), obstacle_clearance_gating="path",
-                                 obstacle_swing_path_timing="straight", obstacle_swing_path_weight=0.0,
-                                 swing_path_weight=0.0, obstacle_com_weight=0.0)
+    config = load_walking_preset("h1").ocp.node_wise(
+        dynamics_backend="kkt", baumgarte_gains=(10.0, 30.0), obstacle_clearance_gating="path",
+        obstacle_swing_path_timing="straight", obstacle_swing_path_weight=0.0, swing_path_weight=0.0,
+        obstacle_com_weight=0.0)
     ocp = WalkingOCP(h1, config, n_nodes=n_nodes, dt=0.02)
     schedule, crossings = crossing_schedule(n_nodes)
     return h1, ocp, schedule, crossings

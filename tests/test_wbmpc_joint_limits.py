@@ -27,7 +27,9 @@ LIMITS = {"joint_limit_weight": 1e5, "joint_limit_margin": 0.05}
 def _h1_ocp(evaluation: str = "batched", **overrides) -> tuple:
     """The H1 preset's OCP over an alternating walk of 0.2 s steps (the right foot swings first): (robot, ocp)."""
     h1 = load_robot("h1")
-    config = dataclasses.replace(load_walking_preset("h1").ocp, evaluation=evaluation, **overrides)
+    preset = load_walking_preset("h1").ocp
+    config = preset.node_wise(**overrides) if evaluation == "nodes" else dataclasses.replace(preset, evaluation=evaluation,
+                                                                                              **overrides)
     ocp = WalkingOCP(h1, config, n_nodes=N_NODES, dt=0.02)
     schedule = alternating_schedule(0.0, 0.02, N_NODES, step_duration=0.2, foot_y=(0.2, -0.2), step_length=0.1)
     ocp.update(standing_state(h1), schedule, np.array([0.05, 0.0, 0.97]))

@@ -47,7 +47,7 @@ def main() -> None:
         overrides.setdefault("mpc_restart_after_failures", 1)
     warnings.simplefilter("ignore")  # the node-wise evaluation warning (the KKT backend)
     box = StepOverBox(height=args.height, depth=args.depth, distance=1.0, speed=args.speed)
-    preset = load_walking_preset("h1", overrides)
+    preset = load_walking_preset("h1", overrides, scenario="obstacle")  # the obstacle runs' preset
     controller = KnownObstacleController(preset, (box.obstacle(),))
     contacts = BoxContacts(box)
     terms = []  # (t, the OCP's largest cost terms after the update) with --terms

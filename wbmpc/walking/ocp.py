@@ -50,7 +50,7 @@ integrated (× dt), the terminal cost is not.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pinocchio as pin
@@ -482,6 +482,14 @@ class WalkingOCPConfig:
             raise ParameterError(f"base_yaw_reference={self.base_yaw_reference!r} must be one of {BASE_YAW_REFERENCES}")
         if not (0 < self.reg_min <= self.reg_max):
             raise ParameterError(f"need 0 < reg_min={self.reg_min} <= reg_max={self.reg_max}")
+
+    def node_wise(self, **changes) -> "WalkingOCPConfig":
+        """This configuration evaluated node by node (``evaluation="nodes"``: a timed OCP's spacings, the
+        reference pipeline of the tests), with ``changes`` (fields by name) applied too. The compiled
+        dynamics paths run only in the batched evaluation, so both are ``"pinocchio"`` there: the same
+        numbers to ~1e-15."""
+        return replace(self, evaluation="nodes", rollout_dynamics="pinocchio",
+                       derivative_dynamics="pinocchio", **changes)
 
 
 BASE_YAW_REFERENCES = ("fixed", "footholds")

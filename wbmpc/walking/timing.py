@@ -24,7 +24,6 @@ points, so they stay off whatever the preset's weight.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 
@@ -425,7 +424,7 @@ def standing_start_timing_ocp(robot_name: str = "bolt", n_nodes: int = 100, dt: 
     from wbmpc.walking.standing_start import standing_start
 
     start = standing_start(robot_name, speed, dcm_offset) if start is None else start
-    config = dataclasses.replace(start.preset.ocp, foothold_weight=foothold_weight, evaluation="nodes")
+    config = start.preset.ocp.node_wise(foothold_weight=foothold_weight)
     ocp = WalkingOCP(start.robot, config, n_nodes=n_nodes, dt=dt)
     com_terminal = start.com_terminal_reference(n_nodes * dt)
     return ContactTimingOCP(ocp, start.plan, 0.0, start.x0, com_terminal)
