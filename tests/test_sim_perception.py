@@ -87,6 +87,47 @@ def test_height_map_keeps_cell_statistics_and_the_bounds_of_high_returns():
     assert many.n_cells == 3000 and np.all(many.height == 1.0)
 
 
+def test_height_map_equals_a_return_by_return_reference_on_random_scans():
+    """Scans of random returns (negative cell indices included), accumulated: every cell's row, count, mean,
+    bounds and high bounds equal those of a dict kept return by return, the rows in the order the cells were first
+    seen (within a scan by (ix, iy)); ``rows_near`` and ``height_at`` equal their brute-force answers."""
+    rng = np.random.default_rng(3)
+    grid, cell = HeightMap(0.02), 0.02
+    reference: dict[tuple[int, int], dict] = {}
+    for scan in range(40):
+        points = np.column_stack([rng.uniform(-1.0, 1.0, 150) + 0.05 * scan, rng.uniform(-0.6, 0.6, 150),
+                                  rng.choice([0.0, 0.1, 0.3], 150) + rng.normal(0.0, 0.01, 150)])
+        grid.add(points, high_above=0.05)
+        keys = [(int(np.floor(x / cell)), int(np.floor(y / cell))) for x, y in points[:, :2]]
+        for key in sorted(set(keys) - set(reference)):
+            reference[key] = {"row": len(reference), "z": [], "xy": [], "high": []}
+        for key, point in zip(keys, points):
+            reference[key]["z"].append(point[2])
+            reference[key]["xy"].append(point[:2])
+            if point[2] > 0.05:
+                reference[key]["high"].append(point[:2])
+    assert grid.n_cells == len(reference)
+    for key, cell_data in reference.items():
+        row = cell_data["row"]
+        assert tuple(grid.keys[row]) == key and grid.count[row] == len(cell_data["z"])
+        np.testing.assert_allclose(grid.height[row], np.mean(cell_data["z"]), rtol=0, atol=1e-15)
+        xy = np.array(cell_data["xy"])
+        assert grid.bounds[row].tolist() == [xy[:, 0].min(), xy[:, 0].max(), xy[:, 1].min(), xy[:, 1].max()]
+        high = np.array(cell_data["high"]).reshape(-1, 2)
+        expected = ([high[:, 0].min(), high[:, 0].max(), high[:, 1].min(), high[:, 1].max()] if len(high)
+                    else [np.inf, -np.inf, np.inf, -np.inf])
+        assert grid.high_bounds[row].tolist() == expected
+        assert grid.centers()[row].tolist() == [(key[0] + 0.5) * cell, (key[1] + 0.5) * cell]
+    for center in ([0.3, 0.1], [-0.9, 0.5], [5.0, 5.0]):
+        brute = np.flatnonzero(np.hypot(*(grid.centers() - center).T) <= 0.4)
+        assert grid.rows_near(center, 0.4).tolist() == brute.tolist()
+    queries = rng.uniform(-1.5, 3.5, (200, 2))
+    expected = [grid.height[reference[key]["row"]] if (key := (int(np.floor(x / cell)), int(np.floor(y / cell))))
+                in reference else np.nan for x, y in queries]
+    np.testing.assert_array_equal(grid.height_at(queries), expected)
+    assert np.isnan(HeightMap(0.02).height_at([[0.0, 0.0]])).all()
+
+
 # ---------------------------------------------------------------------------------------- against the scene
 
 

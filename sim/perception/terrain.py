@@ -134,12 +134,12 @@ class TerrainEstimator:
         return self.obstacles
 
     def _ground_level(self, base_xy: np.ndarray) -> float | None:
-        heights = self.map.height
-        local = np.hypot(*(self.map.centers() - base_xy).T) <= self.config.ground_radius
-        if not local.any():
+        local = self.map.rows_near(base_xy, self.config.ground_radius)
+        if len(local) == 0:
             return self.ground
-        first = float(np.median(heights[local]))
-        low = local & (heights <= first + self.config.obstacle_min_height)
+        heights = self.map.height_of(local)
+        first = float(np.median(heights))
+        low = heights <= first + self.config.obstacle_min_height
         return float(np.median(heights[low])) if low.any() else first
 
     def _detect(self, t: float, heading: float) -> None:
