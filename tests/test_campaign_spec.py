@@ -193,6 +193,23 @@ def test_example_campaign_file_loads():
     assert max(t.arguments["push_time"] for t in trials) + 0.1 < spec.duration
 
 
+def test_every_example_campaign_file_loads_and_expands():
+    """Each file under sim/campaigns/examples/ (the G1's and the H1's push protocols, the G1's obstacles, the timing
+    study) is a valid spec whose grid expands into its trials, each with a robot the library knows."""
+    from pathlib import Path
+
+    import sim.campaigns
+
+    paths = sorted((Path(sim.campaigns.__file__).parent / "examples").glob("*.toml"))
+    assert len(paths) >= 5
+    for path in paths:
+        spec = CampaignSpec.from_toml(path)
+        trials = make_trials(spec)
+        assert trials and spec.robot in ("bolt", "g1", "h1"), path.name
+    h1_forward = make_trials(CampaignSpec.from_toml(paths[[p.name for p in paths].index("h1_push_forward.toml")]))
+    assert len(h1_forward) == 5 * 5  # five forces at five phases
+
+
 def test_the_campaign_times_the_planner_the_trial_runs():
     common = {"force_y": 100.0, "phase": 0.5, "push_after": 2.0, "speed": 0.0}
     alip = {**common, "footstep_planner.kind": "alip"}

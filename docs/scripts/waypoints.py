@@ -1,6 +1,6 @@
 """The waypoint and push runs of docs/closed_loop.md ("Waypoints and pushes"): each robot round the
-circle (1 m radius) and the square (2 m side) at the scenario's speed, and the G1 pushed at its
-pelvis, each with the robot's preset as committed (seed 0); one JSON line per run (status, fall
+circle (1 m radius) and the square (2 m side) at the scenario's speed, and the G1 and the H1 pushed at
+their pelvis, each with the robot's preset as committed (seed 0); one JSON line per run (status, fall
 time and reason, path metrics or push outcome). With ``--out DIR`` each run's log and figure
 (path, footholds, CoM) go to ``DIR/<robot>_<scenario>[_<path>]/``.
 
@@ -19,9 +19,12 @@ from sim.plots import save_figures
 
 # (robot, path, duration [s]): a lap at 0.25 m/s, with the time Bolt needs sideways (v_y <= 0.1 m/s)
 # and the G1 its turns in place at the square's corners
-WAYPOINT_RUNS = [("g1", "circle", 45.0), ("g1", "square", 80.0), ("bolt", "circle", 50.0), ("bolt", "square", 65.0)]
-# G1 pushes at the pelvis, 0.1 s while walking at 0.3 m/s: (force [N], direction [deg], push time [s])
-PUSH_RUNS = [(30.0, 90.0, 4.0), (60.0, 90.0, 4.0), (60.0, 0.0, 4.0)]
+WAYPOINT_RUNS = [("g1", "circle", 45.0), ("g1", "square", 80.0), ("bolt", "circle", 50.0), ("bolt", "square", 65.0),
+                 ("h1", "circle", 45.0), ("h1", "square", 80.0)]
+# pushes at the pelvis, 0.1 s while walking at 0.3 m/s: (robot, force [N], direction [deg], push time [s]) (the
+# five gait phases: sim/campaigns/examples/*_push_*.toml)
+PUSH_RUNS = [("g1", 30.0, 90.0, 4.0), ("g1", 60.0, 90.0, 4.0), ("g1", 60.0, 0.0, 4.0),
+             ("h1", 90.0, 90.0, 4.0), ("h1", 150.0, 0.0, 4.0)]
 PATH_METRICS = ("path_deviation_max", "path_deviation_mean", "heading_error_max", "heading_error_mean",
                 "path_progress", "path_completion")
 
@@ -42,7 +45,7 @@ def _save(log, out: str | None, name: str) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--robot", choices=("g1", "bolt"), default=None, help="only this robot's runs")
+    parser.add_argument("--robot", choices=("g1", "bolt", "h1"), default=None, help="only this robot's runs")
     parser.add_argument("--only", choices=("waypoints", "push"), default=None, help="only these runs")
     parser.add_argument("--speed", type=float, default=None, help="waypoints: speed along the path [m/s]")
     parser.add_argument("--out", default=None, metavar="DIR", help="write each run's log and figure under DIR")
@@ -58,12 +61,14 @@ def main() -> None:
             print(json.dumps({"robot": robot, "path": path, "duration": duration, "status": log.status,
                               "fall_time": log.fall_time, "fall_reason": log.fall_reason,
                               **_rounded(log.metrics, PATH_METRICS)}), flush=True)
-    if args.only in (None, "push") and args.robot in (None, "g1"):
-        for force, direction, push_time in PUSH_RUNS:
-            log = run_scenario("push", robot="g1", duration=push_time + 4.0, seed=0, progress=False, speed=0.3,
+    if args.only in (None, "push"):
+        for robot, force, direction, push_time in PUSH_RUNS:
+            if args.robot not in (None, robot):
+                continue
+            log = run_scenario("push", robot=robot, duration=push_time + 4.0, seed=0, progress=False, speed=0.3,
                                force=force, direction=direction, push_time=push_time)
-            _save(log, args.out, f"g1_push_{force:g}N_{direction:g}deg")
-            print(json.dumps({"robot": "g1", "force": force, "direction": direction, "push_time": push_time,
+            _save(log, args.out, f"{robot}_push_{force:g}N_{direction:g}deg")
+            print(json.dumps({"robot": robot, "force": force, "direction": direction, "push_time": push_time,
                               "status": log.status, "fall_time": log.fall_time, "fall_reason": log.fall_reason,
                               **_rounded(log.metrics, ("push_recovered", "push_recovery_time",
                                                        "push_max_dcm_deviation_y"))}), flush=True)

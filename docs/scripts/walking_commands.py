@@ -1,10 +1,11 @@
-"""The G1's walking runs of docs/closed_loop.md ("The G1 (session 8)"): the commands of issue 13
-(in place 20 s, 0.3 m/s for 60 s, 0.5 m/s, lateral 0.15 m/s, backwards 0.2 m/s, turning in place
-and while walking at 0.3 rad/s), each with the G1 preset as committed, printed one JSON line per
-run (status, fall time and reason, steady speed and yaw-rate errors, mean velocities, MPC update
-median, real-time factor).
+"""The omnidirectional walking runs of docs/closed_loop.md ("The G1 (session 8)", "The H1's commands"): the
+commands of issue 13 (in place 20 s, 0.3 m/s for 60 s, 0.5 m/s, lateral 0.15 m/s, backwards 0.2 m/s, turning
+in place and while walking at 0.3 rad/s), each with the robot's preset as committed, printed one JSON line
+per run (status, fall time and reason, steady speed and yaw-rate errors, mean velocities, MPC update
+median, real-time factor). ``--robot h1`` needs the optional extra ``wbmpc[h1]``.
 
-    python docs/scripts/g1_walking.py [--seed S] [--noise] [--only NAME ...] [--set section.name=value ...]
+    python docs/scripts/walking_commands.py [--robot g1|h1] [--seed S] [--noise] [--only NAME ...]
+                                            [--set section.name=value ...]
 
 ``--noise`` adds measurement noise (0.1 mrad / 1 mm/s std, seeded): runs are chaotic, a second
 seed shows how far one run's fall time speaks for the preset.
@@ -41,6 +42,7 @@ def _milli(metrics: dict, key: str):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--robot", choices=("g1", "h1"), default="g1")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--noise", action="store_true", help="measurement noise (see the module docstring)")
     parser.add_argument("--only", nargs="+", choices=sorted(RUNS), default=None, help="run only these")
@@ -52,11 +54,11 @@ def main() -> None:
     warnings.simplefilter("ignore")
     for name in args.only or RUNS:
         command, duration = RUNS[name]
-        log = run_scenario("walk", robot="g1", duration=duration, seed=args.seed, progress=False,
+        log = run_scenario("walk", robot=args.robot, duration=duration, seed=args.seed, progress=False,
                            velocity_command=command, **options, **overrides)
         m = log.metrics
         print(json.dumps({
-            "run": name, "command": command, "duration": duration, "seed": args.seed, "noise": args.noise,
+            "robot": args.robot, "run": name, "command": command, "duration": duration, "seed": args.seed, "noise": args.noise,
             "status": log.status, "fall_time": log.fall_time, "fall_reason": log.fall_reason,
             "velocity_error_mm_s": [_milli(m, "velocity_error_x"), _milli(m, "velocity_error_y")],
             "mean_velocity": [m.get("mean_velocity_x"), m.get("mean_velocity_y")],
