@@ -58,7 +58,9 @@ def base_rotation(q: np.ndarray) -> np.ndarray:
 def base_yaw(quaternion_xyzw) -> np.ndarray:
     """Yaw [rad] in (-pi, pi] of base orientations given as Pinocchio quaternions (x, y, z, w),
     shape (4,) or (n, 4); returns a scalar array or shape (n,)."""
-    x, y, z, w = np.moveaxis(np.asarray(quaternion_xyzw, dtype=float), -1, 0)
+    quaternion = np.asarray(quaternion_xyzw, dtype=float)
+    # one quaternion (the loop's 1 kHz path): Python floats, the same IEEE arithmetic without numpy's scalar overhead
+    x, y, z, w = quaternion.tolist() if quaternion.ndim == 1 else np.moveaxis(quaternion, -1, 0)
     return np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 

@@ -16,6 +16,7 @@ from robots import load_robot
 from robots.conventions import (
     MujocoIndexMap,
     base_rotation,
+    base_yaw,
     mujoco_to_pinocchio_acceleration,
     mujoco_to_pinocchio_state,
     pinocchio_to_mujoco_acceleration,
@@ -173,6 +174,19 @@ def test_forward_dynamics_agree(robot, mj_model):
         expected = pinocchio_to_mujoco_acceleration(robot, q, v, a)
         worst = max(worst, np.max(np.abs(mj_data.qacc - expected)) / (1.0 + np.max(np.abs(expected))))
     assert worst < 1e-10
+
+
+def test_base_yaw_of_one_quaternion_is_its_row_of_the_batch_and_pinocchios_yaw():
+    """base_yaw of one quaternion (the loop's path, Python floats) equals, bit for bit, its row of a batch (numpy's),
+    and the yaw of Pinocchio's rotation matrix to rounding."""
+    rng = np.random.default_rng(4)
+    quaternions = rng.normal(size=(200, 4))
+    quaternions /= np.linalg.norm(quaternions, axis=1)[:, None]
+    batch = base_yaw(quaternions)
+    assert [float(base_yaw(q)) for q in quaternions] == batch.tolist()
+    for q, yaw in zip(quaternions[:20], batch[:20]):
+        rotation = pin.Quaternion(q[3], q[0], q[1], q[2]).toRotationMatrix()
+        assert yaw == pytest.approx(np.arctan2(rotation[1, 0], rotation[0, 0]), abs=1e-12)
 
 
 def test_torque_order_and_clamping(bolt):
