@@ -315,3 +315,9 @@ def test_the_run_table_shows_the_obstacle_outcome_and_the_perception():
     assert "obstacle success             False (crossed False, touched True, resting on it True)" in text
     assert "detection distance           2.64 m" in text and "height estimate error        0.2 mm" in text
     assert "crossing time                n/a" in text
+    assert "preset [scenarios" not in text  # no table applied: no line
+    table = {"ocp.rollout_dynamics": "pinocchio", "controller.mpc_horizon_end": "rollout"}
+    text = format_metrics({"scenario": "obstacle", "seed": 0, "status": "completed", "metrics": metrics,
+                           "params": {"preset_scenario_overrides": table}})
+    assert ("  preset [scenarios.obstacle]  ocp.rollout_dynamics=pinocchio, controller.mpc_horizon_end=rollout"
+            in text.splitlines())

@@ -268,6 +268,10 @@ def format_metrics(summary: dict) -> str:
         lines[0] += f" at t = {summary['fall_time']:.3f} s: {summary['fall_reason']}"
     if summary.get("error"):
         lines.append(f"  error: {summary['error']}")
+    applied = (summary.get("params") or {}).get("preset_scenario_overrides")
+    if applied:  # the preset's [scenarios.<name>] table: this kind of run is configured apart from the others
+        settings = ", ".join(f"{key}={value}" for key, value in applied.items())
+        lines.append(f"  {'preset [scenarios.' + summary['scenario'] + ']':<28} {settings}")
 
     def row(label: str, value, unit: str = "", scale: float = 1.0, fmt: str = ".3f", paper=None) -> None:
         if value is None:
