@@ -493,6 +493,7 @@ class WalkingOCPConfig:
 
 
 BASE_YAW_REFERENCES = ("fixed", "footholds")
+_YAW_CACHE_SIZE = 256  # yaws kept by WalkingOCP's per-yaw caches (a turning walk meets a new one every step)
 CONTACT_DAMPING_MOMENTS = ("uniform", "sole", "corners")
 
 
@@ -666,6 +667,10 @@ class WalkingOCP:
             for model in running + [terminal]]
         # the reference posture's base orientation (Pinocchio's q[3:7] = (x, y, z, w)), turned by the heading
         self._base_rotation_reference = pin.Quaternion(self.x_reference[3:7]).toRotationMatrix()
+        # the rotations about z and the base orientations of the yaws the updates met, by yaw [rad]: a plan's nodes
+        # share a few yaws (one per foothold), and each update meets them again (the same arrays, computed once)
+        self._yaw_rotations: dict[float, np.ndarray] = {}
+        self._heading_quaternions: dict[float, np.ndarray] = {}
         for model in running + [terminal]:
             items = model.differential.costs.costs
             self._node_terms.append((model.differential, [
@@ -1008,12 +1013,12 @@ class WalkingOCP:
                     if orientation.weight != weight:
                         orientation.weight = weight
                     if swing:
-                        orientation.cost.residual.reference[:] = yaw_rotation(touchdown_yaw[k, j])
+                        orientation.cost.residual.reference[:] = self._yaw_rotation(float(touchdown_yaw[k, j]))
         if cfg.base_yaw_reference == "footholds":
             heading = foothold_heading(in_contact, np.asarray(schedule.contact_yaw, dtype=float)[:, columns],
                                        np.asarray(schedule.touchdown_yaw, dtype=float)[:, columns])
             for residuals, yaw in zip(self._state_residuals, heading.tolist()):  # (a batched problem's rows)
-                quaternion = pin.Quaternion(yaw_rotation(yaw) @ self._base_rotation_reference).coeffs()
+                quaternion = self._heading_quaternion(yaw)
                 for residual in residuals:
                     residual.reference[3:7] = quaternion
         self.problem.terminal_model.differential.costs.costs["com_position"].cost.residual.reference[:] = com_ref
@@ -1035,6 +1040,26 @@ class WalkingOCP:
                     item.cost.residual.reference[:] = path[k]
         if self.evaluation == "batched":  # contact sets (references, weights and activity are shared)
             self.problem.sync()
+
+    def _yaw_rotation(self, yaw: float) -> np.ndarray:
+        """:func:`yaw_rotation` of ``yaw`` [rad], (3, 3), computed once per yaw value (read-only: copied by its users)."""
+        rotation = self._yaw_rotations.get(yaw)
+        if rotation is None:
+            if len(self._yaw_rotations) >= _YAW_CACHE_SIZE:
+                self._yaw_rotations.clear()
+            rotation = self._yaw_rotations[yaw] = yaw_rotation(yaw)
+        return rotation
+
+    def _heading_quaternion(self, yaw: float) -> np.ndarray:
+        """The reference posture's base orientation turned by ``yaw`` [rad] about z, Pinocchio's (x, y, z, w), (4,),
+        computed once per yaw value."""
+        quaternion = self._heading_quaternions.get(yaw)
+        if quaternion is None:
+            if len(self._heading_quaternions) >= _YAW_CACHE_SIZE:
+                self._heading_quaternions.clear()
+            quaternion = self._heading_quaternions[yaw] = pin.Quaternion(
+                self._yaw_rotation(yaw) @ self._base_rotation_reference).coeffs().copy()
+        return quaternion
 
     def _swing_paths(self, liftoff: np.ndarray, swinging: np.ndarray, phase: np.ndarray,
                      touchdown: np.ndarray, weight: float) -> None:
