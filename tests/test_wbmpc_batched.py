@@ -444,9 +444,8 @@ def test_h1_soles_with_the_obstacle_clearance_are_batched_and_match_the_node_pip
 
     h1 = load_robot("h1")
     backend = "kkt" if moments == "sole" else "pinocchio"
-    config = dataclasses.replace(load_walking_preset("h1").ocp, contact_damping_moments=moments,
-                                 dynamics_backend=backend, rollout_dynamics="pinocchio", derivative_dynamics="pinocchio",
-                                 evaluation="auto", obstacle_swing_path_timing="smooth",
+    config = dataclasses.replace(_h1_preset_on_pinocchio_paths(), contact_damping_moments=moments,
+                                 dynamics_backend=backend, evaluation="auto", obstacle_swing_path_timing="smooth",
                                  obstacle_swing_path_weight=1e4, obstacle_clearance_gating="path",
                                  obstacle_com_weight=0.0)  # (the "profile" clearance and the CoM path: below)
     n_nodes = 12
@@ -663,15 +662,15 @@ def _rollout(problem, solver, alpha: float, calls: list | None = None) -> tuple:
 
 def _h1_preset_on_pinocchio_paths():
     """The H1 preset's OCP with both dynamics paths "pinocchio" (the reference the compiled ones are checked
-    against; the preset runs both compiled since session 27)."""
+    against, and its obstacle runs' paths; its walking runs are compiled since session 33)."""
     return dataclasses.replace(load_walking_preset("h1").ocp, rollout_dynamics="pinocchio",
                                derivative_dynamics="pinocchio")
 
 
 @needs_h1_extra
 def test_h1_rollout_dynamics_pinocchio_is_mains_node_by_node_rollout():
-    """rollout_dynamics="pinocchio" (the default; the H1 preset's until session 27): every "kkt" node of the rollout is its own
-    calc_dynamics as before the option (Pinocchio's crba and nonLinearEffects, the explicit-inverse KKT
+    """rollout_dynamics="pinocchio" (the default; the H1 preset's obstacle runs'): every "kkt" node of the rollout is
+    its own calc_dynamics as before the option (Pinocchio's crba and nonLinearEffects, the explicit-inverse KKT
     solve, node by node from Python), so each transition is, to the last bit, the default calc_dynamics and
     Euler step at the rollout's (x, u); the compiled rollout is not built."""
     from wbmpc.ocp.kernels.integration import free_flyer_euler_step

@@ -108,11 +108,16 @@ class HeightMap:
             reduce.at(self._bounds[:, column], rows, points[:, coordinate])
             reduce.at(self._high_bounds[:, column], rows[high], points[high, coordinate])
 
-    def _rows(self, keys: np.ndarray) -> np.ndarray:
-        """Rows of the cells ``keys`` (k,) (increasing, distinct), the unknown ones added in that order."""
+    def _find(self, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where the cells ``keys`` (k,) are, or would go, in the sorted keys (k,), and which are known (k,) bool."""
         position = np.searchsorted(self._sorted_keys, keys)
         known = position < len(self._sorted_keys)
         known[known] = self._sorted_keys[position[known]] == keys[known]
+        return position, known
+
+    def _rows(self, keys: np.ndarray) -> np.ndarray:
+        """Rows of the cells ``keys`` (k,) (increasing, distinct), the unknown ones added in that order."""
+        position, known = self._find(keys)
         rows = np.empty(len(keys), dtype=np.int64)
         rows[known] = self._sorted_rows[position[known]]
         new = ~known
@@ -155,12 +160,9 @@ class HeightMap:
     def height_at(self, points_xy) -> np.ndarray:
         """Mean return height [m] of the cells holding ``points_xy`` (..., 2); NaN where unknown."""
         xy = np.asarray(points_xy, dtype=float)
-        keys = cell_key(self.cells_of(xy.reshape(-1, 2)))
-        position = np.minimum(np.searchsorted(self._sorted_keys, keys), max(len(self._sorted_keys) - 1, 0))
-        out = np.full(len(keys), np.nan)
-        if self.n_cells:
-            known = self._sorted_keys[position] == keys
-            out[known] = self.height_of(self._sorted_rows[position[known]])
+        position, known = self._find(cell_key(self.cells_of(xy.reshape(-1, 2))))
+        out = np.full(len(known), np.nan)
+        out[known] = self.height_of(self._sorted_rows[position[known]])
         return out.reshape(xy.shape[:-1])
 
     def profile(self, origin_xy, heading_yaw: float, distances) -> np.ndarray:

@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 
 import numpy as np
 import pinocchio as pin
@@ -493,7 +494,6 @@ class WalkingOCPConfig:
 
 
 BASE_YAW_REFERENCES = ("fixed", "footholds")
-_YAW_CACHE_SIZE = 256  # yaws kept by WalkingOCP's per-yaw caches (a turning walk meets a new one every step)
 CONTACT_DAMPING_MOMENTS = ("uniform", "sole", "corners")
 
 
@@ -534,6 +534,7 @@ SHANK_GATINGS = ("swing", "profile")
 """``WalkingOCPConfig.obstacle_shank_gating`` values."""
 CLEARANCE_LEGS = ("crossing", "all")
 """``WalkingOCPConfig.obstacle_clearance_legs`` values."""
+_YAW_CACHE_SIZE = 256  # yaws kept by WalkingOCP's per-yaw caches (a turning walk meets a new one every step)
 
 
 def swing_path_fraction(phase, timing: str = "straight"):
@@ -667,10 +668,13 @@ class WalkingOCP:
             for model in running + [terminal]]
         # the reference posture's base orientation (Pinocchio's q[3:7] = (x, y, z, w)), turned by the heading
         self._base_rotation_reference = pin.Quaternion(self.x_reference[3:7]).toRotationMatrix()
-        # the rotations about z and the base orientations of the yaws the updates met, by yaw [rad]: a plan's nodes
-        # share a few yaws (one per foothold), and each update meets them again (the same arrays, computed once)
-        self._yaw_rotations: dict[float, np.ndarray] = {}
-        self._heading_quaternions: dict[float, np.ndarray] = {}
+        # yaw [rad] -> the rotation about z (3, 3) and the reference posture's base orientation turned by it
+        # (Pinocchio's (x, y, z, w)), computed once per yaw value: a plan's nodes share a few yaws (one per foothold)
+        # and each update meets them again; the arrays are read-only (their users copy them)
+        self._yaw_rotation = lru_cache(maxsize=_YAW_CACHE_SIZE)(yaw_rotation)
+        rotation, base = self._yaw_rotation, self._base_rotation_reference
+        self._heading_quaternion = lru_cache(maxsize=_YAW_CACHE_SIZE)(
+            lambda yaw: pin.Quaternion(rotation(yaw) @ base).coeffs().copy())
         for model in running + [terminal]:
             items = model.differential.costs.costs
             self._node_terms.append((model.differential, [
@@ -1040,26 +1044,6 @@ class WalkingOCP:
                     item.cost.residual.reference[:] = path[k]
         if self.evaluation == "batched":  # contact sets (references, weights and activity are shared)
             self.problem.sync()
-
-    def _yaw_rotation(self, yaw: float) -> np.ndarray:
-        """:func:`yaw_rotation` of ``yaw`` [rad], (3, 3), computed once per yaw value (read-only: copied by its users)."""
-        rotation = self._yaw_rotations.get(yaw)
-        if rotation is None:
-            if len(self._yaw_rotations) >= _YAW_CACHE_SIZE:
-                self._yaw_rotations.clear()
-            rotation = self._yaw_rotations[yaw] = yaw_rotation(yaw)
-        return rotation
-
-    def _heading_quaternion(self, yaw: float) -> np.ndarray:
-        """The reference posture's base orientation turned by ``yaw`` [rad] about z, Pinocchio's (x, y, z, w), (4,),
-        computed once per yaw value."""
-        quaternion = self._heading_quaternions.get(yaw)
-        if quaternion is None:
-            if len(self._heading_quaternions) >= _YAW_CACHE_SIZE:
-                self._heading_quaternions.clear()
-            quaternion = self._heading_quaternions[yaw] = pin.Quaternion(
-                self._yaw_rotation(yaw) @ self._base_rotation_reference).coeffs().copy()
-        return quaternion
 
     def _swing_paths(self, liftoff: np.ndarray, swinging: np.ndarray, phase: np.ndarray,
                      touchdown: np.ndarray, weight: float) -> None:
