@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from robot_extras import needs_h1_extra
 from wbmpc_fixtures import alternating_schedule, crossing_schedule, random_state, standing_state
@@ -736,6 +737,57 @@ def test_h1_swing_orientation_is_scaled_only_at_crossing_swing_nodes():
                 assert item.weight == expected
     with pytest.raises(ParameterError, match="obstacle_swing_orientation_scale=-1.0 must be finite and >= 0"):
         WalkingOCPConfig(obstacle_swing_orientation_scale=-1.0)
+
+
+@needs_h1_extra
+def test_h1_abducted_crossing_swing_moves_the_path_outwards_and_rolls_the_sole_over_high_boxes_only():
+    """``obstacle_swing_abduction`` / ``obstacle_swing_roll``: over a box at least ``obstacle_abduction_height_min``
+    high, a crossing swing's path reference moves outwards (the right foot to -y on a path along +x) by the abduction
+    times the normalised height reference, and its sole's orientation reference is the flat one rolled outwards
+    (about x, negative for the right foot) by the roll times the same profile; over a lower box, and at every node
+    of no crossing swing, both are the unshaped problem's; bad values are refused in one line."""
+    from wbmpc.errors import ParameterError
+
+    h1, base, schedule, crossings = _h1_crossing()
+    abduction, roll = 0.15, 0.35
+    top = float(crossings.obstacles[0].height)
+    x0, com = standing_state(h1), np.array([0.1, 0.0, 0.97])
+
+    def references(**options):
+        ocp = WalkingOCP(h1, dataclasses.replace(base.config, obstacle_swing_path_weight=1e4, **options),
+                         n_nodes=base.n_nodes, dt=0.02)
+        ocp.update(x0, schedule, com, crossings=crossings)
+        costs = [model.differential.costs.costs for model in ocp.problem.running_models]
+        path = np.array([c["right_swing_path"].cost.residual.reference[:2].copy() if c["right_swing_path"].active
+                         else np.full(2, np.nan) for c in costs])
+        rotation = np.array([c["right_orientation"].cost.residual.reference.copy() for c in costs])
+        height = np.array([c["right_height"].cost.residual.reference if c["right_height"].active else np.nan
+                           for c in costs])
+        return ocp, path, rotation, height
+
+    flat_ocp, flat_path, flat_rotation, height = references()
+    assert flat_ocp.foot_sides.tolist() == [1.0, -1.0] and flat_ocp.feet == ("left", "right")
+    shaped_ocp, path, rotation, shaped_height = references(obstacle_swing_abduction=abduction,
+                                                           obstacle_swing_roll=roll, obstacle_abduction_height_min=top)
+    crossing = np.asarray(crossings.index)[:-1, list(schedule.feet).index("right")] >= 0
+    assert crossing.sum() >= 3 and np.array_equal(np.isfinite(flat_path[:, 0]), crossing)
+    profile = (height - shaped_ocp.ground_height) / np.nanmax(height - shaped_ocp.ground_height)
+    np.testing.assert_array_equal(shaped_height, height)
+    np.testing.assert_allclose(path[crossing, 0], flat_path[crossing, 0], atol=1e-12)  # the path runs along +x
+    np.testing.assert_allclose(path[crossing, 1], flat_path[crossing, 1] - abduction * profile[crossing], atol=1e-12)
+    assert np.nanmax(flat_path[crossing, 1] - path[crossing, 1]) == pytest.approx(abduction)
+    for k in range(base.n_nodes):
+        angle = -roll * profile[k] if crossing[k] else 0.0
+        np.testing.assert_allclose(rotation[k], flat_rotation[k] @ pin.utils.rotate("x", angle), atol=1e-12)
+    _, low_path, low_rotation, _ = references(obstacle_swing_abduction=abduction, obstacle_swing_roll=roll,
+                                              obstacle_abduction_height_min=top + 0.01)
+    np.testing.assert_array_equal(low_path, flat_path)
+    np.testing.assert_array_equal(low_rotation, flat_rotation)
+    for name, value, allowed in (("obstacle_swing_abduction", -0.1, "must be finite and >= 0"),
+                                 ("obstacle_abduction_height_min", np.inf, "must be finite and >= 0"),
+                                 ("obstacle_swing_roll", 2.0, r"must be in \[0, pi/2\)")):
+        with pytest.raises(ParameterError, match=f"{name}={value!r} .*{allowed}"):
+            WalkingOCPConfig(**{name: value})
 
 
 def test_the_swing_path_timings_go_from_lift_off_to_touchdown_and_smooth_lands_at_rest():

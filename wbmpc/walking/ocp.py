@@ -307,6 +307,18 @@ class WalkingOCPConfig:
         obstacle_swing_orientation_scale: factor on ``swing_orientation_weight`` at the nodes of a crossing swing,
             >= 0: the flat-sole term charges the swing hip's abduction (a rolled sole), the H1's one way to lift the
             lead foot higher than its sagittal reach (docs/robots.md "Can the H1 step over 40 cm?"). 1 = unchanged.
+        obstacle_swing_abduction: the abducted crossing swing, given as the reference rather than only allowed: a
+            crossing swing over an obstacle at least ``obstacle_abduction_height_min`` high has its path (the
+            ``{foot}_swing_path`` reference, and the clearance gating's path) moved outwards, away from the body's
+            sagittal plane across the path's heading, by this times the swing's normalised height profile (0 at
+            lift-off and touchdown, 1 over the box) [m], >= 0; 0 = the path of lift-off -> touchdown. The H1's swing
+            hip rolled to its 0.43 rad limit moves the sole 18 cm out and lifts it to 0.48 m at the box's near edge,
+            against 0.40-0.43 m with the leg in its sagittal plane (docs/robots.md "Can the H1 step over 40 cm?").
+        obstacle_swing_roll: the same swings' ``{foot}_orientation`` reference rolled outwards about the sole's
+            forward axis by this times the profile [rad], >= 0 (a leg without ankle roll abducts with its sole
+            rolled by the hip's roll); 0 = a flat sole.
+        obstacle_abduction_height_min: the obstacles whose crossing swings ``obstacle_swing_abduction`` and
+            ``obstacle_swing_roll`` shape: top at least this above the ground [m], >= 0.
         max_line_search_trials: FDDP line-search steps tried (1, ½, …).
         reg_min, reg_max: FDDP regularisation bounds.
         th_stop: FDDP stopping threshold.
@@ -363,6 +375,9 @@ class WalkingOCPConfig:
     obstacle_com_weight: float = 0.0
     obstacle_leg_posture_scale: float = 1.0
     obstacle_swing_orientation_scale: float = 1.0
+    obstacle_swing_abduction: float = 0.0
+    obstacle_swing_roll: float = 0.0
+    obstacle_abduction_height_min: float = 0.0
     max_line_search_trials: int = 10
     reg_min: float = 1e-9
     reg_max: float = 1e9
@@ -381,10 +396,14 @@ class WalkingOCPConfig:
         if not (np.isfinite(self.swing_apex_height) and self.swing_apex_height >= 0):
             raise ParameterError(f"swing_apex_height={self.swing_apex_height} m must be finite and >= 0")
         for name in ("obstacle_clearance_margin", "obstacle_shank_margin", "obstacle_footprint_margin",
-                     "obstacle_apex_margin", "obstacle_apex_height_max"):
+                     "obstacle_apex_margin", "obstacle_apex_height_max", "obstacle_swing_abduction",
+                     "obstacle_abduction_height_min"):
             value = getattr(self, name)
             if isinstance(value, bool) or not (np.isfinite(value) and value >= 0):
                 raise ParameterError(f"{name}={value!r} m must be finite and >= 0")
+        if isinstance(self.obstacle_swing_roll, bool) or not (np.isfinite(self.obstacle_swing_roll)
+                                                               and 0.0 <= self.obstacle_swing_roll < 0.5 * np.pi):
+            raise ParameterError(f"obstacle_swing_roll={self.obstacle_swing_roll!r} rad must be in [0, pi/2)")
         if isinstance(self.obstacle_plateau_transition_min, bool) or not (
                 0.0 < self.obstacle_plateau_transition_min <= 0.5):
             raise ParameterError(f"obstacle_plateau_transition_min={self.obstacle_plateau_transition_min!r} "
@@ -651,6 +670,10 @@ class WalkingOCP:
         pdata = model.createData()
         pin.framesForwardKinematics(model, pdata, self.x_reference[: model.nq])
         self._reference_placements = {foot: pin.SE3(pdata.oMf[fid]) for foot, fid in self.foot_frame_ids.items()}
+        #: per foot, +1 where the reference posture has it on the base's left (+y), -1 on its right: "outwards"
+        #: for ``obstacle_swing_abduction`` and ``obstacle_swing_roll``
+        self.foot_sides = np.array([1.0 if self._reference_placements[foot].translation[1] >= self.x_reference[1]
+                                    else -1.0 for foot in self.feet])
         running = [self._node(terminal=False) for _ in range(self.n_nodes)]
         terminal = self._node(terminal=True)
         # per node: (differential model, per foot (height, touchdown height, touchdown velocity,
@@ -962,8 +985,10 @@ class WalkingOCP:
                 self._swing_paths(liftoff[:, columns], ~in_contact, np.nan_to_num(phase), touchdown, path_weight)
         heights = self.ground_height + swing_height_reference(np.nan_to_num(phase), apex)
         crossing = None  # the (node, foot) pairs of a crossing swing: where _clearance gave a height reference
+        rolls = None  # the sole's outward roll reference [rad] of each (node, foot) (obstacle_swing_roll)
         if crossings is not None:
-            crossing_heights = self._clearance(crossings, ~in_contact, np.nan_to_num(phase), touchdown, columns)
+            crossing_heights, rolls = self._clearance(crossings, ~in_contact, np.nan_to_num(phase), touchdown,
+                                                      columns)
             crossing = ~np.isnan(crossing_heights)
             heights = np.where(crossing, self.ground_height + crossing_heights, heights)
         n_stance = np.maximum(in_contact.sum(axis=1), 1)
@@ -1017,7 +1042,10 @@ class WalkingOCP:
                     if orientation.weight != weight:
                         orientation.weight = weight
                     if swing:
-                        orientation.cost.residual.reference[:] = self._yaw_rotation(float(touchdown_yaw[k, j]))
+                        rotation = self._yaw_rotation(float(touchdown_yaw[k, j]))
+                        if rolls is not None and rolls[k, j] != 0.0:
+                            rotation = rotation @ pin.utils.rotate("x", float(rolls[k, j]))
+                        orientation.cost.residual.reference[:] = rotation
         if cfg.base_yaw_reference == "footholds":
             heading = foothold_heading(in_contact, np.asarray(schedule.contact_yaw, dtype=float)[:, columns],
                                        np.asarray(schedule.touchdown_yaw, dtype=float)[:, columns])
@@ -1061,9 +1089,11 @@ class WalkingOCP:
             item.cost.residual.reference[:2] = path[k, j]
 
     def _clearance(self, crossings, swinging: np.ndarray, phase: np.ndarray, touchdown: np.ndarray,
-                   columns: list[int]) -> np.ndarray:
+                   columns: list[int]) -> tuple[np.ndarray, np.ndarray | None]:
         """Write the clearance terms of ``crossings`` and return the swing height references (n + 1, n_feet)
-        [m] above the ground of the crossing swings' nodes, NaN at every other node (eq. 19 there).
+        [m] above the ground of the crossing swings' nodes, NaN at every other node (eq. 19 there), and the
+        soles' outward roll references (n + 1, n_feet) [rad] (0 where flat; None without
+        ``obstacle_swing_roll``).
 
         For each crossing swing (a run of swing nodes of one foot over one obstacle) the foot's path position
         is :func:`swing_path` (lift-off -> the schedule's ``touchdown`` (n + 1, n_feet, 2) [m], in the OCP's
@@ -1079,7 +1109,9 @@ class WalkingOCP:
         rise over until the first sole point's path enters the grown footprint and its fall begun
         only once the last has left it (:meth:`_plateau_phases`); "apex", eq. (19) with that H raised until
         the profile is at the clearance reference at the first and the last gated node (same cap). World
-        z = 0 is the ground the obstacles stand on."""
+        z = 0 is the ground the obstacles stand on. Over an obstacle at least ``obstacle_abduction_height_min`` high
+        the path is moved outwards by ``obstacle_swing_abduction`` and the sole rolled by ``obstacle_swing_roll``,
+        each times the height reference over H (:meth:`_abduct`)."""
         cfg = self.config
         index = np.asarray(crossings.index)[:, columns]
         liftoff = np.asarray(crossings.liftoff_xy, dtype=float)[:, columns]
@@ -1089,6 +1121,7 @@ class WalkingOCP:
         if index.shape != swinging.shape:
             raise ParameterError(f"crossings.index has shape {index.shape}, the schedule {swinging.shape}")
         heights = np.full(swinging.shape, np.nan)
+        rolls = np.zeros(swinging.shape) if cfg.obstacle_swing_roll > 0 else None
         terms = self._clearance_terms
         points = np.asarray(cfg.obstacle_sole_points, dtype=float).reshape(-1, 3)
         n_running = self.n_nodes
@@ -1124,6 +1157,8 @@ class WalkingOCP:
                         edge = float(np.min(swing_height_reference(s[[over[0], over[-1]]], 1.0)))
                         height = max(height, need / edge if edge > 0 else np.inf)
                     heights[nodes, j] = swing_height_reference(s, min(height, cap))
+                if top >= cfg.obstacle_abduction_height_min and min(height, cap) > 0:
+                    self._abduct(path, rolls, nodes, j, heights[nodes, j] / min(height, cap), path_yaw[nodes, j])
                 for row, node in enumerate(nodes.tolist()):
                     if node >= n_running:
                         continue
@@ -1151,7 +1186,21 @@ class WalkingOCP:
             if terms is not None and cfg.obstacle_clearance_legs == "all":
                 self._clearance_beside(crossings.obstacles, swinging[:, j], index[:, j] < 0, touchdown[:, j],
                                        [node[j] for node in terms])
-        return heights
+        return heights, rolls
+
+    def _abduct(self, path: np.ndarray, rolls: np.ndarray | None, nodes: np.ndarray, foot: int, profile: np.ndarray,
+                yaw: np.ndarray) -> None:
+        """Move foot ``foot``'s path ``path`` (n + 1, n_feet, 2) [m] outwards at ``nodes`` by ``obstacle_swing_abduction``
+        times ``profile`` (the normalised height reference, in [0, 1], per node), across the path's heading
+        ``yaw`` (per node) [rad], and write ``obstacle_swing_roll`` times ``profile`` outwards into ``rolls``
+        (n + 1, n_feet) [rad] (when not None). Outwards is the foot's side, :attr:`foot_sides`."""
+        cfg, side = self.config, self.foot_sides[foot]
+        if cfg.obstacle_swing_abduction > 0:
+            offset = side * cfg.obstacle_swing_abduction * profile
+            path[nodes, foot, 0] -= offset * np.sin(yaw)
+            path[nodes, foot, 1] += offset * np.cos(yaw)
+        if rolls is not None:
+            rolls[nodes, foot] = side * cfg.obstacle_swing_roll * profile
 
     def _clearance_beside(self, obstacles, swinging: np.ndarray, free: np.ndarray, position: np.ndarray,
                           terms) -> None:
