@@ -131,3 +131,59 @@ def test_measured_phase_wraps_around_the_step():
     assert _circular_mean([]) is None
     assert _measured_phase({"metrics": {"push_phase_measured": 1.25}}) == pytest.approx(0.25)  # a late step
     assert _measured_phase({"metrics": {}}) is None
+
+
+def test_the_wilson_interval_stays_in_zero_one_and_matches_its_closed_form():
+    from sim.campaigns.report import wilson_interval
+
+    assert wilson_interval(0, 0) is None
+    lower, upper = wilson_interval(0, 20)
+    assert lower == 0.0 and upper == pytest.approx(0.1611, abs=1e-4)
+    lower, upper = wilson_interval(20, 20)
+    assert upper == 1.0 and lower == pytest.approx(0.8389, abs=1e-4)
+    lower, upper = wilson_interval(17, 20)  # 85 %: 64.0-94.8 %
+    assert (lower, upper) == pytest.approx((0.6396, 0.9476), abs=1e-4)
+    z = 1.959963984540054  # closed form at 1 of 20
+    p, n = 0.05, 20
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    assert wilson_interval(1, 20) == pytest.approx((centre - half, centre + half), rel=1e-12)
+
+
+def test_obstacle_campaigns_run_apart_combine_into_one_summary_and_refuse_a_trial_counted_twice(tmp_path, capsys):
+    """The H1 preset's 30 cm campaign, run as seeds 0-9 and 10-19 (docs/data/), pools to its 17 of 20 with both
+    sources listed; the 10 cm one adds a height; the same campaign given twice, a push campaign and a single
+    directory are refused in one line."""
+    from pathlib import Path
+
+    from sim.campaigns.report import combine_obstacle_campaigns
+
+    data = Path(__file__).resolve().parents[1] / "docs" / "data"
+    halves = [data / "h1-obstacles-s26-30cm-lateral-aim-planned-seeds0-9", data / "h1-obstacles-s27-30cm-seeds10-19"]
+    ten = data / "h1-obstacles-s26-10cm-lateral-aim-planned"
+    summary = combine_obstacle_campaigns([*halves, ten], tmp_path / "pooled", name="pooled")
+    entries = summary["obstacle"]["default"]
+    assert [e["height"] for e in entries] == [0.1, 0.3]
+    assert [(e["n_success"], e["n"]) for e in entries] == [(20, 20), (17, 20)]
+    assert entries[1]["success_interval_95"] == pytest.approx((0.6396, 0.9476), abs=1e-4)
+    assert entries[1]["paper_success_rate"] == 0.6
+    assert [s["seeds"] for s in summary["sources"]] == [list(range(10)), list(range(10, 20)), list(range(20))]
+    assert summary["n_recorded"] == 40 and summary["robot"] == "h1"
+    written = json.loads((tmp_path / "pooled" / "summary.json").read_text())
+    assert written["obstacle"]["default"][1]["n_success"] == 17
+    assert (tmp_path / "pooled" / "obstacle_success.png").stat().st_size > 0
+    text = format_summary(summary)
+    assert "obstacle 30 cm, default: success 85.0 % (17/20) [64-95 %] (seed 000: 60.0 %)" in text
+    assert "source h1-obstacles-s27-30cm-seeds10-19: heights [0.3] m, seeds 10-19, 10 trials" in text
+    # through the command line, and its one-line refusals (exit code 2)
+    assert main(["campaign", "combine", *map(str, halves), "--out", str(tmp_path / "cli"), "--no-plots"]) == 0
+    assert "obstacle 30 cm, default: success 85.0 % (17/20)" in capsys.readouterr().out
+    assert main(["campaign", "combine", str(halves[0]), str(halves[0]), "--out", str(tmp_path / "twice")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "seed 0 is in both" in err and len(err.splitlines()) == 1
+    push = tmp_path / "push"
+    ResultStore(push).write_spec(timing_study().to_dict())
+    assert main(["campaign", "combine", str(halves[0]), str(push), "--out", str(tmp_path / "mixed")]) == 2
+    assert "is not an obstacle campaign with a height grid" in capsys.readouterr().err
+    assert main(["campaign", "combine", str(halves[0]), "--out", str(tmp_path / "one")]) == 2
+    assert "must name at least two campaigns" in capsys.readouterr().err

@@ -299,7 +299,7 @@ def test_a_tiny_obstacle_campaign_runs_through_the_real_machinery(tmp_path, caps
     assert [e["height"] for e in entries] == [0.1, 0.4] and [e["paper_success_rate"] for e in entries] == [1.0, 0.05]
     assert all(e["n"] == 1 and e["success_rate"] == 0.0 and e["detected_rate"] == 1.0 for e in entries)
     assert (out / "obstacle_success.png").stat().st_size > 0
-    assert "obstacle 10 cm, default: success 0.0 % (seed 000: 100.0 %)" in capsys.readouterr().out
+    assert "obstacle 10 cm, default: success 0.0 % (0/1) [0-79 %] (seed 000: 100.0 %)" in capsys.readouterr().out
     records = ResultStore(out).records()
     assert len(records) == 2 and all(r["success"] is False and r["metrics"]["crossed"] is False for r in records)
 

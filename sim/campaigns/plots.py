@@ -135,7 +135,8 @@ def plot_success_by_axis(summary: dict[str, Any], axes_names: list[str], path: s
 
 def plot_obstacle_success(summary: dict[str, Any], path: str | Path) -> str:
     """Step-over success rate by box height [cm], one bar per variant, beside the seed-000 thesis's
-    (H1-2, Fig. 5.13), with the touched rate as a dot and the trial counts."""
+    (H1-2, Fig. 5.13), with the 95 % Wilson interval of each rate as an error bar, the touched rate as a dot and the
+    trial counts."""
     plt = _pyplot()
     by_variant = summary["obstacle"]
     variants = list(by_variant)
@@ -149,6 +150,9 @@ def plot_obstacle_success(summary: dict[str, Any], path: str | Path) -> str:
         offset = (k - (n_bars - 1) / 2) * width
         rates = [np.nan if e["success_rate"] is None else e["success_rate"] for e in by_variant[variant]]
         ax.bar(x + offset, rates, width, label=f"ours ({variant})" if len(variants) > 1 else "ours")
+        bounds = np.array([e.get("success_interval_95") or (np.nan, np.nan) for e in by_variant[variant]], float)
+        ax.errorbar(x + offset, rates, yerr=np.abs(bounds.T - np.asarray(rates, float)), fmt="none", ecolor="0.25",
+                    elinewidth=1, capsize=3, label="95 % interval" if k == 0 else None)
         touched = [np.nan if e["touched_rate"] is None else e["touched_rate"] for e in by_variant[variant]]
         ax.plot(x + offset, touched, "kv", markersize=5, label="touched the box" if k == 0 else None)
         for xi, e in zip(x + offset, by_variant[variant]):

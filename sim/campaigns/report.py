@@ -46,6 +46,18 @@ MEASURED_PHASE_BINS = 5  # bins of the measured push phase over [0, 1)
 PAPER_OBSTACLE_SUCCESS = {0.1: 1.00, 0.2: 0.85, 0.3: 0.60, 0.4: 0.05}
 
 
+def wilson_interval(successes: int, n: int, z: float = 1.959963984540054) -> tuple[float, float] | None:
+    """Wilson score interval (lower, upper) of a success rate from ``successes`` of ``n`` trials, at the normal
+    quantile ``z`` (default: 95 %); None when ``n`` is 0. Unlike the normal approximation it stays in [0, 1] and is
+    not empty at 0 or n successes (0 of 20: [0, 0.161]; 20 of 20: [0.839, 1])."""
+    if n <= 0:
+        return None
+    rate, z2 = successes / n, z * z
+    centre = (rate + z2 / (2 * n)) / (1 + z2 / n)
+    half = z * np.sqrt(rate * (1 - rate) / n + z2 / (4 * n * n)) / (1 + z2 / n)
+    return max(0.0, float(centre - half)), min(1.0, float(centre + half))
+
+
 def _stats(records: list[dict[str, Any]]) -> dict[str, Any]:
     n = len(records)
     n_success = sum(bool(r["success"]) for r in records)
@@ -56,6 +68,7 @@ def _stats(records: list[dict[str, Any]]) -> dict[str, Any]:
         "n_error": sum(r["status"] == "error" for r in records),
         "n_failed": sum(r["status"] == "failed" for r in records),  # the controller had nothing left to follow
         "success_rate": n_success / n if n else None,
+        "success_interval_95": wilson_interval(n_success, n),
     }
 
 
@@ -182,14 +195,18 @@ def summarize(spec: CampaignSpec, records: list[dict[str, Any]]) -> dict[str, An
         summary["comparisons"] = comparisons
 
     if spec.scenario == "obstacle" and "height" in spec.grid:
-        summary["obstacle"] = _obstacle_summary(spec, rows)
-
-    errors = Counter(r["error"] for _, r in rows if r["status"] == "error")
-    summary["errors"] = [{"error": text, "count": count} for text, count in errors.most_common(MAX_ERROR_KINDS)]
-    # the code each trial ran (sim.campaigns.trial.code_version; records written before it have none)
-    versions = Counter(r.get("code", "not recorded") for _, r in rows)
-    summary["code_versions"] = [{"code": code, "count": count} for code, count in versions.most_common()]
+        summary["obstacle"] = _obstacle_summary(variants, spec.grid["height"], rows)
+    summary.update(_errors_and_versions(rows))
     return summary
+
+
+def _errors_and_versions(rows) -> dict[str, Any]:
+    """``errors`` (the most frequent error texts of the (trial, record) ``rows``) and ``code_versions`` (the code each
+    trial ran, :func:`sim.campaigns.trial.code_version`; records written before it have none)."""
+    errors = Counter(r["error"] for _, r in rows if r["status"] == "error")
+    versions = Counter(r.get("code", "not recorded") for _, r in rows)
+    return {"errors": [{"error": text, "count": count} for text, count in errors.most_common(MAX_ERROR_KINDS)],
+            "code_versions": [{"code": code, "count": count} for code, count in versions.most_common()]}
 
 
 def _mean(values: list[Any]) -> float | None:
@@ -197,15 +214,16 @@ def _mean(values: list[Any]) -> float | None:
     return float(np.mean(values)) if values else None
 
 
-def _obstacle_summary(spec: CampaignSpec, rows) -> dict[str, Any]:
-    """Per variant and box height: success, touched, fell and detected rates, mean crossing time [s],
+def _obstacle_summary(variants, heights, rows) -> dict[str, Any]:
+    """Per variant of ``variants`` and box height of ``heights`` [m], over the (trial, record) ``rows``: success,
+    touched, fell and detected rates, mean crossing time [s],
     mean |height estimate error| [m], the falls by the most feet that got across the box before them
     (``falls_by_feet_across``: [0, 1, 2], from the ``feet_across`` metric: before the box, astride it, after
     crossing; records without it are not counted), and the seed-000 thesis's success rate (None where it has none)."""
     out: dict[str, Any] = {}
-    for variant in spec.variants:
+    for variant in variants:
         entries = []
-        for height in spec.grid["height"]:
+        for height in heights:
             selected = [r for t, r in rows if t.variant == variant and t.params.get("height") == height]
             metrics = [r.get("metrics", {}) for r in selected]
             n = len(selected)
@@ -230,6 +248,17 @@ def _fall_phases(entry: dict[str, Any]) -> str:
     if before + astride + after == 0:
         return ""
     return f" (before the box {before}, astride {astride}, across {after})"
+
+
+def _ranges(values: list[int]) -> str:
+    """Sorted integers as runs: [0, 1, 2, 5, 7, 8] -> "0-2, 5, 7-8"."""
+    runs: list[list[int]] = []
+    for value in values:
+        if runs and value == runs[-1][1] + 1:
+            runs[-1][1] = value
+        else:
+            runs.append([value, value])
+    return ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs) or "none"
 
 
 def format_summary(summary: dict[str, Any]) -> str:
@@ -288,15 +317,23 @@ def format_summary(summary: dict[str, Any]) -> str:
     for variant, entries in summary.get("obstacle", {}).items():
         for e in entries:
             paper = "" if e["paper_success_rate"] is None else f" (seed 000: {pct(e['paper_success_rate']).strip()})"
+            interval = e.get("success_interval_95")
+            within = "" if interval is None else f" [{100 * interval[0]:.0f}-{100 * interval[1]:.0f} %]"
             lines.append(
-                f"  obstacle {100 * e['height']:.0f} cm, {variant}: success {pct(e['success_rate']).strip()}{paper}, "
+                f"  obstacle {100 * e['height']:.0f} cm, {variant}: success {pct(e['success_rate']).strip()}"
+                f" ({e['n_success']}/{e['n']}){within}{paper}, "
                 f"touched {pct(e['touched_rate']).strip()}, fell {e['n_fell']}/{e['n']}{_fall_phases(e)}, detected "
                 f"{pct(e['detected_rate']).strip()}"
             )
     for e in summary.get("errors", []):
         lines.append(f"  error x{e['count']}: {e['error']}")
+    for source in summary.get("sources", []):
+        params = ", ".join(f"{k}={v}" for k, v in source["params"].items()) or "no params"
+        codes = ", ".join(v["code"][:7] for v in source["code_versions"])
+        lines.append(f"  source {source['campaign']}: heights {source['heights']} m, seeds {_ranges(source['seeds'])}, "
+                     f"{source['n_recorded']} trials, {params}, code {codes}")
     versions = summary.get("code_versions", [])
-    if len(versions) > 1:
+    if len(versions) > 1 and "sources" not in summary:
         lines.append("  WARNING the trials ran on " + str(len(versions)) + " code versions: "
                      + ", ".join(f"{v['code']} x{v['count']}" for v in versions))
     for path in summary.get("files", []):
@@ -337,4 +374,68 @@ def write_report(directory: str | Path, plots: bool = True) -> dict[str, Any]:
     files.append(str(directory / SUMMARY_FILE))
     summary["files"] = files
     (directory / SUMMARY_FILE).write_text(json.dumps(to_jsonable(summary), indent=2) + "\n")
+    return summary
+
+
+def combine_obstacle_campaigns(directories: list[str | Path], out: str | Path, name: str | None = None,
+                               plots: bool = True) -> dict[str, Any]:
+    """One step-over summary from several obstacle campaigns of one robot (heights or seeds run apart, as a preset's
+    20 trials per height often are): ``summary.json`` and ``obstacle_success.png`` written into ``out``.
+
+    The trials are pooled by variant and box height; each source is listed under ``sources`` (its campaign, directory,
+    heights, seeds, shared ``params`` and code versions), so a reader sees what was pooled. A (variant, height, seed)
+    recorded by two sources is refused: it would be counted twice.
+
+    Raises:
+        ParameterError: fewer than two directories, a source that is not an obstacle campaign with a ``height`` grid,
+            sources of different robots or controllers, or a trial in two sources.
+        CampaignDirectoryError: a directory holds no campaign.
+    """
+    from sim.campaigns.run import load_campaign
+    from wbmpc.errors import ParameterError
+    from wbmpc.jsonable import to_jsonable
+
+    if len(directories) < 2:
+        raise ParameterError(f"directories={[str(d) for d in directories]} must name at least two campaigns to combine")
+    sources, rows, owner = [], [], {}
+    for directory in directories:
+        spec, records = load_campaign(directory)
+        if spec.scenario != "obstacle" or "height" not in spec.grid:
+            raise ParameterError(f"campaign {spec.name!r} ({directory}) is not an obstacle campaign with a height grid "
+                                 f"(scenario {spec.scenario!r}, grid {sorted(spec.grid)})")
+        by_key = {r["key"]: r for r in records}
+        mine = [(t, by_key[t.key]) for t in make_trials(spec) if t.key in by_key]
+        for trial, _ in mine:
+            point = (trial.variant, float(trial.params["height"]), trial.seed)
+            if point in owner:
+                raise ParameterError(f"variant {point[0]!r}, height {point[1]} m, seed {point[2]} is in both "
+                                     f"{owner[point]} and {spec.name!r}: combine campaigns of disjoint trials")
+            owner[point] = repr(spec.name)
+        rows.extend(mine)
+        sources.append({"campaign": spec.name, "directory": str(directory), "robot": spec.robot,
+                        "controller": spec.controller, "heights": sorted(spec.grid["height"]),
+                        "seeds": sorted({t.seed for t, _ in mine}), "n_recorded": len(mine), "params": spec.params,
+                        "code_versions": _errors_and_versions(mine)["code_versions"]})
+    for key in ("robot", "controller"):
+        values = sorted({source[key] for source in sources})
+        if len(values) > 1:
+            raise ParameterError(f"the campaigns' {key}s {values} differ: combine campaigns of one {key}")
+    out = Path(out)
+    variants = list(dict.fromkeys(t.variant for t, _ in rows))
+    heights = sorted({float(t.params["height"]) for t, _ in rows})
+    summary: dict[str, Any] = {
+        "campaign": name or out.name, "scenario": "obstacle", "controller": sources[0]["controller"],
+        "robot": sources[0]["robot"], "duration": None, "n_trials": len(rows), "n_recorded": len(rows),
+        "complete": all(s["n_recorded"] for s in sources), "sources": sources,
+        "variants": {v: _stats([r for t, r in rows if t.variant == v]) for v in variants},
+        "axes": {}, "obstacle": _obstacle_summary(variants, heights, rows), **_errors_and_versions(rows)}
+    out.mkdir(parents=True, exist_ok=True)
+    files: list[str] = []
+    if plots and rows:
+        from sim.campaigns import plots as campaign_plots
+
+        files.append(campaign_plots.plot_obstacle_success(summary, out / "obstacle_success.png"))
+    files.append(str(out / SUMMARY_FILE))
+    summary["files"] = files
+    (out / SUMMARY_FILE).write_text(json.dumps(to_jsonable(summary), indent=2) + "\n")
     return summary

@@ -9,6 +9,7 @@
     wbmpc campaign obstacles --robot h1 --heights 0.1 0.2 0.3 0.4 --trials 20   # step-over success by height
     wbmpc campaign run my_campaign.toml --backend ray --address auto     # a campaign file, on a cluster
     wbmpc campaign report runs/push-map                                  # summary.json + figures
+    wbmpc campaign combine runs/h1-10cm runs/h1-40cm --out runs/h1       # one step-over figure from several
 
 Every run writes the report (``summary.json``, figures) into its directory when it ends.
 """
@@ -115,6 +116,15 @@ def register(subparsers) -> None:
     report.add_argument("--json", action="store_true", help="print the summary as JSON")
     report.set_defaults(func=_report)
 
+    combine = commands.add_parser("combine", help="one step-over summary and figure from several obstacle campaigns "
+                                                  "(heights or seeds run apart)")
+    combine.add_argument("directories", nargs="+", help="obstacle campaign directories (two or more)")
+    combine.add_argument("--out", required=True, help="directory for summary.json and obstacle_success.png")
+    combine.add_argument("--name", default=None, help="the combined campaign's label (default: the --out name)")
+    combine.add_argument("--no-plots", action="store_true", help="write summary.json only")
+    combine.add_argument("--json", action="store_true", help="print the summary as JSON")
+    combine.set_defaults(func=_combine)
+
 
 def _spec_from_args(args: argparse.Namespace):
     from sim.campaigns.spec import builtin_campaign
@@ -217,6 +227,14 @@ def _run(args: argparse.Namespace, spec) -> int:
             f"{outcome.wall_time:.1f} s, {outcome.n_skipped} already recorded, {outcome.n_remaining} remaining"
         )
         print(format_summary(summary))
+    return 0
+
+
+def _combine(args: argparse.Namespace) -> int:
+    from sim.campaigns.report import combine_obstacle_campaigns, format_summary
+
+    summary = combine_obstacle_campaigns(args.directories, args.out, name=args.name, plots=not args.no_plots)
+    print_json(summary) if args.json else print(format_summary(summary))
     return 0
 
 
