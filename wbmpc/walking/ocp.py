@@ -309,7 +309,8 @@ class WalkingOCPConfig:
             lead foot higher than its sagittal reach (docs/robots.md "Can the H1 step over 40 cm?"). 1 = unchanged.
         obstacle_swing_abduction: the abducted crossing swing, given as the reference rather than only allowed: a
             crossing swing over an obstacle at least ``obstacle_abduction_height_min`` high has its path (the
-            ``{foot}_swing_path`` reference, and the clearance gating's path) moved outwards, away from the body's
+            ``{foot}_swing_path`` reference; the clearance gating and the plateau's breakpoints keep the straight
+            lift-off -> touchdown path) moved outwards, away from the body's
             sagittal plane across the path's heading, by this times the swing's normalised height profile (0 at
             lift-off and touchdown, 1 over the box) [m], >= 0; 0 = the path of lift-off -> touchdown. The H1's swing
             hip rolled to its 0.43 rad limit moves the sole 18 cm out and lifts it to 0.48 m at the box's near edge,
