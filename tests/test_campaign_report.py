@@ -168,7 +168,12 @@ def test_obstacle_campaigns_run_apart_combine_into_one_summary_and_refuse_a_tria
     assert entries[1]["success_interval_95"] == pytest.approx((0.6396, 0.9476), abs=1e-4)
     assert entries[1]["paper_success_rate"] == 0.6
     assert [s["seeds"] for s in summary["sources"]] == [list(range(10)), list(range(10, 20)), list(range(20))]
-    assert summary["n_recorded"] == 40 and summary["robot"] == "h1"
+    assert summary["n_recorded"] == 40 and summary["n_trials"] == 40 and summary["complete"] and summary["robot"] == "h1"
+    # a source stopped halfway (10 of its 20 trials): counted as recorded, and the pool is not complete
+    stopped = combine_obstacle_campaigns([halves[0], data / "h1-obstacles-s34-40cm-preset-apex-0.50"],
+                                         tmp_path / "stopped", plots=False)
+    assert (stopped["n_recorded"], stopped["n_trials"], stopped["complete"]) == (20, 30, False)
+    assert "20/30 trials recorded (incomplete" in format_summary(stopped)
     written = json.loads((tmp_path / "pooled" / "summary.json").read_text())
     assert written["obstacle"]["default"][1]["n_success"] == 17
     assert (tmp_path / "pooled" / "obstacle_success.png").stat().st_size > 0

@@ -100,9 +100,8 @@ def summarize(spec: CampaignSpec, records: list[dict[str, Any]]) -> dict[str, An
         first one, on paired trials) and ``errors`` (most frequent error texts).
     """
     trials = make_trials(spec)
-    by_key = {r["key"]: r for r in records}
     variants = list(spec.variants)
-    rows = [(trial, by_key[trial.key]) for trial in trials if trial.key in by_key]
+    rows = _recorded(trials, records)
     summary: dict[str, Any] = {
         "campaign": spec.name,
         "scenario": spec.scenario,
@@ -198,6 +197,13 @@ def summarize(spec: CampaignSpec, records: list[dict[str, Any]]) -> dict[str, An
         summary["obstacle"] = _obstacle_summary(variants, spec.grid["height"], rows)
     summary.update(_errors_and_versions(rows))
     return summary
+
+
+def _recorded(trials, records: list[dict[str, Any]]) -> list[tuple[Any, dict[str, Any]]]:
+    """(trial, record) of each of ``trials`` (:func:`sim.campaigns.trial.make_trials`) that ``records`` holds, in the
+    trials' order (records of other trials are ignored)."""
+    by_key = {r["key"]: r for r in records}
+    return [(trial, by_key[trial.key]) for trial in trials if trial.key in by_key]
 
 
 def _errors_and_versions(rows) -> dict[str, Any]:
@@ -341,6 +347,16 @@ def format_summary(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _write_summary(summary: dict[str, Any], directory: Path, files: list[str]) -> dict[str, Any]:
+    """Write ``summary`` as ``directory``/summary.json, with ``files`` (the figures written) and that file listed
+    under ``files``; returns the summary."""
+    from wbmpc.jsonable import to_jsonable
+
+    summary["files"] = [*files, str(directory / SUMMARY_FILE)]
+    (directory / SUMMARY_FILE).write_text(json.dumps(to_jsonable(summary), indent=2) + "\n")
+    return summary
+
+
 def write_report(directory: str | Path, plots: bool = True) -> dict[str, Any]:
     """Summarize the campaign stored in ``directory``: write ``summary.json`` and the figures.
 
@@ -353,7 +369,6 @@ def write_report(directory: str | Path, plots: bool = True) -> dict[str, Any]:
         The summary, with ``files`` listing what was written.
     """
     from sim.campaigns.run import load_campaign
-    from wbmpc.jsonable import to_jsonable
 
     directory = Path(directory)
     spec, records = load_campaign(directory)
@@ -371,10 +386,7 @@ def write_report(directory: str | Path, plots: bool = True) -> dict[str, Any]:
         other_axes = [a for a in summary["axes"] if a not in ("force_x", "force_y", "phase")]
         if other_axes:
             files.append(campaign_plots.plot_success_by_axis(summary, other_axes, directory / "axes.png"))
-    files.append(str(directory / SUMMARY_FILE))
-    summary["files"] = files
-    (directory / SUMMARY_FILE).write_text(json.dumps(to_jsonable(summary), indent=2) + "\n")
-    return summary
+    return _write_summary(summary, directory, files)
 
 
 def combine_obstacle_campaigns(directories: list[str | Path], out: str | Path, name: str | None = None,
@@ -393,7 +405,6 @@ def combine_obstacle_campaigns(directories: list[str | Path], out: str | Path, n
     """
     from sim.campaigns.run import load_campaign
     from wbmpc.errors import ParameterError
-    from wbmpc.jsonable import to_jsonable
 
     if len(directories) < 2:
         raise ParameterError(f"directories={[str(d) for d in directories]} must name at least two campaigns to combine")
@@ -403,8 +414,8 @@ def combine_obstacle_campaigns(directories: list[str | Path], out: str | Path, n
         if spec.scenario != "obstacle" or "height" not in spec.grid:
             raise ParameterError(f"campaign {spec.name!r} ({directory}) is not an obstacle campaign with a height grid "
                                  f"(scenario {spec.scenario!r}, grid {sorted(spec.grid)})")
-        by_key = {r["key"]: r for r in records}
-        mine = [(t, by_key[t.key]) for t in make_trials(spec) if t.key in by_key]
+        trials = make_trials(spec)
+        mine = _recorded(trials, records)
         for trial, _ in mine:
             point = (trial.variant, float(trial.params["height"]), trial.seed)
             if point in owner:
@@ -414,7 +425,8 @@ def combine_obstacle_campaigns(directories: list[str | Path], out: str | Path, n
         rows.extend(mine)
         sources.append({"campaign": spec.name, "directory": str(directory), "robot": spec.robot,
                         "controller": spec.controller, "heights": sorted(spec.grid["height"]),
-                        "seeds": sorted({t.seed for t, _ in mine}), "n_recorded": len(mine), "params": spec.params,
+                        "seeds": sorted({t.seed for t, _ in mine}), "n_trials": len(trials), "n_recorded": len(mine),
+                        "params": spec.params,
                         "code_versions": _errors_and_versions(mine)["code_versions"]})
     for key in ("robot", "controller"):
         values = sorted({source[key] for source in sources})
@@ -425,8 +437,9 @@ def combine_obstacle_campaigns(directories: list[str | Path], out: str | Path, n
     heights = sorted({float(t.params["height"]) for t, _ in rows})
     summary: dict[str, Any] = {
         "campaign": name or out.name, "scenario": "obstacle", "controller": sources[0]["controller"],
-        "robot": sources[0]["robot"], "duration": None, "n_trials": len(rows), "n_recorded": len(rows),
-        "complete": all(s["n_recorded"] for s in sources), "sources": sources,
+        "robot": sources[0]["robot"], "duration": None, "n_trials": sum(s["n_trials"] for s in sources),
+        "n_recorded": len(rows), "complete": all(s["n_recorded"] == s["n_trials"] for s in sources),
+        "sources": sources,
         "variants": {v: _stats([r for t, r in rows if t.variant == v]) for v in variants},
         "axes": {}, "obstacle": _obstacle_summary(variants, heights, rows), **_errors_and_versions(rows)}
     out.mkdir(parents=True, exist_ok=True)
@@ -435,7 +448,4 @@ def combine_obstacle_campaigns(directories: list[str | Path], out: str | Path, n
         from sim.campaigns import plots as campaign_plots
 
         files.append(campaign_plots.plot_obstacle_success(summary, out / "obstacle_success.png"))
-    files.append(str(out / SUMMARY_FILE))
-    summary["files"] = files
-    (out / SUMMARY_FILE).write_text(json.dumps(to_jsonable(summary), indent=2) + "\n")
-    return summary
+    return _write_summary(summary, out, files)
