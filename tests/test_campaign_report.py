@@ -133,6 +133,18 @@ def test_measured_phase_wraps_around_the_step():
     assert _measured_phase({"metrics": {}}) is None
 
 
+def test_success_by_depth_bins_on_multiples_of_five_centimetres_with_an_edge_in_the_deeper_bin():
+    from sim.campaigns.report import _success_by_depth
+
+    metrics = [{"obstacle_depth": 0.15, "success": True}, {"obstacle_depth": 0.1499, "success": False},
+               {"obstacle_depth": 0.29, "success": True}, {"success": True}]
+    assert _success_by_depth(metrics) == [
+        {"depth_range": [0.1, 0.15], "n": 1, "n_success": 0, "success_rate": 0.0},
+        {"depth_range": [0.15, 0.2], "n": 1, "n_success": 1, "success_rate": 1.0},
+        {"depth_range": [0.25, 0.3], "n": 1, "n_success": 1, "success_rate": 1.0}]
+    assert _success_by_depth([]) == []
+
+
 def test_the_wilson_interval_stays_in_zero_one_and_matches_its_closed_form():
     from sim.campaigns.report import wilson_interval
 
@@ -167,6 +179,9 @@ def test_obstacle_campaigns_run_apart_combine_into_one_summary_and_refuse_a_tria
     assert [(e["n_success"], e["n"]) for e in entries] == [(20, 20), (17, 20)]
     assert entries[1]["success_interval_95"] == pytest.approx((0.6396, 0.9476), abs=1e-4)
     assert entries[1]["paper_success_rate"] == 0.6
+    # by the boxes' drawn depths: the 30 cm failures are the shallowest and the deepest boxes
+    assert [(b["depth_range"], b["n_success"], b["n"]) for b in entries[1]["by_depth"]] == [
+        ([0.1, 0.15], 2, 3), ([0.15, 0.2], 7, 7), ([0.2, 0.25], 2, 2), ([0.25, 0.3], 6, 8)]
     assert [s["seeds"] for s in summary["sources"]] == [list(range(10)), list(range(10, 20)), list(range(20))]
     assert summary["n_recorded"] == 40 and summary["n_trials"] == 40 and summary["complete"] and summary["robot"] == "h1"
     # a source stopped halfway (10 of its 20 trials): counted as recorded, and the pool is not complete
@@ -180,6 +195,7 @@ def test_obstacle_campaigns_run_apart_combine_into_one_summary_and_refuse_a_tria
     text = format_summary(summary)
     assert "obstacle 30 cm, default: success 85.0 % (17/20) [64-95 %] (seed 000: 60.0 %)" in text
     assert "source h1-obstacles-s27-30cm-seeds10-19: heights [0.3] m, seeds 10-19, 10 trials" in text
+    assert "by box depth: 10-15 cm 2/3, 15-20 cm 7/7, 20-25 cm 2/2, 25-30 cm 6/8" in text
     # through the command line, and its one-line refusals (exit code 2)
     assert main(["campaign", "combine", *map(str, halves), "--out", str(tmp_path / "cli"), "--no-plots"]) == 0
     assert "obstacle 30 cm, default: success 85.0 % (17/20)" in capsys.readouterr().out

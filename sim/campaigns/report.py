@@ -44,6 +44,7 @@ MAX_ERROR_KINDS = 5
 MEASURED_PHASE_BINS = 5  # bins of the measured push phase over [0, 1)
 # The seed-000 thesis (Unitree H1-2, MJPC): step-over success by obstacle height [m], Fig. 5.13, 20 trials each
 PAPER_OBSTACLE_SUCCESS = {0.1: 1.00, 0.2: 0.85, 0.3: 0.60, 0.4: 0.05}
+OBSTACLE_DEPTH_BIN = 0.05  # [m] width of the box-depth bins of an obstacle campaign's per-depth success
 
 
 def wilson_interval(successes: int, n: int, z: float = 1.959963984540054) -> tuple[float, float] | None:
@@ -225,7 +226,8 @@ def _obstacle_summary(variants, heights, rows) -> dict[str, Any]:
     touched, fell and detected rates, mean crossing time [s],
     mean |height estimate error| [m], the falls by the most feet that got across the box before them
     (``falls_by_feet_across``: [0, 1, 2], from the ``feet_across`` metric: before the box, astride it, after
-    crossing; records without it are not counted), and the seed-000 thesis's success rate (None where it has none)."""
+    crossing; records without it are not counted), the success by the box's drawn depth (``by_depth``, see
+    :func:`_success_by_depth`) and the seed-000 thesis's success rate (None where it has none)."""
     out: dict[str, Any] = {}
     for variant in variants:
         entries = []
@@ -242,10 +244,27 @@ def _obstacle_summary(variants, heights, rows) -> dict[str, Any]:
                 "falls_by_feet_across": [sum(1 for m in metrics if m.get("fell") and m.get("feet_across") == k)
                                          for k in range(3)],
                 "height_error_abs_mean": _mean(errors),
+                "by_depth": _success_by_depth(metrics),
                 "paper_success_rate": PAPER_OBSTACLE_SUCCESS.get(round(float(height), 3)),
             })
         out[variant] = entries
     return out
+
+
+def _success_by_depth(metrics: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Success by the box's depth along the path (the ``obstacle_depth`` metric [m], drawn per seed), in bins of
+    ``OBSTACLE_DEPTH_BIN`` aligned on its multiples: [{"depth_range": [lo, hi] [m], "n", "n_success",
+    "success_rate"}] for the bins holding a trial, shallowest first (a depth on a bin edge counts in the deeper bin;
+    trials without the metric are left out)."""
+    bins: dict[int, list[bool]] = {}
+    for m in metrics:
+        depth = m.get("obstacle_depth")
+        if depth is not None:
+            # the 1e-9 keeps a depth on an edge (0.15 / 0.05 = 2.9999999999999996) in the deeper bin
+            bins.setdefault(int(np.floor(float(depth) / OBSTACLE_DEPTH_BIN + 1e-9)), []).append(bool(m.get("success")))
+    return [{"depth_range": [round(k * OBSTACLE_DEPTH_BIN, 6), round((k + 1) * OBSTACLE_DEPTH_BIN, 6)],
+             "n": len(outcomes), "n_success": sum(outcomes), "success_rate": sum(outcomes) / len(outcomes)}
+            for k, outcomes in sorted(bins.items())]
 
 
 def _fall_phases(entry: dict[str, Any]) -> str:
@@ -331,6 +350,10 @@ def format_summary(summary: dict[str, Any]) -> str:
                 f"touched {pct(e['touched_rate']).strip()}, fell {e['n_fell']}/{e['n']}{_fall_phases(e)}, detected "
                 f"{pct(e['detected_rate']).strip()}"
             )
+            if e.get("by_depth"):
+                lines.append("    by box depth: " + ", ".join(
+                    f"{100 * b['depth_range'][0]:.0f}-{100 * b['depth_range'][1]:.0f} cm {b['n_success']}/{b['n']}"
+                    for b in e["by_depth"]))
     for e in summary.get("errors", []):
         lines.append(f"  error x{e['count']}: {e['error']}")
     for source in summary.get("sources", []):
