@@ -12,6 +12,14 @@ Definitions (world frame, the box of ``params["obstacle_truth"]``, crossed along
 - ``touched``: any robot-box contact during the run; ``first_touch_time`` [s];
 - ``fell``: the run ended in a fall (the runner's fall detector);
 - ``success``: crossed, not fallen, not resting on the box, and the run completed (no error);
+- the crossing's balance (two feet, the log's ``dcm``, ``feet`` and ``foot_contact`` ticks; None where the event
+  did not happen): the DCM along the depth axis minus a sole centre [m] (> 0: the DCM ahead of it) at three events.
+  ``lead_touchdown_dcm_margin``: minus the lead foot's, at its touchdown (the first tick a sole centre beyond the far
+  edge is on the ground, ``lead_touchdown_time`` [s]); ``trailing_liftoff_dcm_margin``: minus the lead foot's, when
+  the other sole rises ``LIFTOFF_HEIGHT`` above the floor after it (``trailing_liftoff_time`` [s]): the body must be
+  carried over the lead foot, whose heel bounds the centre of pressure; ``trailing_touchdown_dcm_margin``: minus the
+  rear sole's, when the trailing foot is down beyond the far edge (``trailing_touchdown_time`` [s]): < 0, the DCM
+  behind both feet with the box behind them;
 - perception (when on): ``detected``, ``detection_time`` [s] (first report),
   ``detection_distance`` [m] (the box's near edge ahead of the base, true position, at that time),
   and the last estimate's errors, estimate minus truth [m]: ``height_error``,
@@ -28,11 +36,46 @@ import numpy as np
 
 from sequencer.obstacles import Obstacle
 
+LIFTOFF_HEIGHT = 0.05  # [m] a sole centre this far above the floor (z = 0) has lifted off (a heel rocking in a
+# double support lifts it 1-2 cm)
+
 
 def obstacle_from_record(record: dict[str, Any]) -> Obstacle:
     """An :class:`Obstacle` from its plain data in a log (``wbmpc.jsonable.to_jsonable`` of one, extra keys
     such as a detection's ``first_seen`` ignored)."""
     return Obstacle(**{field.name: record[field.name] for field in dataclasses.fields(Obstacle)})
+
+
+def _crossing_balance(ticks: dict[str, np.ndarray], axis: np.ndarray, far: float) -> dict[str, Any]:
+    """The crossing's balance metrics of the module docstring (the world's depth ``axis`` (2,), the box's ``far``
+    edge along it [m]); every value None when the log has no DCM or contacts, or not two feet."""
+    names = ("lead_touchdown", "trailing_liftoff", "trailing_touchdown")
+    out: dict[str, Any] = {f"{name}_{kind}": None for name in names for kind in ("time", "dcm_margin")}
+    feet, on_ground, dcm = ticks.get("feet"), ticks.get("foot_contact"), ticks.get("dcm")
+    if feet is None or on_ground is None or dcm is None or feet.shape[1] != 2:
+        return out
+    t = ticks["t"]
+    along = feet[:, :, :2] @ axis  # (n, 2) sole centres along the depth axis [m]
+    dcm_along = dcm[:, :2] @ axis
+    down_beyond = (along > far) & np.asarray(on_ground, dtype=bool)
+    if not down_beyond.any():
+        return out
+    i = int(np.argmax(down_beyond.any(axis=1)))
+    lead = int(np.argmax(down_beyond[i]))
+    trail = 1 - lead
+    out.update(lead_touchdown_time=float(t[i]), lead_touchdown_dcm_margin=float(dcm_along[i] - along[i, lead]))
+    lifted = np.flatnonzero(feet[i:, trail, 2] > LIFTOFF_HEIGHT)
+    if len(lifted) == 0:
+        return out
+    j = i + int(lifted[0])
+    out.update(trailing_liftoff_time=float(t[j]), trailing_liftoff_dcm_margin=float(dcm_along[j] - along[j, lead]))
+    landed = np.flatnonzero(down_beyond[j:, trail])
+    if len(landed) == 0:
+        return out
+    k = j + int(landed[0])
+    out.update(trailing_touchdown_time=float(t[k]),
+               trailing_touchdown_dcm_margin=float(dcm_along[k] - np.min(along[k])))
+    return out
 
 
 def obstacle_metrics(log) -> dict[str, Any]:
@@ -66,6 +109,7 @@ def obstacle_metrics(log) -> dict[str, Any]:
         "first_touch_time": float(t[np.argmax(touching)]) if touching.any() else None,
         "resting_on_obstacle": resting,
         "success": crossed and not fell and not resting and log.status == "completed",
+        **_crossing_balance(ticks, axis, far),
     }
     perception = log.params.get("perception")
     if perception is None:

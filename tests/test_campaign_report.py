@@ -145,6 +145,30 @@ def test_success_by_depth_bins_on_multiples_of_five_centimetres_with_an_edge_in_
     assert _success_by_depth([]) == []
 
 
+def test_the_crossing_balance_margins_are_averaged_over_successes_and_failures_and_printed_in_centimetres():
+    from types import SimpleNamespace
+
+    from sim.campaigns.report import _obstacle_summary
+
+    trial = SimpleNamespace(variant="default", params={"height": 0.4})
+    rows = [(trial, {"status": "completed", "success": True, "metrics": {
+                "success": True, "lead_touchdown_dcm_margin": 0.02, "trailing_liftoff_dcm_margin": -0.04,
+                "trailing_touchdown_dcm_margin": 0.03}}),
+            (trial, {"status": "fell", "success": False, "metrics": {
+                "success": False, "fell": True, "feet_across": 1, "lead_touchdown_dcm_margin": -0.05,
+                "trailing_liftoff_dcm_margin": -0.10, "trailing_touchdown_dcm_margin": None}}),
+            (trial, {"status": "fell", "success": False, "metrics": {
+                "success": False, "fell": True, "feet_across": 0, "lead_touchdown_dcm_margin": -0.01}})]
+    entry = _obstacle_summary(["default"], [0.4], rows)["default"][0]
+    assert entry["dcm_margins"]["lead_touchdown_dcm_margin"] == pytest.approx([0.02, -0.03])
+    assert entry["dcm_margins"]["trailing_liftoff_dcm_margin"] == pytest.approx([-0.04, -0.10])
+    assert entry["dcm_margins"]["trailing_touchdown_dcm_margin"] == [pytest.approx(0.03), None]
+    summary = {"campaign": "c", "scenario": "obstacle", "controller": "walking", "n_recorded": 3, "n_trials": 3,
+               "complete": True, "variants": {}, "axes": {}, "obstacle": {"default": [entry]}}
+    assert ("DCM margin [cm], successes / others: lead touchdown +2.0 / -3.0, trailing liftoff -4.0 / -10.0, "
+            "trailing touchdown +3.0 / n/a") in format_summary(summary)
+
+
 def test_the_wilson_interval_stays_in_zero_one_and_matches_its_closed_form():
     from sim.campaigns.report import wilson_interval
 

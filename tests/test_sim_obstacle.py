@@ -168,6 +168,29 @@ def test_success_needs_the_base_and_both_feet_beyond_the_far_edge_and_nothing_le
     assert not obstacle_metrics(fell)["success"]
 
 
+def test_the_crossing_balance_is_the_dcm_against_the_lead_and_rear_soles_at_the_three_crossing_events():
+    """Box from 1.0 to 1.2 m. Left foot (0) leads: down beyond the box at tick 2; the right foot (1) rises at tick 3
+    and is down beyond the box at tick 5. Margins: DCM along x minus the lead sole (ticks 2, 3), minus the rear
+    sole (tick 5)."""
+    left = [0.8, 1.0, 1.45, 1.45, 1.45, 1.45]
+    right = [0.9, 0.9, 0.9, 0.9, 1.1, 1.4]
+    log = synthetic_log([0.8, 1.0, 1.2, 1.3, 1.35, 1.4], list(zip(left, right)), np.zeros((6, 3)))
+    log.ticks["feet"][:, 1, 2] = [0.0, 0.0, 0.0, 0.3, 0.5, 0.0]
+    log.ticks["foot_contact"] = np.array([[1, 1], [0, 1], [1, 1], [1, 0], [1, 0], [1, 1]], dtype=bool)
+    log.ticks["dcm"] = np.column_stack([[0.9, 1.1, 1.43, 1.40, 1.42, 1.5], np.zeros(6)])
+    m = obstacle_metrics(log)
+    assert (m["lead_touchdown_time"], m["trailing_liftoff_time"], m["trailing_touchdown_time"]) == pytest.approx(
+        (0.2, 0.3, 0.5))
+    assert m["lead_touchdown_dcm_margin"] == pytest.approx(-0.02)
+    assert m["trailing_liftoff_dcm_margin"] == pytest.approx(-0.05)
+    assert m["trailing_touchdown_dcm_margin"] == pytest.approx(0.1)  # the rear sole is the trailing one, 1.4 m
+    # still astride at the end: the trailing touchdown is None; no DCM in the log: all None
+    log.ticks["foot_contact"][5, 1] = False
+    assert obstacle_metrics(log)["trailing_touchdown_dcm_margin"] is None
+    del log.ticks["dcm"]
+    assert obstacle_metrics(log)["lead_touchdown_time"] is None
+
+
 def test_detection_errors_are_estimate_minus_truth():
     estimate = {"center": [1.095, 0.02], "yaw": 0.0, "depth": 0.19, "width": 0.5, "height": 0.103, "first_seen": 0.1}
     log = synthetic_log([0.0, 0.1, 0.2], [[0.0, 0.0]] * 3, np.zeros((3, 3)), detections=[estimate])

@@ -44,6 +44,8 @@ MAX_ERROR_KINDS = 5
 MEASURED_PHASE_BINS = 5  # bins of the measured push phase over [0, 1)
 # The seed-000 thesis (Unitree H1-2, MJPC): step-over success by obstacle height [m], Fig. 5.13, 20 trials each
 PAPER_OBSTACLE_SUCCESS = {0.1: 1.00, 0.2: 0.85, 0.3: 0.60, 0.4: 0.05}
+# the DCM margins an obstacle run's metrics give at its crossing's three events (sim.obstacle_metrics)
+CROSSING_BALANCE_METRICS = ("lead_touchdown_dcm_margin", "trailing_liftoff_dcm_margin", "trailing_touchdown_dcm_margin")
 OBSTACLE_DEPTH_BIN = 0.05  # [m] width of the box-depth bins of an obstacle campaign's per-depth success
 
 
@@ -227,7 +229,9 @@ def _obstacle_summary(variants, heights, rows) -> dict[str, Any]:
     mean |height estimate error| [m], the falls by the most feet that got across the box before them
     (``falls_by_feet_across``: [0, 1, 2], from the ``feet_across`` metric: before the box, astride it, after
     crossing; records without it are not counted), the success by the box's drawn depth (``by_depth``, see
-    :func:`_success_by_depth`) and the seed-000 thesis's success rate (None where it has none)."""
+    :func:`_success_by_depth`), the mean DCM margins of the crossing's balance (``dcm_margins``: per metric of
+    ``CROSSING_BALANCE_METRICS`` [m], [mean over the successes, mean over the others], None where no trial has it; the
+    metrics of :mod:`sim.obstacle_metrics`) and the seed-000 thesis's success rate (None where it has none)."""
     out: dict[str, Any] = {}
     for variant in variants:
         entries = []
@@ -245,6 +249,8 @@ def _obstacle_summary(variants, heights, rows) -> dict[str, Any]:
                                          for k in range(3)],
                 "height_error_abs_mean": _mean(errors),
                 "by_depth": _success_by_depth(metrics),
+                "dcm_margins": {name: [_mean([m.get(name) for m in metrics if bool(m.get("success")) == ok])
+                                       for ok in (True, False)] for name in CROSSING_BALANCE_METRICS},
                 "paper_success_rate": PAPER_OBSTACLE_SUCCESS.get(round(float(height), 3)),
             })
         out[variant] = entries
@@ -354,6 +360,13 @@ def format_summary(summary: dict[str, Any]) -> str:
                 lines.append("    by box depth: " + ", ".join(
                     f"{100 * b['depth_range'][0]:.0f}-{100 * b['depth_range'][1]:.0f} cm {b['n_success']}/{b['n']}"
                     for b in e["by_depth"]))
+            margins = e.get("dcm_margins") or {}
+            if any(v is not None for pair in margins.values() for v in pair):
+                def cm(value: float | None) -> str:
+                    return "n/a" if value is None else f"{100 * value:+.1f}"
+                lines.append("    DCM margin [cm], successes / others: " + ", ".join(
+                    f"{name.removesuffix('_dcm_margin').replace('_', ' ')} {cm(ok)} / {cm(not_ok)}"
+                    for name, (ok, not_ok) in margins.items()))
     for e in summary.get("errors", []):
         lines.append(f"  error x{e['count']}: {e['error']}")
     for source in summary.get("sources", []):
