@@ -36,6 +36,9 @@ import numpy as np
 
 from sequencer.obstacles import Obstacle
 
+# the crossing's three balance events (the module docstring) and their DCM-margin metrics
+CROSSING_EVENTS = ("lead_touchdown", "trailing_liftoff", "trailing_touchdown")
+CROSSING_BALANCE_METRICS = tuple(f"{event}_dcm_margin" for event in CROSSING_EVENTS)
 LIFTOFF_HEIGHT = 0.05  # [m] a sole centre this far above the floor (z = 0) has lifted off (a heel rocking in a
 # double support lifts it 1-2 cm)
 
@@ -49,8 +52,7 @@ def obstacle_from_record(record: dict[str, Any]) -> Obstacle:
 def _crossing_balance(ticks: dict[str, np.ndarray], axis: np.ndarray, far: float) -> dict[str, Any]:
     """The crossing's balance metrics of the module docstring (the world's depth ``axis`` (2,), the box's ``far``
     edge along it [m]); every value None when the log has no DCM or contacts, or not two feet."""
-    names = ("lead_touchdown", "trailing_liftoff", "trailing_touchdown")
-    out: dict[str, Any] = {f"{name}_{kind}": None for name in names for kind in ("time", "dcm_margin")}
+    out: dict[str, Any] = {f"{event}_{kind}": None for event in CROSSING_EVENTS for kind in ("time", "dcm_margin")}
     feet, on_ground, dcm = ticks.get("feet"), ticks.get("foot_contact"), ticks.get("dcm")
     if feet is None or on_ground is None or dcm is None or feet.shape[1] != 2:
         return out

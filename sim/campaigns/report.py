@@ -38,14 +38,13 @@ import numpy as np
 from sim.campaigns.spec import CampaignSpec
 from sim.campaigns.store import SUMMARY_FILE
 from sim.campaigns.trial import make_trials
+from sim.obstacle_metrics import CROSSING_BALANCE_METRICS
 
 PAPER_TIMING_GAIN = 0.36  # ALIP paper: adaptive step timing, +36 % successful push recoveries (G1)
 MAX_ERROR_KINDS = 5
 MEASURED_PHASE_BINS = 5  # bins of the measured push phase over [0, 1)
 # The seed-000 thesis (Unitree H1-2, MJPC): step-over success by obstacle height [m], Fig. 5.13, 20 trials each
 PAPER_OBSTACLE_SUCCESS = {0.1: 1.00, 0.2: 0.85, 0.3: 0.60, 0.4: 0.05}
-# the DCM margins an obstacle run's metrics give at its crossing's three events (sim.obstacle_metrics)
-CROSSING_BALANCE_METRICS = ("lead_touchdown_dcm_margin", "trailing_liftoff_dcm_margin", "trailing_touchdown_dcm_margin")
 OBSTACLE_DEPTH_BIN = 0.05  # [m] width of the box-depth bins of an obstacle campaign's per-depth success
 
 
@@ -230,8 +229,8 @@ def _obstacle_summary(variants, heights, rows) -> dict[str, Any]:
     (``falls_by_feet_across``: [0, 1, 2], from the ``feet_across`` metric: before the box, astride it, after
     crossing; records without it are not counted), the success by the box's drawn depth (``by_depth``, see
     :func:`_success_by_depth`), the mean DCM margins of the crossing's balance (``dcm_margins``: per metric of
-    ``CROSSING_BALANCE_METRICS`` [m], [mean over the successes, mean over the others], None where no trial has it; the
-    metrics of :mod:`sim.obstacle_metrics`) and the seed-000 thesis's success rate (None where it has none)."""
+    :data:`sim.obstacle_metrics.CROSSING_BALANCE_METRICS` [m], [mean over the successes, mean over the others], None
+    where no trial has it) and the seed-000 thesis's success rate (None where it has none)."""
     out: dict[str, Any] = {}
     for variant in variants:
         entries = []
@@ -298,6 +297,9 @@ def format_summary(summary: dict[str, Any]) -> str:
     def pct(x: float | None) -> str:
         return "  n/a" if x is None else f"{100 * x:5.1f} %"
 
+    def cm(value: float | None) -> str:  # a signed length [m] in centimetres
+        return "n/a" if value is None else f"{100 * value:+.1f}"
+
     lines = [
         f"campaign {summary['campaign']} ({summary['scenario']}, controller {summary['controller']}): "
         f"{summary['n_recorded']}/{summary['n_trials']} trials recorded"
@@ -362,8 +364,6 @@ def format_summary(summary: dict[str, Any]) -> str:
                     for b in e["by_depth"]))
             margins = e.get("dcm_margins") or {}
             if any(v is not None for pair in margins.values() for v in pair):
-                def cm(value: float | None) -> str:
-                    return "n/a" if value is None else f"{100 * value:+.1f}"
                 lines.append("    DCM margin [cm], successes / others: " + ", ".join(
                     f"{name.removesuffix('_dcm_margin').replace('_', ' ')} {cm(ok)} / {cm(not_ok)}"
                     for name, (ok, not_ok) in margins.items()))
