@@ -122,6 +122,9 @@ class CrocoddylMirror:
             r = croc.ResidualModelContactFrictionCone(self.state, frame_id, cone, nu)
             activation = croc.ActivationModelQuadraticBarrier(croc.ActivationBounds(cone.lb, cone.ub))
         elif isinstance(residual, ResidualWrenchCone):
+            if residual.center_x != 0.0:
+                raise NoCrocoddylTwin(f"Crocoddyl's WrenchCone is centred on its contact frame; this one's centre is "
+                                      f"center_x={residual.center_x} m along it")
             frame_id = self._contact_frames[residual.contact_name]
             cone = croc.WrenchCone(np.eye(3), residual.mu, np.array([2.0 * residual.half_length, 2.0 * residual.half_width]),
                                    4, True)

@@ -531,6 +531,33 @@ def test_the_quasi_static_load_keeps_each_centre_of_pressure_in_its_sole(robot_n
     np.testing.assert_allclose(load, gravity, rtol=0, atol=1e-8 * np.max(np.abs(gravity)))
 
 
+@needs_h1_extra
+def test_cop_rear_extension_moves_the_wrench_cones_rear_edge_back_and_keeps_its_front_edge():
+    """A vertical load at a centre of pressure x along the sole frame (τ = p × f): inside the cone between the
+    rear edge moved back by the extension and the sole rectangle's front edge, outside beyond either."""
+    from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig
+
+    h1 = load_robot("h1")
+    half_length = 0.5 * h1.sole_size[0]
+    extension = 0.035
+    with pytest.raises(ParameterError, match=r"cop_rear_extension=0.2 m must be in \[0, 0.1\] m"):
+        WalkingOCPConfig(cop_rear_extension=0.2)
+    ocp = WalkingOCP(h1, WalkingOCPConfig(wrench_cone_weight=1e2, cop_rear_extension=extension), n_nodes=2, dt=0.02)
+    residual = ocp.problem.running_models[0].differential.costs.costs["left_wrench_cone"].cost.residual
+    lower, upper = residual.lower_bounds, residual.upper_bounds
+
+    def inside(cop_x):
+        force = np.array([0.0, 0.0, 500.0])
+        wrench = np.concatenate([force, np.cross([cop_x, 0.0, 0.0], force)])
+        r = residual.A @ wrench
+        return bool(np.all(r >= lower - 1e-12) and np.all(r <= upper + 1e-12))
+
+    for cop_x, expected in ((half_length - 1e-3, True), (half_length + 1e-3, False),
+                            (-half_length - extension + 1e-3, True), (-half_length - extension - 1e-3, False),
+                            (-half_length - 1e-3, True)):
+        assert inside(cop_x) is expected, cop_x
+
+
 def test_contact_wrench_scales_weigh_moments_by_the_sole():
     from wbmpc.walking.ocp import contact_wrench_scales
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 crocoddyl = pytest.importorskip("crocoddyl", reason="Crocoddyl (test extra) is the oracle of these comparisons")
@@ -196,6 +197,22 @@ def test_wrench_cone_has_crocoddyls_rows():
     ours = sorted(zip(map(tuple, np.round(A, 12)), lower, upper))
     theirs = sorted(zip(map(tuple, np.round(cone.A, 12)), cone.lb, cone.ub))
     assert ours == theirs
+
+
+def test_offset_wrench_cone_is_crocoddyls_about_the_rectangle_centre():
+    """A rectangle centred c along the contact frame's x: Crocoddyl's rows on the wrench moved to that centre."""
+    from wbmpc.ocp.residuals.wrench_cone import wrench_cone_matrix
+
+    c = -0.0175
+    cone = crocoddyl.WrenchCone(np.eye(3), 0.7, np.array([0.18, 0.02]), 4, True)
+    A, _, _ = wrench_cone_matrix(0.7, 0.09, 0.01, center_x=c)
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        wrench = rng.normal(size=6) * np.array([50.0, 50.0, 300.0, 5.0, 5.0, 2.0])
+        moved = pin.Force(wrench[:3], wrench[3:]).se3Action(pin.SE3(np.eye(3), np.array([-c, 0.0, 0.0])))
+        theirs = cone.A @ moved.vector
+        ours = A @ wrench
+        assert sorted(np.round(ours, 9)) == sorted(np.round(theirs, 9))
 
 
 @needs_h1_extra

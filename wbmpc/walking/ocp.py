@@ -181,6 +181,10 @@ class WalkingOCPConfig:
             every stance foot; 0 = off.
         cop_sole_fraction: the fraction of the robot's ``sole_size`` the wrench cone lets the
             centre of pressure use, (0, 1] (a margin against the sole's edges).
+        cop_rear_extension: e [m] in [0, 0.1]: the wrench cone's centre-of-pressure rectangle reaches this much
+            further behind the sole rectangle's rear edge (along the sole frame's -x, its width and front edge
+            kept; its centre e/2 behind the sole frame). The H1's sole rectangle ends at the ankle axis, its
+            heel spheres 3.5 cm behind it (robots.h1); 0 = the sole rectangle.
         swing_orientation_weight: flat feet: orientation of the swing foot towards flat with
             the planned touchdown yaw, log3(R_ref^T R) [rad], at every swing node; 0 = off.
         swing_path_weight: weight of ``{foot}_swing_path`` at every swing node of every swing: the foot frame's
@@ -345,6 +349,7 @@ class WalkingOCPConfig:
     friction_coefficient: float = 0.7
     wrench_cone_weight: float = 0.0
     cop_sole_fraction: float = 1.0
+    cop_rear_extension: float = 0.0
     swing_orientation_weight: float = 0.0
     swing_path_weight: float = 0.0
     swing_path_timing: str = "smooth"
@@ -461,6 +466,9 @@ class WalkingOCPConfig:
             raise ParameterError(f"control_bound_fraction={self.control_bound_fraction} must be in (0, 1]")
         if not (0 < self.cop_sole_fraction <= 1):
             raise ParameterError(f"cop_sole_fraction={self.cop_sole_fraction} must be in (0, 1]")
+        if isinstance(self.cop_rear_extension, bool) or not (np.isfinite(self.cop_rear_extension)
+                                                              and 0.0 <= self.cop_rear_extension <= 0.1):
+            raise ParameterError(f"cop_rear_extension={self.cop_rear_extension} m must be in [0, 0.1] m")
         if not (np.isfinite(self.friction_coefficient) and self.friction_coefficient > 0):
             raise ParameterError(f"friction_coefficient={self.friction_coefficient} must be > 0")
         if len(self.baumgarte_gains) != 2 or min(self.baumgarte_gains) < 0:
@@ -844,8 +852,10 @@ class WalkingOCP:
             flat = self.contact_type == "flat6d"
             if not terminal and cfg.wrench_cone_weight > 0 and flat:
                 length, width = self._sole_size("wrench_cone_weight > 0")
+                extension = cfg.cop_rear_extension
                 residual = ResidualWrenchCone(state, foot, cfg.friction_coefficient,
-                                              0.5 * cfg.cop_sole_fraction * length, 0.5 * cfg.cop_sole_fraction * width, nu)
+                                              0.5 * (cfg.cop_sole_fraction * length + extension),
+                                              0.5 * cfg.cop_sole_fraction * width, nu, center_x=-0.5 * extension)
                 costs.add(f"{foot}_wrench_cone",
                           CostModelResidual(residual, ActivationQuadraticBarrier(residual.lower_bounds,
                                                                                  residual.upper_bounds)),
