@@ -558,6 +558,37 @@ def test_cop_rear_extension_moves_the_wrench_cones_rear_edge_back_and_keeps_its_
         assert inside(cop_x) is expected, cop_x
 
 
+@needs_h1_extra
+def test_passed_feet_reach_behind_the_sole_only_beyond_a_crossed_box():
+    """cop_rear_extension_feet = "passed": the stance foot before the box (during the first crossing swing) keeps
+    the sole rectangle, a foot landed beyond it gets the extended cone, at its contact nodes only."""
+    from wbmpc_fixtures import crossing_schedule, standing_state
+
+    from wbmpc.walking.ocp import WalkingOCP, WalkingOCPConfig
+
+    h1 = load_robot("h1")
+    with pytest.raises(ParameterError, match="cop_rear_extension_feet='lead' must be 'all' or 'passed'"):
+        WalkingOCPConfig(cop_rear_extension_feet="lead")
+    config = WalkingOCPConfig(wrench_cone_weight=1e2, cop_rear_extension=0.035, cop_rear_extension_feet="passed")
+    ocp = WalkingOCP(h1, config, n_nodes=30, dt=0.02)
+    schedule, crossings = crossing_schedule(30)  # right swings over the box (x in [0.2, 0.3]) on nodes 0-9, left 10-19
+    x0 = standing_state(h1)  # soles at x = 0.018 m, before the box
+    passed = ocp.passed_feet(x0, crossings, schedule.in_contact, schedule.touchdown_position, [0, 1])
+    left, right = passed[:, 0], passed[:, 1]
+    assert not left[:10].any()  # the stance before the box while the right foot crosses
+    assert not right[:10].any() and not left[10:20].any()  # swinging
+    assert right[10:20].all() and left[20:30].all()  # landed beyond the box
+    ocp.update(x0, schedule, np.array([0.0, 0.0, 0.97]), crossings=crossings)
+    costs = [model.differential.costs.costs for model in ocp.problem.running_models]
+    for k in (5, 15):
+        assert costs[k]["left_wrench_cone"].active is (k == 5)
+        assert costs[k]["left_wrench_cone_passed"].active is False
+        assert costs[k]["right_wrench_cone"].active is False
+        assert costs[k]["right_wrench_cone_passed"].active is (k == 15)
+    ocp.update(x0, schedule, np.array([0.0, 0.0, 0.97]))  # no crossing: the sole rectangle everywhere
+    assert not any(c[f"{foot}_wrench_cone_passed"].active for c in costs for foot in ("left", "right"))
+
+
 def test_contact_wrench_scales_weigh_moments_by_the_sole():
     from wbmpc.walking.ocp import contact_wrench_scales
 

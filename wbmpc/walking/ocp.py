@@ -185,6 +185,11 @@ class WalkingOCPConfig:
             further behind the sole rectangle's rear edge (along the sole frame's -x, its width and front edge
             kept; its centre e/2 behind the sole frame). The H1's sole rectangle ends at the ankle axis, its
             heel spheres 3.5 cm behind it (robots.h1); 0 = the sole rectangle.
+        cop_rear_extension_feet: where that extension holds: "all" (every stance foot at every node) or "passed"
+            (only a stance foot beyond an obstacle that a crossing swing of the horizon passes over, on the far
+            side from the swing's lift-off, by :meth:`WalkingOCP.passed_feet`: the lead foot from its touchdown
+            beyond the box, under a DCM that lags it, while the trailing foot is still to cross; the other feet
+            keep the sole rectangle, as the stance before the box during the lead crossing).
         swing_orientation_weight: flat feet: orientation of the swing foot towards flat with
             the planned touchdown yaw, log3(R_ref^T R) [rad], at every swing node; 0 = off.
         swing_path_weight: weight of ``{foot}_swing_path`` at every swing node of every swing: the foot frame's
@@ -350,6 +355,7 @@ class WalkingOCPConfig:
     wrench_cone_weight: float = 0.0
     cop_sole_fraction: float = 1.0
     cop_rear_extension: float = 0.0
+    cop_rear_extension_feet: str = "all"
     swing_orientation_weight: float = 0.0
     swing_path_weight: float = 0.0
     swing_path_timing: str = "smooth"
@@ -469,6 +475,8 @@ class WalkingOCPConfig:
         if isinstance(self.cop_rear_extension, bool) or not (np.isfinite(self.cop_rear_extension)
                                                               and 0.0 <= self.cop_rear_extension <= 0.1):
             raise ParameterError(f"cop_rear_extension={self.cop_rear_extension} m must be in [0, 0.1] m")
+        if self.cop_rear_extension_feet not in ("all", "passed"):
+            raise ParameterError(f"cop_rear_extension_feet={self.cop_rear_extension_feet!r} must be 'all' or 'passed'")
         if not (np.isfinite(self.friction_coefficient) and self.friction_coefficient > 0):
             raise ParameterError(f"friction_coefficient={self.friction_coefficient} must be > 0")
         if len(self.baumgarte_gains) != 2 or min(self.baumgarte_gains) < 0:
@@ -677,6 +685,7 @@ class WalkingOCP:
             for j in model.supports[model.frames[fid].parentJoint] if j > 1
             for i in range(model.joints[j].nv)}), dtype=int)
         pdata = model.createData()
+        self._kinematics_data = model.createData()  # the feet at x0 (passed_feet)
         pin.framesForwardKinematics(model, pdata, self.x_reference[: model.nq])
         self._reference_placements = {foot: pin.SE3(pdata.oMf[fid]) for foot, fid in self.foot_frame_ids.items()}
         #: per foot, +1 where the reference posture has it on the base's left (+y), -1 on its right: "outwards"
@@ -712,8 +721,10 @@ class WalkingOCP:
             self._node_terms.append((model.differential, [
                 tuple(items.get(f"{foot}_{term}") for term in (
                     "height", "touchdown_height", "touchdown_velocity", "foothold", "contact_force", "friction_cone",
-                    "wrench_cone", "orientation"))
+                    "wrench_cone", "wrench_cone_passed", "orientation"))
                 for foot in self.feet]))
+        self._has_passed_cones = any(f"{foot}_wrench_cone_passed" in model.differential.costs.costs
+                                     for model in running for foot in self.feet)
         # per running node, per foot: (the sole points' clearance cost items, the shank's or None)
         self._clearance_terms = [
             [([items[f"{foot}_clearance_sole{i}"] for i in range(len(config.obstacle_sole_points))],
@@ -852,14 +863,18 @@ class WalkingOCP:
             flat = self.contact_type == "flat6d"
             if not terminal and cfg.wrench_cone_weight > 0 and flat:
                 length, width = self._sole_size("wrench_cone_weight > 0")
-                extension = cfg.cop_rear_extension
-                residual = ResidualWrenchCone(state, foot, cfg.friction_coefficient,
-                                              0.5 * (cfg.cop_sole_fraction * length + extension),
-                                              0.5 * cfg.cop_sole_fraction * width, nu, center_x=-0.5 * extension)
-                costs.add(f"{foot}_wrench_cone",
-                          CostModelResidual(residual, ActivationQuadraticBarrier(residual.lower_bounds,
-                                                                                 residual.upper_bounds)),
-                          cfg.wrench_cone_weight, active=False)
+                passed_only = cfg.cop_rear_extension > 0 and cfg.cop_rear_extension_feet == "passed"
+                cones = {"wrench_cone": 0.0 if passed_only else cfg.cop_rear_extension}
+                if passed_only:
+                    cones["wrench_cone_passed"] = cfg.cop_rear_extension
+                for term, extension in cones.items():
+                    residual = ResidualWrenchCone(state, foot, cfg.friction_coefficient,
+                                                  0.5 * (cfg.cop_sole_fraction * length + extension),
+                                                  0.5 * cfg.cop_sole_fraction * width, nu, center_x=-0.5 * extension)
+                    costs.add(f"{foot}_{term}",
+                              CostModelResidual(residual, ActivationQuadraticBarrier(residual.lower_bounds,
+                                                                                     residual.upper_bounds)),
+                              cfg.wrench_cone_weight, active=False)
             if not terminal and cfg.obstacle_clearance_weight > 0:
                 barrier = (np.zeros(1), np.full(1, np.inf))  # one-sided: no cost above the reference
                 for i, point in enumerate(cfg.obstacle_sole_points):
@@ -1015,13 +1030,16 @@ class WalkingOCP:
             orientation_rows = np.where(crossing, orientation_weight * cfg.obstacle_swing_orientation_scale,
                                         orientation_weight).tolist()
         heights_rows = heights.tolist()
+        passed = None  # the (node, foot) pairs whose stance cone reaches behind the sole (cop_rear_extension_feet)
+        if crossings is not None and self._has_passed_cones:
+            passed = self.passed_feet(x0, crossings, in_contact, touchdown, columns).tolist()
         force_reference = (self.mass * GRAVITY / n_stance).tolist()
         for k, (dam, feet_terms) in enumerate(self._node_terms):
             terminal = k == self.n_nodes
             if not terminal:
                 dam.set_active_contacts(stance_names[k])
-            for j, (height, touchdown_height, touchdown_velocity, foothold, force, cone, wrench, orientation) in (
-                    enumerate(feet_terms)):
+            for j, (height, touchdown_height, touchdown_velocity, foothold, force, cone, wrench, wrench_passed,
+                    orientation) in enumerate(feet_terms):
                 swing = swing_rows[k][j]
                 height.active = swing
                 if swing:
@@ -1046,7 +1064,9 @@ class WalkingOCP:
                 if cone is not None:
                     cone.active = not swing
                 if wrench is not None:
-                    wrench.active = not swing
+                    wrench.active = not swing and not (passed is not None and passed[k][j])
+                if wrench_passed is not None:
+                    wrench_passed.active = not swing and passed is not None and passed[k][j]
                 if orientation is not None:
                     orientation.active = swing
                     weight = orientation_weight if orientation_rows is None else orientation_rows[k][j]
@@ -1098,6 +1118,42 @@ class WalkingOCP:
             if item.weight != weight:
                 item.weight = weight
             item.cost.residual.reference[:2] = path[k, j]
+
+    def passed_feet(self, x0: np.ndarray, crossings, in_contact: np.ndarray, touchdown: np.ndarray,
+                    columns: list[int]) -> np.ndarray:
+        """Where a stance foot stands beyond an obstacle that a crossing swing of this horizon passes over:
+        (n + 1, n_feet) bool in the OCP's foot order (``cop_rear_extension_feet = "passed"``).
+
+        A foot stands where it is at ``x0`` (its frame's world (x, y)) until its first swing of the horizon,
+        then on that swing's ``touchdown`` (n + 1, n_feet, 2) [m], and so on. It is beyond obstacle o when its
+        position is outside o's footprint along o's depth axis, on the other side of o's centre from the lift-off
+        of a crossing swing over o (``crossings``, a :class:`wbmpc.walking.reference.CrossingSchedule` in the
+        schedule's foot order, ``columns`` the OCP's feet in it); only at nodes where it is in contact."""
+        model, data = self.state.pinocchio, self._kinematics_data
+        pin.forwardKinematics(model, data, np.asarray(x0[: model.nq], dtype=float))
+        position = np.array([pin.updateFramePlacement(model, data, self.foot_frame_ids[foot]).translation[:2]
+                             for foot in self.feet])
+        index = np.asarray(crossings.index)[:, columns]
+        liftoff = np.asarray(crossings.liftoff_xy, dtype=float)[:, columns]
+        sides = []  # per crossed obstacle: (centre, depth axis, half depth, the lift-off's side: +1 or -1)
+        for which, obstacle in enumerate(crossings.obstacles):
+            rows = np.argwhere(index == which)
+            if rows.size == 0:
+                continue
+            axis = obstacle.axes[0]
+            start = liftoff[rows[0, 0], rows[0, 1]]
+            sides.append((obstacle.center, axis, 0.5 * obstacle.depth, np.sign((start - obstacle.center) @ axis)))
+        passed = np.zeros(in_contact.shape, dtype=bool)
+        for k in range(in_contact.shape[0]):
+            for j in range(in_contact.shape[1]):
+                if not in_contact[k, j]:
+                    position[j] = touchdown[k, j]
+                    continue
+                for centre, axis, half_depth, liftoff_side in sides:
+                    along = (position[j] - centre) @ axis
+                    if abs(along) > half_depth and np.sign(along) == -liftoff_side:
+                        passed[k, j] = True
+        return passed
 
     def _clearance(self, crossings, swinging: np.ndarray, phase: np.ndarray, touchdown: np.ndarray,
                    columns: list[int]) -> tuple[np.ndarray, np.ndarray | None]:
