@@ -684,8 +684,7 @@ class WalkingOCP:
             model.joints[j].idx_v + i for fid in self.foot_frame_ids.values()
             for j in model.supports[model.frames[fid].parentJoint] if j > 1
             for i in range(model.joints[j].nv)}), dtype=int)
-        pdata = model.createData()
-        self._kinematics_data = model.createData()  # the feet at x0 (passed_feet)
+        self._kinematics_data = pdata = model.createData()  # here the reference posture; the feet at x0 (passed_feet)
         pin.framesForwardKinematics(model, pdata, self.x_reference[: model.nq])
         self._reference_placements = {foot: pin.SE3(pdata.oMf[fid]) for foot, fid in self.foot_frame_ids.items()}
         #: per foot, +1 where the reference posture has it on the base's left (+y), -1 on its right: "outwards"
@@ -1135,23 +1134,20 @@ class WalkingOCP:
                              for foot in self.feet])
         index = np.asarray(crossings.index)[:, columns]
         liftoff = np.asarray(crossings.liftoff_xy, dtype=float)[:, columns]
-        sides = []  # per crossed obstacle: (centre, depth axis, half depth, the lift-off's side: +1 or -1)
+        sides = []  # per crossed obstacle: (the obstacle, the side of its centre the lift-off is on: +1 or -1)
         for which, obstacle in enumerate(crossings.obstacles):
             rows = np.argwhere(index == which)
-            if rows.size == 0:
-                continue
-            axis = obstacle.axes[0]
-            start = liftoff[rows[0, 0], rows[0, 1]]
-            sides.append((obstacle.center, axis, 0.5 * obstacle.depth, np.sign((start - obstacle.center) @ axis)))
+            if rows.size:
+                sides.append((obstacle, np.sign(obstacle.local(liftoff[rows[0, 0], rows[0, 1]])[0])))
         passed = np.zeros(in_contact.shape, dtype=bool)
         for k in range(in_contact.shape[0]):
             for j in range(in_contact.shape[1]):
                 if not in_contact[k, j]:
                     position[j] = touchdown[k, j]
                     continue
-                for centre, axis, half_depth, liftoff_side in sides:
-                    along = (position[j] - centre) @ axis
-                    if abs(along) > half_depth and np.sign(along) == -liftoff_side:
+                for obstacle, liftoff_side in sides:
+                    along = obstacle.local(position[j])[0]  # along the depth axis from the centre [m]
+                    if abs(along) > 0.5 * obstacle.depth and np.sign(along) == -liftoff_side:
                         passed[k, j] = True
         return passed
 
